@@ -1,0 +1,201 @@
+// The R-tree occupancy grid: a probabilistic occupancy map whose leaves are disjoint
+// axis-aligned cuboids of lattice cells, each with one log-odds value. Cells exist only
+// where a sensor observed; unknown space has no leaf.
+#pragma once
+
+#include <cstdint>
+#include <iosfwd>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "rtog/core/detail/flat_hash_map.hpp"
+#include "rtog/core/key.hpp"
+#include "rtog/core/log_odds.hpp"
+#include "rtog/core/rtree.hpp"
+#include "rtog/core/update_batch.hpp"
+
+namespace rtog {
+
+/// Inverse sensor model used to turn a beam into cell updates.
+enum class SensorModel {
+  BeamBased,     ///< ray traced: free along the beam, occupied at its end
+  BeamEndPoint,  ///< end points only
+};
+
+/// When adjacent leaves are merged into one cuboid.
+enum class MergePolicy {
+  Off,      ///< every leaf stays one cell
+  Clamped,  ///< cells whose log-odds converged to the same clamping bound (seed §2.5.2)
+  Equal,    ///< any cells with bit-identical log-odds (lossless as well; more merging)
+};
+
+const char* toString(SensorModel m);
+const char* toString(MergePolicy m);
+SensorModel sensorModelFromString(const std::string& s);  ///< throws std::invalid_argument
+MergePolicy mergePolicyFromString(const std::string& s);  ///< throws std::invalid_argument
+
+struct MapParams {
+  double resolution = 0.05;              ///< Cell edge length [m]. (Default: 0.05)
+  LogOddsParams log_odds;                ///< Sensor and clamping probabilities. (Default: OctoMap's)
+  MergePolicy merge = MergePolicy::Clamped;  ///< Leaf merging. (Default: Clamped)
+  RTreeParams rtree;                     ///< Node capacities of the index. (Default: 16/6)
+
+  void validate() const;
+};
+
+/// Per-call insertion settings.
+struct InsertParams {
+  SensorModel model = SensorModel::BeamBased;  ///< (Default: BeamBased)
+  /// Beams longer than this are cut here: free up to the cut, nothing occupied. <= 0 means
+  /// unlimited. (Default: -1)
+  double max_range = -1.0;
+};
+
+/// What one insertion did; every input beam is counted in exactly one of the first five.
+struct InsertStats {
+  std::size_t rays_hit = 0;              ///< beams that marked an occupied end cell
+  std::size_t rays_truncated = 0;        ///< beams cut at max_range or flagged as no-return
+  std::size_t skipped_non_finite = 0;    ///< NaN/Inf end points
+  std::size_t skipped_zero_length = 0;   ///< end point at the origin (no direction)
+  std::size_t skipped_out_of_range = 0;  ///< end point outside the key range
+  std::size_t cells_occupied = 0;        ///< distinct cells updated as occupied
+  std::size_t cells_free = 0;            ///< distinct cells updated as free
+  std::size_t cells_unchanged = 0;       ///< updates absorbed by clamping
+  std::size_t leaves_created = 0;
+  std::size_t leaves_merged = 0;         ///< merges performed (each removes one leaf)
+  std::size_t leaves_split = 0;          ///< merged cuboids split by disagreeing evidence
+
+  std::size_t raysTotal() const {
+    return rays_hit + rays_truncated + skipped_non_finite + skipped_zero_length + skipped_out_of_range;
+  }
+  InsertStats& operator+=(const InsertStats& o);
+};
+
+/// Whole-map figures (what `rtog info` prints).
+struct MapStatistics {
+  std::size_t leaves = 0, occupied_leaves = 0, free_leaves = 0;
+  std::int64_t cells = 0, occupied_cells = 0, free_cells = 0;
+  std::size_t bricks = 0;
+  int tree_height = 0;
+  std::size_t tree_nodes = 0;
+  std::size_t memory_bytes = 0;
+  Box bounds = Box::empty();
+};
+
+/// Counts of cells in a box by state.
+struct BoxSummary {
+  std::int64_t occupied = 0, free = 0, unknown = 0;
+};
+
+class OccupancyMap {
+ public:
+  explicit OccupancyMap(const MapParams& params = {});
+
+  const MapParams& params() const { return params_; }
+  const Lattice& lattice() const { return lattice_; }
+  const LogOddsModel& logOddsModel() const { return model_; }
+  double resolution() const { return lattice_.resolution(); }
+
+  /// Removes every leaf; parameters stay.
+  void clear();
+
+  // ---- insertion --------------------------------------------------------------------
+  /// Integrates one scan: beams from `origin` to each point (map frame, metres). `is_hit`
+  /// (optional, one byte per point) flags beams that returned; a zero marks a no-return
+  /// beam, which clears space up to the point but marks nothing occupied.
+  InsertStats insertPointCloud(const Eigen::Vector3d& origin, const Eigen::Vector3f* points, std::size_t count,
+                               const InsertParams& ip = {}, const std::uint8_t* is_hit = nullptr);
+  InsertStats insertPointCloud(const Eigen::Vector3d& origin, const std::vector<Eigen::Vector3f>& points,
+                               const InsertParams& ip = {}) {
+    return insertPointCloud(origin, points.data(), points.size(), ip);
+  }
+
+  /// Step 1 of an insertion: traces the beams into `batch` (no change to the map). Throws
+  /// std::out_of_range if the origin has no key.
+  void computeUpdate(const Eigen::Vector3d& origin, const Eigen::Vector3f* points, std::size_t count,
+                     const InsertParams& ip, const std::uint8_t* is_hit, UpdateBatch& batch,
+                     InsertStats& stats) const;
+  /// Step 2: applies a finalized batch to the tree in one sweep over its bricks.
+  void applyUpdate(const UpdateBatch& batch, InsertStats& stats);
+
+  // ---- queries ----------------------------------------------------------------------
+  std::optional<float> logOdds(const Key& k) const;
+  /// P(occupied); the prior for unknown cells.
+  double occupancy(const Key& k) const;
+  CellState state(const Key& k) const;
+  /// State at a metric point; Unknown for points without a key.
+  CellState stateAt(const Eigen::Vector3d& p) const;
+  BoxSummary summarize(const Box& b) const;
+
+  struct RayHit {
+    bool hit = false;
+    Key cell;              ///< first occupied cell along the ray
+    double distance = 0;   ///< metres from the origin to where the ray enters it
+  };
+  /// First occupied leaf along a ray (direction need not be normalized).
+  RayHit castRay(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction, double max_range) const;
+
+  struct NearestHit {
+    bool found = false;
+    Box leaf;
+    double distance = 0;   ///< metres from p to the closest point of the leaf
+  };
+  /// Nearest occupied leaf within max_distance metres.
+  NearestHit nearestOccupied(const Eigen::Vector3d& p, double max_distance) const;
+
+  /// Calls fn(box, log_odds) for every leaf.
+  template <class Fn>
+  void forEachLeaf(Fn&& fn) const {
+    tree_.forEach([&](Handle h, const Box& b) { fn(b, tree_.payload(h)); });
+  }
+
+  std::size_t leafCount() const { return tree_.size(); }
+  /// Cells covered by leaves (a merged cuboid counts all its cells).
+  std::int64_t cellCount() const;
+  /// Smallest box containing every leaf (Box::empty() if none).
+  Box keyBounds() const { return tree_.bounds(); }
+  std::size_t memoryBytes() const;
+  MapStatistics statistics() const;
+  const RTree<float>& index() const { return tree_; }
+
+  /// Empty if the R-tree and the brick index are sound and agree; else the first problem.
+  std::string checkInvariants() const;
+
+  // ---- serialization (binary, little-endian, versioned; see doc/format.md) -------------
+  void write(std::ostream& os) const;
+  /// Throws std::runtime_error on a corrupt or truncated stream.
+  static OccupancyMap read(std::istream& is);
+
+ private:
+  /// A leaf as seen from its brick: its cells in local coordinates.
+  struct BrickLeaf {
+    std::uint8_t lo[3], hi[3];
+    Handle handle;
+  };
+  struct Brick {
+    Key brick;
+    std::vector<BrickLeaf> leaves;
+  };
+
+  std::uint32_t brickSlot(const Key& brick);
+  const Brick* findBrick(const Key& brick) const;
+  Handle findLeaf(const Key& k) const;
+  Box globalBox(const Brick& b, const BrickLeaf& l) const;
+  bool mergeable(float v) const;
+  void applyBrick(const UpdateBatch::BrickUpdates& upd, InsertStats& stats);
+  void mergeInBrick(Brick& brick, std::vector<std::int32_t>& local, std::vector<std::uint32_t>& candidates,
+                    InsertStats& stats);
+
+  MapParams params_;
+  Lattice lattice_;
+  LogOddsModel model_;
+  RTree<float> tree_;
+  detail::FlatHashMap64 brick_index_;
+  std::vector<Brick> bricks_;
+  std::vector<std::int32_t> local_;  // scratch: brick-local cell -> leaf index, -1 when none
+};
+
+}  // namespace rtog

@@ -1,0 +1,73 @@
+// The per-scan update set: which cells a scan saw free and which occupied, each at most
+// once, occupied winning over free (as OctoMap's computeUpdate), grouped by brick.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "rtog/core/detail/flat_hash_map.hpp"
+#include "rtog/core/key.hpp"
+
+namespace rtog {
+
+/// Bricks are aligned cubes of kBrickSize^3 cells. They group updates and bound leaf
+/// cuboids so that one scan's changes stay local.
+constexpr int kBrickBits = 4;
+constexpr int kBrickSize = 1 << kBrickBits;
+constexpr int kBrickCells = kBrickSize * kBrickSize * kBrickSize;
+constexpr int kBrickWords = kBrickCells / 64;
+
+inline Key brickOf(const Key& k) {
+  // Arithmetic shift: floor division for negative keys too.
+  return Key{k.x >> kBrickBits, k.y >> kBrickBits, k.z >> kBrickBits};
+}
+inline Key brickOrigin(const Key& brick) {
+  return Key{brick.x * kBrickSize, brick.y * kBrickSize, brick.z * kBrickSize};
+}
+inline int localIndex(const Key& k) {
+  constexpr int m = kBrickSize - 1;
+  return (k.x & m) | ((k.y & m) << kBrickBits) | ((k.z & m) << (2 * kBrickBits));
+}
+inline Key localKey(int index) {
+  constexpr int m = kBrickSize - 1;
+  return Key{index & m, (index >> kBrickBits) & m, (index >> (2 * kBrickBits)) & m};
+}
+
+class UpdateBatch {
+ public:
+  struct BrickUpdates {
+    Key brick;                                      ///< brick coordinates (key >> kBrickBits)
+    std::array<std::uint64_t, kBrickWords> occupied;  ///< bit per local cell index
+    std::array<std::uint64_t, kBrickWords> free;
+  };
+
+  void clear();
+  void markFree(const Key& k) { set(k, false); }
+  void markOccupied(const Key& k) { set(k, true); }
+
+  /// Drops free marks of cells also marked occupied and orders bricks by (z, y, x) so that
+  /// applying the batch is deterministic. Call once after marking.
+  void finalize();
+
+  const std::vector<BrickUpdates>& bricks() const { return bricks_; }
+  std::size_t occupiedCount() const;
+  std::size_t freeCount() const;
+  std::size_t memoryBytes() const { return bricks_.capacity() * sizeof(BrickUpdates) + index_.memoryBytes(); }
+
+ private:
+  void set(const Key& k, bool occupied) {
+    const Key b = brickOf(k);
+    if (last_ == detail::FlatHashMap64::kAbsent || b != bricks_[last_].brick) last_ = brickSlot(b);
+    const int i = localIndex(k);
+    auto& words = occupied ? bricks_[last_].occupied : bricks_[last_].free;
+    words[i >> 6] |= std::uint64_t{1} << (i & 63);
+  }
+  std::uint32_t brickSlot(const Key& b);
+
+  std::vector<BrickUpdates> bricks_;
+  detail::FlatHashMap64 index_;
+  std::uint32_t last_ = detail::FlatHashMap64::kAbsent;
+};
+
+}  // namespace rtog

@@ -1,0 +1,177 @@
+// Binary serialization of the map: header, parameters, leaves, checksum (doc/format.md).
+#include <algorithm>
+#include <cstring>
+#include <type_traits>
+#include <istream>
+#include <ostream>
+
+#include "rtog/core/occupancy_map.hpp"
+
+namespace rtog {
+namespace {
+
+constexpr char kMagic[8] = {'R', 'T', 'O', 'G', 'M', 'A', 'P', '\0'};
+constexpr std::uint32_t kFormatVersion = 1;
+
+// FNV-1a over everything written after the magic, so a flipped bit anywhere is caught.
+class Fnv1a {
+ public:
+  void add(const void* data, std::size_t n) {
+    const auto* p = static_cast<const unsigned char*>(data);
+    for (std::size_t i = 0; i < n; ++i) h_ = (h_ ^ p[i]) * 0x100000001b3ull;
+  }
+  std::uint64_t value() const { return h_; }
+
+ private:
+  std::uint64_t h_ = 0xcbf29ce484222325ull;
+};
+
+class Writer {
+ public:
+  explicit Writer(std::ostream& os) : os_(os) {}
+  template <class T>
+  void put(const T& v) {
+    static_assert(std::is_trivially_copyable_v<T>);
+    os_.write(reinterpret_cast<const char*>(&v), sizeof(T));
+    sum_.add(&v, sizeof(T));
+  }
+  std::uint64_t checksum() const { return sum_.value(); }
+
+ private:
+  std::ostream& os_;
+  Fnv1a sum_;
+};
+
+class Reader {
+ public:
+  explicit Reader(std::istream& is) : is_(is) {}
+  template <class T>
+  T get(const char* what) {
+    T v;
+    if (!is_.read(reinterpret_cast<char*>(&v), sizeof(T)))
+      throw std::runtime_error(std::string("rtog map: truncated stream while reading ") + what);
+    sum_.add(&v, sizeof(T));
+    return v;
+  }
+  std::uint64_t checksum() const { return sum_.value(); }
+
+ private:
+  std::istream& is_;
+  Fnv1a sum_;
+};
+
+}  // namespace
+
+void OccupancyMap::write(std::ostream& os) const {
+  os.write(kMagic, sizeof(kMagic));
+  Writer w(os);
+  w.put(kFormatVersion);
+  const LogOddsParams& lp = params_.log_odds;
+  for (double d : {params_.resolution, lp.prob_hit, lp.prob_miss, lp.clamp_min, lp.clamp_max, lp.occupied_threshold,
+                   lp.prior})
+    w.put(d);
+  w.put(static_cast<std::uint8_t>(params_.merge));
+  w.put(params_.rtree.max_entries);
+  w.put(params_.rtree.min_entries);
+  w.put(static_cast<std::uint64_t>(tree_.size()));
+  // Bricks in key order so equal maps give equal files.
+  std::vector<const Brick*> order;
+  order.reserve(bricks_.size());
+  for (const Brick& b : bricks_) order.push_back(&b);
+  std::sort(order.begin(), order.end(), [](const Brick* a, const Brick* b) { return a->brick < b->brick; });
+  for (const Brick* b : order) {
+    std::vector<BrickLeaf> leaves = b->leaves;
+    std::sort(leaves.begin(), leaves.end(), [](const BrickLeaf& x, const BrickLeaf& y) {
+      return std::memcmp(x.lo, y.lo, 3) < 0 || (std::memcmp(x.lo, y.lo, 3) == 0 && std::memcmp(x.hi, y.hi, 3) < 0);
+    });
+    for (const BrickLeaf& l : leaves) {
+      const Box gb = globalBox(*b, l);
+      for (int a = 0; a < 3; ++a) w.put(gb.min[a]);
+      for (int a = 0; a < 3; ++a) w.put(gb.max[a]);
+      w.put(tree_.payload(l.handle));
+    }
+  }
+  const std::uint64_t sum = w.checksum();
+  os.write(reinterpret_cast<const char*>(&sum), sizeof(sum));
+  if (!os) throw std::runtime_error("rtog map: write failed");
+}
+
+OccupancyMap OccupancyMap::read(std::istream& is) {
+  char magic[sizeof(kMagic)];
+  if (!is.read(magic, sizeof(magic)) || std::memcmp(magic, kMagic, sizeof(kMagic)) != 0)
+    throw std::runtime_error("rtog map: not an rtog map (bad magic)");
+  Reader r(is);
+  const auto version = r.get<std::uint32_t>("version");
+  if (version != kFormatVersion)
+    throw std::runtime_error("rtog map: unsupported format version " + std::to_string(version));
+  MapParams p;
+  p.resolution = r.get<double>("resolution");
+  LogOddsParams& lp = p.log_odds;
+  for (double* d : {&lp.prob_hit, &lp.prob_miss, &lp.clamp_min, &lp.clamp_max, &lp.occupied_threshold, &lp.prior})
+    *d = r.get<double>("log-odds parameters");
+  const auto merge = r.get<std::uint8_t>("merge policy");
+  if (merge > static_cast<std::uint8_t>(MergePolicy::Equal)) throw std::runtime_error("rtog map: bad merge policy");
+  p.merge = static_cast<MergePolicy>(merge);
+  p.rtree.max_entries = r.get<std::uint32_t>("R-tree parameters");
+  p.rtree.min_entries = r.get<std::uint32_t>("R-tree parameters");
+  try {
+    p.validate();
+  } catch (const std::invalid_argument& e) {
+    throw std::runtime_error(std::string("rtog map: bad parameters: ") + e.what());
+  }
+  const auto count = r.get<std::uint64_t>("leaf count");
+  if (count > (std::uint64_t{1} << 36)) throw std::runtime_error("rtog map: implausible leaf count");
+
+  OccupancyMap map(p);
+  std::vector<std::pair<Box, float>> items;
+  std::vector<std::uint32_t> brick_of;
+  items.reserve(static_cast<std::size_t>(std::min<std::uint64_t>(count, 1u << 24)));
+  for (std::uint64_t i = 0; i < count; ++i) {
+    Box b;
+    for (int a = 0; a < 3; ++a) b.min[a] = r.get<std::int32_t>("leaf");
+    for (int a = 0; a < 3; ++a) b.max[a] = r.get<std::int32_t>("leaf");
+    const auto v = r.get<float>("leaf");
+    if (!keyInRange(b.min) || !keyInRange(b.max) || b.isEmpty() || brickOf(b.min) != brickOf(b.max))
+      throw std::runtime_error("rtog map: malformed leaf box " + toString(b));
+    if (!(v >= map.model_.clampMin() && v <= map.model_.clampMax()))
+      throw std::runtime_error("rtog map: leaf value outside the clamping bounds");
+    if (b.volume() > 1 && !map.mergeable(v))
+      throw std::runtime_error("rtog map: merged leaf " + toString(b) + " with a value its merge policy keeps apart");
+    brick_of.push_back(map.brickSlot(brickOf(b.min)));
+    items.emplace_back(b, v);
+  }
+  std::uint64_t stored_sum;
+  const std::uint64_t sum = r.checksum();
+  if (!is.read(reinterpret_cast<char*>(&stored_sum), sizeof(stored_sum)))
+    throw std::runtime_error("rtog map: truncated stream while reading checksum");
+  if (stored_sum != sum) throw std::runtime_error("rtog map: checksum mismatch (corrupt file)");
+
+  // Leaves must be disjoint: paint each brick's cells once.
+  std::vector<std::vector<std::uint32_t>> per_brick(map.bricks_.size());
+  for (std::size_t i = 0; i < items.size(); ++i) per_brick[brick_of[i]].push_back(static_cast<std::uint32_t>(i));
+  std::vector<std::uint8_t> painted(kBrickCells);
+  for (const auto& ids : per_brick) {
+    std::fill(painted.begin(), painted.end(), 0);
+    for (const std::uint32_t i : ids) {
+      bool overlap = false;
+      forEachCell(items[i].first, [&](const Key& k) { overlap |= painted[localIndex(k)]++ != 0; });
+      if (overlap) throw std::runtime_error("rtog map: overlapping leaves at " + toString(items[i].first));
+    }
+  }
+  map.tree_.bulkLoad(items);  // handles 0..n-1 follow `items`
+  for (std::size_t i = 0; i < items.size(); ++i) {
+    Brick& br = map.bricks_[brick_of[i]];
+    const Key o = brickOrigin(br.brick);
+    const Box& b = items[i].first;
+    BrickLeaf l{};
+    for (int a = 0; a < 3; ++a) {
+      l.lo[a] = static_cast<std::uint8_t>(b.min[a] - o[a]);
+      l.hi[a] = static_cast<std::uint8_t>(b.max[a] - o[a]);
+    }
+    l.handle = static_cast<Handle>(i);
+    br.leaves.push_back(l);
+  }
+  return map;
+}
+
+}  // namespace rtog
