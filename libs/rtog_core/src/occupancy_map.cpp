@@ -3,7 +3,6 @@
 
 #include <cmath>
 #include <sstream>
-#include <unordered_set>
 
 namespace rtog {
 
@@ -61,19 +60,20 @@ OccupancyMap::OccupancyMap(const MapParams& params)
     : params_(validated(params)),
       lattice_(params.resolution),
       model_(params.log_odds),
-      tree_(params.rtree),
+      upper_(params.rtree),
       local_(kBrickCells, -1) {}
 
 void OccupancyMap::clear() {
-  tree_.clear();
+  upper_.clear();
   brick_index_.clear();
   bricks_.clear();
+  leaf_count_ = 0;
 }
 
 std::uint32_t OccupancyMap::brickSlot(const Key& brick) {
   const auto next = static_cast<std::uint32_t>(bricks_.size());
   const std::uint32_t slot = brick_index_.findOrInsert(packKey(brick), next);
-  if (slot == next) bricks_.push_back(Brick{brick, {}});
+  if (slot == next) bricks_.push_back(Brick{brick, {}, {}});
   return slot;
 }
 
@@ -82,21 +82,30 @@ const OccupancyMap::Brick* OccupancyMap::findBrick(const Key& brick) const {
   return slot == detail::FlatHashMap64::kAbsent ? nullptr : &bricks_[slot];
 }
 
-Box OccupancyMap::globalBox(const Brick& b, const BrickLeaf& l) const {
+Box OccupancyMap::leafNodeBox(const Brick& b, std::size_t node) const {
   const Key o = brickOrigin(b.brick);
-  return Box{Key{o.x + l.lo[0], o.y + l.lo[1], o.z + l.lo[2]}, Key{o.x + l.hi[0], o.y + l.hi[1], o.z + l.hi[2]}};
+  Box box = Box::empty();
+  const std::size_t first = node * leafNodeSize(), last = std::min(b.leaves.size(), first + leafNodeSize());
+  for (std::size_t i = first; i < last; ++i) box = box.united(globalBox(o, b.leaves[i]));
+  return box;
 }
 
-Handle OccupancyMap::findLeaf(const Key& k) const {
-  if (!keyInRange(k)) return kNoHandle;
+const OccupancyMap::LeafEntry* OccupancyMap::findLeaf(const Key& k) const {
+  if (!keyInRange(k)) return nullptr;
   const Brick* b = findBrick(brickOf(k));
-  if (!b) return kNoHandle;
+  if (!b) return nullptr;
   const Key l = localKey(localIndex(k));
-  for (const BrickLeaf& leaf : b->leaves)
-    if (l.x >= leaf.lo[0] && l.x <= leaf.hi[0] && l.y >= leaf.lo[1] && l.y <= leaf.hi[1] && l.z >= leaf.lo[2] &&
-        l.z <= leaf.hi[2])
-      return leaf.handle;
-  return kNoHandle;
+  // Leaf-node boxes first, then the entries of the one node that can hold the cell.
+  for (std::size_t n = 0; n < b->nodes.size(); ++n) {
+    if (!upper_.box(b->nodes[n]).contains(k)) continue;
+    const std::size_t first = n * leafNodeSize(), last = std::min(b->leaves.size(), first + leafNodeSize());
+    for (std::size_t i = first; i < last; ++i) {
+      const LeafEntry& e = b->leaves[i];
+      if (l.x >= e.lo[0] && l.x <= e.hi[0] && l.y >= e.lo[1] && l.y <= e.hi[1] && l.z >= e.lo[2] && l.z <= e.hi[2])
+        return &e;
+    }
+  }
+  return nullptr;
 }
 
 bool OccupancyMap::mergeable(float v) const {
@@ -108,9 +117,9 @@ bool OccupancyMap::mergeable(float v) const {
 }
 
 std::optional<float> OccupancyMap::logOdds(const Key& k) const {
-  const Handle h = findLeaf(k);
-  if (h == kNoHandle) return std::nullopt;
-  return tree_.payload(h);
+  const LeafEntry* e = findLeaf(k);
+  if (!e) return std::nullopt;
+  return e->value;
 }
 
 double OccupancyMap::occupancy(const Key& k) const {
@@ -131,10 +140,13 @@ CellState OccupancyMap::stateAt(const Eigen::Vector3d& p) const {
 BoxSummary OccupancyMap::summarize(const Box& b) const {
   BoxSummary s;
   std::int64_t known = 0;
-  tree_.queryBox(b, [&](Handle h, const Box& lb) {
-    const std::int64_t n = lb.intersection(b).volume();
-    known += n;
-    (model_.classify(tree_.payload(h)) == CellState::Occupied ? s.occupied : s.free) += n;
+  upper_.queryBox(b, [&](Handle h, const Box&) {
+    forEachInLeafNode(h, [&](const Box& lb, float v) {
+      if (!lb.intersects(b)) return;
+      const std::int64_t n = lb.intersection(b).volume();
+      known += n;
+      (model_.classify(v) == CellState::Occupied ? s.occupied : s.free) += n;
+    });
   });
   s.unknown = b.volume() - known;
   return s;
@@ -148,87 +160,120 @@ OccupancyMap::RayHit OccupancyMap::castRay(const Eigen::Vector3d& origin, const 
   const Eigen::Vector3d o = lattice_.toLattice(origin);
   const Eigen::Vector3d d = direction / n;
   const double t_max = std::isfinite(max_range) ? max_range / resolution() : std::numeric_limits<double>::max();
-  const auto hit = tree_.firstAlongRay(o, d, t_max, [&](Handle h, const Box&) {
-    return model_.classify(tree_.payload(h)) == CellState::Occupied;
+  // Leaf nodes arrive in order of where the ray enters their box; a node entered after the
+  // best leaf found so far cannot hold a nearer one.
+  double best_t = std::numeric_limits<double>::infinity();
+  Box best_box;
+  upper_.firstAlongRay(o, d, t_max, [&](Handle h, const Box& node_box) {
+    double t0 = 0.0, t1 = 0.0;
+    intersectRay(o, d, t_max, node_box, t0, t1);
+    if (t0 >= best_t) return true;
+    forEachInLeafNode(h, [&](const Box& lb, float v) {
+      if (model_.classify(v) != CellState::Occupied) return;
+      double a, b;
+      if (intersectRay(o, d, t_max, lb, a, b) && a < best_t) best_t = a, best_box = lb;
+    });
+    return false;
   });
-  if (!hit) return r;
-  const Box& b = tree_.box(hit.handle);
-  const Eigen::Vector3d entry = o + d * hit.value;
+  if (!std::isfinite(best_t)) return r;
+  const Eigen::Vector3d entry = o + d * best_t;
   for (int a = 0; a < 3; ++a)
-    r.cell[a] = std::clamp(static_cast<std::int32_t>(std::floor(entry[a])), b.min[a], b.max[a]);
+    r.cell[a] = std::clamp(static_cast<std::int32_t>(std::floor(entry[a])), best_box.min[a], best_box.max[a]);
   r.hit = true;
-  r.distance = hit.value * resolution();
+  r.distance = best_t * resolution();
   return r;
 }
 
 OccupancyMap::NearestHit OccupancyMap::nearestOccupied(const Eigen::Vector3d& p, double max_distance) const {
   NearestHit r;
   if (!p.allFinite()) return r;
+  const Eigen::Vector3d pl = lattice_.toLattice(p);
   const double lim = max_distance / resolution();
-  const auto hit = tree_.nearest(
-      lattice_.toLattice(p),
-      [&](Handle h, const Box&) { return model_.classify(tree_.payload(h)) == CellState::Occupied; },
-      std::isfinite(lim) ? lim * lim : std::numeric_limits<double>::infinity());
-  if (!hit) return r;
+  double best = std::isfinite(lim) ? lim * lim : std::numeric_limits<double>::infinity();
+  bool found = false;
+  upper_.nearest(
+      pl,
+      [&](Handle h, const Box& node_box) {
+        if (squaredDistance(pl, node_box) > best) return true;
+        forEachInLeafNode(h, [&](const Box& lb, float v) {
+          if (model_.classify(v) != CellState::Occupied) return;
+          const double d2 = squaredDistance(pl, lb);
+          if (d2 < best || (!found && d2 <= best)) best = d2, r.leaf = lb, found = true;
+        });
+        return false;
+      },
+      best);
+  if (!found) return r;
   r.found = true;
-  r.leaf = tree_.box(hit.handle);
-  r.distance = std::sqrt(hit.value) * resolution();
+  r.distance = std::sqrt(best) * resolution();
   return r;
 }
 
 std::int64_t OccupancyMap::cellCount() const {
   std::int64_t n = 0;
-  tree_.forEach([&](Handle, const Box& b) { n += b.volume(); });
+  forEachLeaf([&](const Box& b, float) { n += b.volume(); });
   return n;
 }
 
 std::size_t OccupancyMap::memoryBytes() const {
-  std::size_t bytes = sizeof(*this) + tree_.memoryBytes() + brick_index_.memoryBytes() +
+  std::size_t bytes = sizeof(*this) + upper_.memoryBytes() + brick_index_.memoryBytes() +
                       bricks_.capacity() * sizeof(Brick) + local_.capacity() * sizeof(std::int32_t);
-  for (const Brick& b : bricks_) bytes += b.leaves.capacity() * sizeof(BrickLeaf);
+  for (const Brick& b : bricks_) bytes += b.leaves.capacity() * sizeof(LeafEntry) + b.nodes.capacity() * sizeof(Handle);
   return bytes;
 }
 
 MapStatistics OccupancyMap::statistics() const {
   MapStatistics s;
-  tree_.forEach([&](Handle h, const Box& b) {
-    const bool occ = model_.classify(tree_.payload(h)) == CellState::Occupied;
+  forEachLeaf([&](const Box& b, float v) {
+    const bool occ = model_.classify(v) == CellState::Occupied;
     ++(occ ? s.occupied_leaves : s.free_leaves);
     (occ ? s.occupied_cells : s.free_cells) += b.volume();
   });
-  s.leaves = tree_.size();
+  s.leaves = leaf_count_;
   s.cells = s.occupied_cells + s.free_cells;
   s.bricks = bricks_.size();
-  s.tree_height = tree_.height();
-  s.tree_nodes = tree_.nodeCount();
+  s.tree_height = upper_.height() + 1;
+  s.tree_nodes = upper_.nodeCount() + upper_.size();
   s.memory_bytes = memoryBytes();
-  s.bounds = tree_.bounds();
+  s.bounds = upper_.bounds();
   return s;
 }
 
 std::string OccupancyMap::checkInvariants() const {
-  std::string err = tree_.checkInvariants(true);
+  // Leaf-node boxes may overlap (inner boxes of an R-tree); leaves may not, checked below.
+  std::string err = upper_.checkInvariants(false);
   if (!err.empty()) return "R-tree: " + err;
-  std::size_t leaves = 0;
-  std::unordered_set<Handle> seen;
-  for (const Brick& b : bricks_) {
-    if (brick_index_.find(packKey(b.brick)) != static_cast<std::uint32_t>(&b - bricks_.data()))
-      return "brick index does not point at brick " + toString(b.brick);
-    for (const BrickLeaf& l : b.leaves) {
+  std::size_t leaves = 0, nodes = 0;
+  std::vector<std::uint8_t> painted(kBrickCells);
+  for (std::size_t slot = 0; slot < bricks_.size(); ++slot) {
+    const Brick& b = bricks_[slot];
+    if (brick_index_.find(packKey(b.brick)) != slot) return "brick index does not point at brick " + toString(b.brick);
+    const std::size_t want_nodes = (b.leaves.size() + leafNodeSize() - 1) / leafNodeSize();
+    if (b.nodes.size() != want_nodes) return "brick " + toString(b.brick) + " has the wrong number of leaf nodes";
+    for (std::size_t n = 0; n < b.nodes.size(); ++n) {
+      const Handle h = b.nodes[n];
+      if (!upper_.valid(h)) return "leaf node with a dead handle";
+      const LeafNodeRef r = upper_.payload(h);
+      if (r.brick != slot || r.node != n) return "leaf node reference mismatch";
+      if (upper_.box(h) != leafNodeBox(b, n)) return "leaf node box is not the tight union of its entries";
+    }
+    nodes += b.nodes.size();
+    std::fill(painted.begin(), painted.end(), 0);
+    for (const LeafEntry& e : b.leaves) {
       ++leaves;
       for (int a = 0; a < 3; ++a)
-        if (l.lo[a] > l.hi[a] || l.hi[a] >= kBrickSize) return "malformed brick leaf in brick " + toString(b.brick);
-      if (!tree_.valid(l.handle)) return "brick leaf with a dead handle";
-      if (!seen.insert(l.handle).second) return "handle listed twice in the brick index";
-      const Box gb = globalBox(b, l);
-      if (tree_.box(l.handle) != gb)
-        return "brick leaf " + toString(gb) + " differs from its tree entry " + toString(tree_.box(l.handle));
-      const float v = tree_.payload(l.handle);
-      if (!(v >= model_.clampMin() && v <= model_.clampMax())) return "leaf value outside the clamping bounds";
-      if (gb.volume() > 1 && !mergeable(v)) return "merged leaf " + toString(gb) + " holds a value its policy does not merge";
+        if (e.lo[a] > e.hi[a] || e.hi[a] >= kBrickSize) return "malformed leaf in brick " + toString(b.brick);
+      const Box gb = globalBox(brickOrigin(b.brick), e);
+      if (!(e.value >= model_.clampMin() && e.value <= model_.clampMax())) return "leaf value outside the clamping bounds";
+      if (gb.volume() > 1 && !mergeable(e.value))
+        return "merged leaf " + toString(gb) + " holds a value its policy does not merge";
+      bool overlap = false;
+      forEachCell(gb, [&](const Key& k) { overlap |= painted[localIndex(k)]++ != 0; });
+      if (overlap) return "leaves overlap at " + toString(gb);
     }
   }
-  if (leaves != tree_.size()) return "brick index and tree disagree on the number of leaves";
+  if (leaves != leaf_count_) return "leaf count mismatch";
+  if (nodes != upper_.size()) return "upper tree and bricks disagree on the number of leaf nodes";
   return {};
 }
 

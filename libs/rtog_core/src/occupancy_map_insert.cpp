@@ -1,5 +1,6 @@
 // Insertion: beams -> per-scan update batch -> one sweep over the touched bricks.
 #include <algorithm>
+#include <array>
 
 #include "rtog/core/occupancy_map.hpp"
 #include "rtog/core/ray_traversal.hpp"
@@ -97,15 +98,32 @@ void forEachLocal(const std::uint8_t lo[3], const std::uint8_t hi[3], Fn&& fn) {
 
 }  // namespace
 
+// Local cell indices of a brick in Morton (Z-order) order, so that consecutive leaves, and
+// with them the leaf nodes cut from them, stay compact.
+static const std::array<std::uint16_t, kBrickCells>& mortonOrder() {
+  static const std::array<std::uint16_t, kBrickCells> order = [] {
+    std::array<std::uint16_t, kBrickCells> o{};
+    for (int m = 0; m < kBrickCells; ++m) {
+      int c[3] = {0, 0, 0};
+      for (int bit = 0; bit < kBrickBits; ++bit)
+        for (int a = 0; a < 3; ++a) c[a] |= ((m >> (3 * bit + a)) & 1) << bit;
+      o[static_cast<std::size_t>(m)] = static_cast<std::uint16_t>(localIdx(c[0], c[1], c[2]));
+    }
+    return o;
+  }();
+  return order;
+}
+
 void OccupancyMap::applyBrick(const UpdateBatch::BrickUpdates& upd, InsertStats& stats) {
   const std::uint32_t slot = brickSlot(upd.brick);
-  Brick& br = bricks_[slot];
+  std::vector<LeafEntry>& leaves = bricks_[slot].leaves;
   std::vector<std::int32_t>& local = local_;
-  for (std::size_t i = 0; i < br.leaves.size(); ++i)
-    forEachLocal(br.leaves[i].lo, br.leaves[i].hi, [&](int idx) { local[idx] = static_cast<std::int32_t>(i); });
+  for (std::size_t i = 0; i < leaves.size(); ++i)
+    forEachLocal(leaves[i].lo, leaves[i].hi, [&](int idx) { local[idx] = static_cast<std::int32_t>(i); });
 
-  const Key origin = brickOrigin(upd.brick);
   const bool merging = params_.merge != MergePolicy::Off;
+  const std::size_t leaves_before = leaves.size();
+  bool reshaped = false;
   std::vector<std::uint32_t> candidates;
   for (int w = 0; w < kBrickWords; ++w) {
     std::uint64_t bits = upd.occupied[w] | upd.free[w];
@@ -118,65 +136,63 @@ void OccupancyMap::applyBrick(const UpdateBatch::BrickUpdates& upd, InsertStats&
       const std::int32_t li = local[idx];
       if (li < 0) {
         const float v = model_.first(delta);
-        const Key k{origin.x + lk.x, origin.y + lk.y, origin.z + lk.z};
-        const Handle h = tree_.insert(Box::cell(k), v);
         const auto x = static_cast<std::uint8_t>(lk.x), y = static_cast<std::uint8_t>(lk.y),
                    z = static_cast<std::uint8_t>(lk.z);
-        br.leaves.push_back(BrickLeaf{{x, y, z}, {x, y, z}, h});
-        local[idx] = static_cast<std::int32_t>(br.leaves.size() - 1);
-        ++stats.leaves_created;
-        if (merging && mergeable(v)) candidates.push_back(static_cast<std::uint32_t>(br.leaves.size() - 1));
+        leaves.push_back(LeafEntry{{x, y, z}, {x, y, z}, v});
+        local[idx] = static_cast<std::int32_t>(leaves.size() - 1);
+        if (merging && mergeable(v)) candidates.push_back(static_cast<std::uint32_t>(leaves.size() - 1));
         continue;
       }
-      const BrickLeaf leaf = br.leaves[li];
-      const float old = tree_.payload(leaf.handle);
+      LeafEntry& e = leaves[static_cast<std::size_t>(li)];
+      const float old = e.value;
       const float v = model_.update(old, delta);
       if (v == old) {
         ++stats.cells_unchanged;
         continue;
       }
-      tree_.payload(leaf.handle) = v;
+      e.value = v;
       if (merging && mergeable(v)) candidates.push_back(static_cast<std::uint32_t>(li));
-      if (leaf.lo[0] == leaf.hi[0] && leaf.lo[1] == leaf.hi[1] && leaf.lo[2] == leaf.hi[2]) continue;
+      if (e.lo[0] == e.hi[0] && e.lo[1] == e.hi[1] && e.lo[2] == e.hi[2]) continue;
 
       // Disagreeing evidence inside a merged cuboid: the leaf shrinks to the updated cell
       // and the rest of its cells keep the old value in at most six new leaves.
       std::uint8_t plo[6][3], phi[6][3];
-      const int pieces = cutAround(leaf.lo, leaf.hi, lk, plo, phi);
-      BrickLeaf& shrunk = br.leaves[li];
-      for (int a = 0; a < 3; ++a) shrunk.lo[a] = shrunk.hi[a] = static_cast<std::uint8_t>(lk[a]);
-      tree_.updateBox(leaf.handle, globalBox(br, shrunk));
+      const LeafEntry whole = e;
+      const int pieces = cutAround(whole.lo, whole.hi, lk, plo, phi);
+      for (int a = 0; a < 3; ++a) e.lo[a] = e.hi[a] = static_cast<std::uint8_t>(lk[a]);
       for (int p = 0; p < pieces; ++p) {
-        BrickLeaf piece{{plo[p][0], plo[p][1], plo[p][2]}, {phi[p][0], phi[p][1], phi[p][2]}, kNoHandle};
-        piece.handle = tree_.insert(globalBox(br, piece), old);
-        br.leaves.push_back(piece);
-        const auto pi = static_cast<std::int32_t>(br.leaves.size() - 1);
-        forEachLocal(piece.lo, piece.hi, [&](int i) { local[i] = pi; });
+        leaves.push_back(LeafEntry{{plo[p][0], plo[p][1], plo[p][2]}, {phi[p][0], phi[p][1], phi[p][2]}, old});
+        const auto pi = static_cast<std::int32_t>(leaves.size() - 1);
+        forEachLocal(plo[p], phi[p], [&](int i) { local[i] = pi; });
         candidates.push_back(static_cast<std::uint32_t>(pi));  // was merged, so mergeable
       }
       ++stats.leaves_split;
-      stats.leaves_created += static_cast<std::size_t>(pieces);
+      reshaped = true;
     }
   }
-
-  if (merging && !candidates.empty()) mergeInBrick(br, local, candidates, stats);
-
-  // Drop the leaves merged away and leave the scratch map empty for the next brick.
-  br.leaves.erase(std::remove_if(br.leaves.begin(), br.leaves.end(),
-                                 [](const BrickLeaf& l) { return l.handle == kNoHandle; }),
-                  br.leaves.end());
+  stats.leaves_created += leaves.size() - leaves_before;
+  if (merging && !candidates.empty()) {
+    const std::size_t merges = mergeInBrick(leaves, candidates);
+    stats.leaves_merged += merges;
+    reshaped |= merges > 0;
+  }
+  if (reshaped || leaves.size() != leaves_before) {
+    packLeaves(slot);
+    syncLeafNodes(slot);
+  }
+  leaf_count_ += leaves.size();
+  leaf_count_ -= leaves_before;
   std::fill(local.begin(), local.end(), -1);
 }
 
-void OccupancyMap::mergeInBrick(Brick& br, std::vector<std::int32_t>& local, std::vector<std::uint32_t>& candidates,
-                                InsertStats& stats) {
+std::size_t OccupancyMap::mergeInBrick(std::vector<LeafEntry>& leaves, const std::vector<std::uint32_t>& candidates) {
+  std::vector<std::int32_t>& local = local_;
+  std::size_t merges = 0;
   for (const std::uint32_t i : candidates) {
     for (bool merged = true; merged;) {
       merged = false;
-      BrickLeaf& a = br.leaves[i];
-      if (a.handle == kNoHandle) break;
-      const float v = tree_.payload(a.handle);
-      if (!mergeable(v)) break;
+      LeafEntry& a = leaves[i];
+      if (a.lo[0] == kDead || !mergeable(a.value)) break;
       for (int axis = 0; axis < 3 && !merged; ++axis) {
         const int b1 = (axis + 1) % 3, b2 = (axis + 2) % 3;
         for (int dir = 1; dir >= -1 && !merged; dir -= 2) {
@@ -186,23 +202,53 @@ void OccupancyMap::mergeInBrick(Brick& br, std::vector<std::int32_t>& local, std
           n[axis] = c;
           const std::int32_t j = local[localIdx(n[0], n[1], n[2])];
           if (j < 0 || static_cast<std::uint32_t>(j) == i) continue;
-          BrickLeaf& nb = br.leaves[j];
+          LeafEntry& nb = leaves[static_cast<std::size_t>(j)];
           // A face neighbour holding the cell next to a's corner starts right after a on
           // this axis (leaves are disjoint); it merges if its face matches exactly.
           if (nb.lo[b1] != a.lo[b1] || nb.hi[b1] != a.hi[b1] || nb.lo[b2] != a.lo[b2] || nb.hi[b2] != a.hi[b2])
             continue;
-          if (tree_.payload(nb.handle) != v) continue;
+          if (nb.value != a.value) continue;
+          forEachLocal(nb.lo, nb.hi, [&](int idx) { local[idx] = static_cast<std::int32_t>(i); });
           a.lo[axis] = std::min(a.lo[axis], nb.lo[axis]);
           a.hi[axis] = std::max(a.hi[axis], nb.hi[axis]);
-          forEachLocal(nb.lo, nb.hi, [&](int idx) { local[idx] = static_cast<std::int32_t>(i); });
-          tree_.remove(nb.handle);
-          nb.handle = kNoHandle;
-          tree_.updateBox(a.handle, globalBox(br, a));
-          ++stats.leaves_merged;
+          nb.lo[0] = kDead;
+          ++merges;
           merged = true;
         }
       }
     }
+  }
+  return merges;
+}
+
+void OccupancyMap::packLeaves(std::uint32_t slot) {
+  Brick& br = bricks_[slot];
+  // The scratch table names each live leaf at its first cell; dead leaves were repainted.
+  std::vector<LeafEntry>& packed = pack_scratch_;
+  packed.clear();
+  for (const std::uint16_t idx : mortonOrder()) {
+    const std::int32_t i = local_[idx];
+    if (i < 0) continue;
+    const LeafEntry& e = br.leaves[static_cast<std::size_t>(i)];
+    if (localIdx(e.lo[0], e.lo[1], e.lo[2]) == idx) packed.push_back(e);
+  }
+  br.leaves = std::vector<LeafEntry>(packed.begin(), packed.end());  // exact capacity
+}
+
+void OccupancyMap::syncLeafNodes(std::uint32_t slot) {
+  Brick& br = bricks_[slot];
+  const std::size_t nodes = (br.leaves.size() + leafNodeSize() - 1) / leafNodeSize();
+  for (std::size_t n = 0; n < nodes; ++n) {
+    const Box box = leafNodeBox(br, n);
+    if (n < br.nodes.size()) {
+      if (upper_.box(br.nodes[n]) != box) upper_.updateBox(br.nodes[n], box);
+    } else {
+      br.nodes.push_back(upper_.insert(box, LeafNodeRef{slot, static_cast<std::uint32_t>(n)}));
+    }
+  }
+  while (br.nodes.size() > nodes) {
+    upper_.remove(br.nodes.back());
+    br.nodes.pop_back();
   }
 }
 

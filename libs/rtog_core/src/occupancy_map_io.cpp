@@ -73,22 +73,23 @@ void OccupancyMap::write(std::ostream& os) const {
   w.put(static_cast<std::uint8_t>(params_.merge));
   w.put(params_.rtree.max_entries);
   w.put(params_.rtree.min_entries);
-  w.put(static_cast<std::uint64_t>(tree_.size()));
+  w.put(static_cast<std::uint64_t>(leaf_count_));
   // Bricks in key order so equal maps give equal files.
   std::vector<const Brick*> order;
   order.reserve(bricks_.size());
   for (const Brick& b : bricks_) order.push_back(&b);
   std::sort(order.begin(), order.end(), [](const Brick* a, const Brick* b) { return a->brick < b->brick; });
   for (const Brick* b : order) {
-    std::vector<BrickLeaf> leaves = b->leaves;
-    std::sort(leaves.begin(), leaves.end(), [](const BrickLeaf& x, const BrickLeaf& y) {
+    std::vector<LeafEntry> leaves = b->leaves;
+    std::sort(leaves.begin(), leaves.end(), [](const LeafEntry& x, const LeafEntry& y) {
       return std::memcmp(x.lo, y.lo, 3) < 0 || (std::memcmp(x.lo, y.lo, 3) == 0 && std::memcmp(x.hi, y.hi, 3) < 0);
     });
-    for (const BrickLeaf& l : leaves) {
-      const Box gb = globalBox(*b, l);
+    const Key o = brickOrigin(b->brick);
+    for (const LeafEntry& l : leaves) {
+      const Box gb = globalBox(o, l);
       for (int a = 0; a < 3; ++a) w.put(gb.min[a]);
       for (int a = 0; a < 3; ++a) w.put(gb.max[a]);
-      w.put(tree_.payload(l.handle));
+      w.put(l.value);
     }
   }
   const std::uint64_t sum = w.checksum();
@@ -123,9 +124,6 @@ OccupancyMap OccupancyMap::read(std::istream& is) {
   if (count > (std::uint64_t{1} << 36)) throw std::runtime_error("rtog map: implausible leaf count");
 
   OccupancyMap map(p);
-  std::vector<std::pair<Box, float>> items;
-  std::vector<std::uint32_t> brick_of;
-  items.reserve(static_cast<std::size_t>(std::min<std::uint64_t>(count, 1u << 24)));
   for (std::uint64_t i = 0; i < count; ++i) {
     Box b;
     for (int a = 0; a < 3; ++a) b.min[a] = r.get<std::int32_t>("leaf");
@@ -137,8 +135,14 @@ OccupancyMap OccupancyMap::read(std::istream& is) {
       throw std::runtime_error("rtog map: leaf value outside the clamping bounds");
     if (b.volume() > 1 && !map.mergeable(v))
       throw std::runtime_error("rtog map: merged leaf " + toString(b) + " with a value its merge policy keeps apart");
-    brick_of.push_back(map.brickSlot(brickOf(b.min)));
-    items.emplace_back(b, v);
+    const Key o = brickOrigin(brickOf(b.min));
+    LeafEntry e{};
+    for (int a = 0; a < 3; ++a) {
+      e.lo[a] = static_cast<std::uint8_t>(b.min[a] - o[a]);
+      e.hi[a] = static_cast<std::uint8_t>(b.max[a] - o[a]);
+    }
+    e.value = v;
+    map.bricks_[map.brickSlot(brickOf(b.min))].leaves.push_back(e);
   }
   std::uint64_t stored_sum;
   const std::uint64_t sum = r.checksum();
@@ -146,31 +150,33 @@ OccupancyMap OccupancyMap::read(std::istream& is) {
     throw std::runtime_error("rtog map: truncated stream while reading checksum");
   if (stored_sum != sum) throw std::runtime_error("rtog map: checksum mismatch (corrupt file)");
 
-  // Leaves must be disjoint: paint each brick's cells once.
-  std::vector<std::vector<std::uint32_t>> per_brick(map.bricks_.size());
-  for (std::size_t i = 0; i < items.size(); ++i) per_brick[brick_of[i]].push_back(static_cast<std::uint32_t>(i));
-  std::vector<std::uint8_t> painted(kBrickCells);
-  for (const auto& ids : per_brick) {
-    std::fill(painted.begin(), painted.end(), 0);
-    for (const std::uint32_t i : ids) {
+  // Leaves must be disjoint: paint each brick's cells once, then pack the brick and index
+  // all leaf nodes with one bulk load.
+  std::vector<std::pair<Box, LeafNodeRef>> nodes;
+  for (std::uint32_t slot = 0; slot < map.bricks_.size(); ++slot) {
+    Brick& br = map.bricks_[slot];
+    for (std::size_t i = 0; i < br.leaves.size(); ++i) {
       bool overlap = false;
-      forEachCell(items[i].first, [&](const Key& k) { overlap |= painted[localIndex(k)]++ != 0; });
-      if (overlap) throw std::runtime_error("rtog map: overlapping leaves at " + toString(items[i].first));
+      forEachCell(globalBox(Key{0, 0, 0}, br.leaves[i]), [&](const Key& k) {
+        std::int32_t& cell = map.local_[localIndex(k)];
+        overlap |= cell >= 0;
+        cell = static_cast<std::int32_t>(i);
+      });
+      if (overlap) {
+        std::fill(map.local_.begin(), map.local_.end(), -1);
+        throw std::runtime_error("rtog map: overlapping leaves in brick " + toString(br.brick));
+      }
     }
+    map.packLeaves(slot);
+    std::fill(map.local_.begin(), map.local_.end(), -1);
+    map.leaf_count_ += br.leaves.size();
+    const std::size_t n = (br.leaves.size() + map.leafNodeSize() - 1) / map.leafNodeSize();
+    for (std::size_t k = 0; k < n; ++k)
+      nodes.push_back({map.leafNodeBox(br, k), LeafNodeRef{slot, static_cast<std::uint32_t>(k)}});
   }
-  map.tree_.bulkLoad(items);  // handles 0..n-1 follow `items`
-  for (std::size_t i = 0; i < items.size(); ++i) {
-    Brick& br = map.bricks_[brick_of[i]];
-    const Key o = brickOrigin(br.brick);
-    const Box& b = items[i].first;
-    BrickLeaf l{};
-    for (int a = 0; a < 3; ++a) {
-      l.lo[a] = static_cast<std::uint8_t>(b.min[a] - o[a]);
-      l.hi[a] = static_cast<std::uint8_t>(b.max[a] - o[a]);
-    }
-    l.handle = static_cast<Handle>(i);
-    br.leaves.push_back(l);
-  }
+  map.upper_.bulkLoad(nodes);  // handles 0..n-1 follow `nodes`
+  for (std::size_t h = 0; h < nodes.size(); ++h)
+    map.bricks_[nodes[h].second.brick].nodes.push_back(static_cast<Handle>(h));
   return map;
 }
 

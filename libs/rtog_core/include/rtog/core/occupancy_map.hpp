@@ -149,19 +149,22 @@ class OccupancyMap {
   /// Calls fn(box, log_odds) for every leaf.
   template <class Fn>
   void forEachLeaf(Fn&& fn) const {
-    tree_.forEach([&](Handle h, const Box& b) { fn(b, tree_.payload(h)); });
+    for (const Brick& b : bricks_) {
+      const Key o = brickOrigin(b.brick);
+      for (const LeafEntry& e : b.leaves) fn(globalBox(o, e), e.value);
+    }
   }
 
-  std::size_t leafCount() const { return tree_.size(); }
+  std::size_t leafCount() const { return leaf_count_; }
   /// Cells covered by leaves (a merged cuboid counts all its cells).
   std::int64_t cellCount() const;
   /// Smallest box containing every leaf (Box::empty() if none).
-  Box keyBounds() const { return tree_.bounds(); }
+  Box keyBounds() const { return upper_.bounds(); }
   std::size_t memoryBytes() const;
   MapStatistics statistics() const;
-  const RTree<float>& index() const { return tree_; }
 
-  /// Empty if the R-tree and the brick index are sound and agree; else the first problem.
+  /// Empty if the R-tree (upper levels, leaf nodes, entries) and the brick index are sound
+  /// and agree; else the first problem found.
   std::string checkInvariants() const;
 
   // ---- serialization (binary, little-endian, versioned; see doc/format.md) -------------
@@ -170,32 +173,61 @@ class OccupancyMap {
   static OccupancyMap read(std::istream& is);
 
  private:
-  /// A leaf as seen from its brick: its cells in local coordinates.
-  struct BrickLeaf {
-    std::uint8_t lo[3], hi[3];
-    Handle handle;
+  // The R-tree's leaf level is clustered by brick: a brick's cuboids, kept in Morton order of
+  // their first cell, are cut into leaf nodes of at most M consecutive entries. The levels
+  // above are a Guttman R-tree over the leaf nodes' boxes. A brick's array is thus the storage
+  // of its leaf nodes, and the brick hash finds a cell's leaf without descending the tree.
+  struct LeafEntry {
+    std::uint8_t lo[3], hi[3];  // brick-local cells, inclusive
+    float value;                // log-odds
+  };
+  struct LeafNodeRef {
+    std::uint32_t brick;  // slot in bricks_
+    std::uint32_t node;   // leaf node index within the brick
   };
   struct Brick {
     Key brick;
-    std::vector<BrickLeaf> leaves;
+    std::vector<LeafEntry> leaves;
+    std::vector<Handle> nodes;  // upper-tree handle of each leaf node
   };
+  static constexpr std::uint8_t kDead = 0xFF;
 
+  static Box globalBox(const Key& brick_origin, const LeafEntry& e) {
+    return Box{Key{brick_origin.x + e.lo[0], brick_origin.y + e.lo[1], brick_origin.z + e.lo[2]},
+               Key{brick_origin.x + e.hi[0], brick_origin.y + e.hi[1], brick_origin.z + e.hi[2]}};
+  }
   std::uint32_t brickSlot(const Key& brick);
   const Brick* findBrick(const Key& brick) const;
-  Handle findLeaf(const Key& k) const;
-  Box globalBox(const Brick& b, const BrickLeaf& l) const;
+  const LeafEntry* findLeaf(const Key& k) const;
+  std::size_t leafNodeSize() const { return params_.rtree.max_entries; }
+  Box leafNodeBox(const Brick& b, std::size_t node) const;
   bool mergeable(float v) const;
   void applyBrick(const UpdateBatch::BrickUpdates& upd, InsertStats& stats);
-  void mergeInBrick(Brick& brick, std::vector<std::int32_t>& local, std::vector<std::uint32_t>& candidates,
-                    InsertStats& stats);
+  std::size_t mergeInBrick(std::vector<LeafEntry>& leaves, const std::vector<std::uint32_t>& candidates);
+  /// Rewrites a brick's leaves in Morton order of their first cell from the painted scratch
+  /// table, dropping leaves merged away.
+  void packLeaves(std::uint32_t slot);
+  /// Brings the brick's leaf nodes in the upper tree up to date with its leaves.
+  void syncLeafNodes(std::uint32_t slot);
+  /// Visits the leaf entries of one upper-tree item.
+  template <class Fn>
+  void forEachInLeafNode(Handle h, Fn&& fn) const {
+    const LeafNodeRef r = upper_.payload(h);
+    const Brick& b = bricks_[r.brick];
+    const Key o = brickOrigin(b.brick);
+    const std::size_t first = r.node * leafNodeSize(), last = std::min(b.leaves.size(), first + leafNodeSize());
+    for (std::size_t i = first; i < last; ++i) fn(globalBox(o, b.leaves[i]), b.leaves[i].value);
+  }
 
   MapParams params_;
   Lattice lattice_;
   LogOddsModel model_;
-  RTree<float> tree_;
+  RTree<LeafNodeRef> upper_;
   detail::FlatHashMap64 brick_index_;
   std::vector<Brick> bricks_;
+  std::size_t leaf_count_ = 0;
   std::vector<std::int32_t> local_;  // scratch: brick-local cell -> leaf index, -1 when none
+  std::vector<LeafEntry> pack_scratch_;
 };
 
 }  // namespace rtog
