@@ -18,6 +18,8 @@ int main(int argc, char** argv) {
   b->add_option("--model", model, "Sensor model: beam | endpoint")->capture_default_str();
   b->add_option("--merge", merge, "Leaf merging: off | clamped | equal")->capture_default_str();
   b->add_option("--max-range", build.insert.max_range, "Cut beams longer than this [m] (<= 0: no limit)");
+  b->add_option("--threads", build.insert.threads, "Threads tracing beams")->capture_default_str()->check(CLI::Range(1, 256));
+  b->add_flag("--discretize", build.insert.discretize, "Trace beams to end-cell centres, once per cell (OctoMap's discretize)");
   b->add_option("--stride", build.stride, "Use every n-th pixel")->capture_default_str()->check(CLI::PositiveNumber);
 
   std::string map_path;

@@ -1,5 +1,7 @@
 // Insertion: beams -> per-scan update batch -> one sweep over the touched bricks.
 #include <algorithm>
+#include <exception>
+#include <thread>
 #include <array>
 
 #include "rtog/core/occupancy_map.hpp"
@@ -9,11 +11,33 @@ namespace rtog {
 
 InsertStats OccupancyMap::insertPointCloud(const Eigen::Vector3d& origin, const Eigen::Vector3f* points,
                                            std::size_t count, const InsertParams& ip, const std::uint8_t* is_hit) {
+  if (ip.threads < 1) throw std::invalid_argument("InsertParams: threads must be >= 1");
+  // Below a few thousand beams a thread costs more than it saves.
+  const std::size_t threads = std::min<std::size_t>(static_cast<std::size_t>(ip.threads), 1 + count / 4096);
+  if (batches_.size() < threads) batches_.resize(threads);
+  std::vector<InsertStats> part(threads);
+  std::vector<std::exception_ptr> errors(threads);
+  // Contiguous slices, traced independently; their union does not depend on the split.
+  const auto trace = [&](std::size_t t) {
+    try {
+      const std::size_t first = count * t / threads, last = count * (t + 1) / threads;
+      batches_[t].clear();
+      computeUpdate(origin, points + first, last - first, ip, is_hit ? is_hit + first : nullptr, batches_[t], part[t]);
+    } catch (...) {
+      errors[t] = std::current_exception();
+    }
+  };
+  std::vector<std::thread> workers;
+  for (std::size_t t = 1; t < threads; ++t) workers.emplace_back(trace, t);
+  trace(0);
+  for (auto& w : workers) w.join();
+  for (const auto& e : errors)
+    if (e) std::rethrow_exception(e);
   InsertStats stats;
-  UpdateBatch batch;
-  computeUpdate(origin, points, count, ip, is_hit, batch, stats);
-  batch.finalize();
-  applyUpdate(batch, stats);
+  for (std::size_t t = 0; t < threads; ++t) stats += part[t];
+  for (std::size_t t = 1; t < threads; ++t) batches_[0].merge(batches_[t]);
+  batches_[0].finalize();
+  applyUpdate(batches_[0], stats);
   return stats;
 }
 
@@ -48,16 +72,23 @@ void OccupancyMap::computeUpdate(const Eigen::Vector3d& origin, const Eigen::Vec
       continue;
     }
     ++(hit ? stats.rays_hit : stats.rays_truncated);
-    if (trace)
-      traverseRay(origin_l, lattice_.toLattice(end), origin_key, end_key, [&](const Key& k) { batch.markFree(k); });
-    if (hit) batch.markOccupied(end_key);
+    Eigen::Vector3d end_l;
+    if (ip.discretize) {
+      // A beam to a cell already traced to in this batch adds nothing.
+      if (hit && !batch.markOccupied(end_key)) continue;
+      end_l = Eigen::Vector3d(end_key.x + 0.5, end_key.y + 0.5, end_key.z + 0.5);
+    } else {
+      if (hit) batch.markOccupied(end_key);
+      end_l = lattice_.toLattice(end);
+    }
+    if (trace) traverseRay(origin_l, end_l, origin_key, end_key, [&](const Key& k) { batch.markFree(k); });
   }
 }
 
 void OccupancyMap::applyUpdate(const UpdateBatch& batch, InsertStats& stats) {
   stats.cells_occupied += batch.occupiedCount();
   stats.cells_free += batch.freeCount();
-  for (const auto& upd : batch.bricks()) applyBrick(upd, stats);
+  for (const UpdateBatch::BrickUpdates* upd : batch.bricks()) applyBrick(*upd, stats);
 }
 
 namespace {

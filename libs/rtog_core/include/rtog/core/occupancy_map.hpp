@@ -52,6 +52,11 @@ struct InsertParams {
   /// Beams longer than this are cut here: free up to the cut, nothing occupied. <= 0 means
   /// unlimited. (Default: -1)
   double max_range = -1.0;
+  /// Trace each beam to the centre of its end cell and beams ending in the same cell once
+  /// (OctoMap's `discretize`): much faster for dense clouds. (Default: false)
+  bool discretize = false;
+  /// Threads tracing beams; the map is bit-identical for any count. (Default: 1)
+  int threads = 1;
 };
 
 /// What one insertion did; every input beam is counted in exactly one of the first five.
@@ -72,6 +77,7 @@ struct InsertStats {
     return rays_hit + rays_truncated + skipped_non_finite + skipped_zero_length + skipped_out_of_range;
   }
   InsertStats& operator+=(const InsertStats& o);
+  bool operator==(const InsertStats& o) const;
 };
 
 /// Whole-map figures (what `rtog info` prints).
@@ -228,6 +234,7 @@ class OccupancyMap {
   std::size_t leaf_count_ = 0;
   std::vector<std::int32_t> local_;  // scratch: brick-local cell -> leaf index, -1 when none
   std::vector<LeafEntry> pack_scratch_;
+  std::vector<UpdateBatch> batches_;  // per-thread scratch, reused across insertions
 };
 
 }  // namespace rtog

@@ -37,37 +37,52 @@ inline Key localKey(int index) {
 class UpdateBatch {
  public:
   struct BrickUpdates {
-    Key brick;                                      ///< brick coordinates (key >> kBrickBits)
+    Key brick;                                        ///< brick coordinates (key >> kBrickBits)
     std::array<std::uint64_t, kBrickWords> occupied;  ///< bit per local cell index
     std::array<std::uint64_t, kBrickWords> free;
   };
 
   void clear();
-  void markFree(const Key& k) { set(k, false); }
-  void markOccupied(const Key& k) { set(k, true); }
+  void markFree(const Key& k) {
+    const int i = localIndex(k);
+    brickFor(k).free[static_cast<std::size_t>(i >> 6)] |= std::uint64_t{1} << (i & 63);
+  }
+  /// Returns false if the cell was already marked occupied in this batch.
+  bool markOccupied(const Key& k) {
+    const int i = localIndex(k);
+    std::uint64_t& w = brickFor(k).occupied[static_cast<std::size_t>(i >> 6)];
+    const std::uint64_t bit = std::uint64_t{1} << (i & 63);
+    const bool fresh = (w & bit) == 0;
+    w |= bit;
+    return fresh;
+  }
+  /// Adds another (unfinalized) batch's marks: the union, whatever the order.
+  void merge(const UpdateBatch& other);
 
   /// Drops free marks of cells also marked occupied and orders bricks by (z, y, x) so that
-  /// applying the batch is deterministic. Call once after marking.
+  /// applying the batch is deterministic. Ends marking; clear() starts a new batch.
   void finalize();
 
-  const std::vector<BrickUpdates>& bricks() const { return bricks_; }
+  /// The touched bricks in (z, y, x) order, after finalize().
+  const std::vector<const BrickUpdates*>& bricks() const { return sorted_; }
   std::size_t occupiedCount() const;
   std::size_t freeCount() const;
-  std::size_t memoryBytes() const { return bricks_.capacity() * sizeof(BrickUpdates) + index_.memoryBytes(); }
+  std::size_t memoryBytes() const {
+    return bricks_.capacity() * sizeof(BrickUpdates) + index_.memoryBytes() + sorted_.capacity() * sizeof(void*);
+  }
 
  private:
-  void set(const Key& k, bool occupied) {
+  BrickUpdates& brickFor(const Key& k) {
     const Key b = brickOf(k);
-    if (last_ == detail::FlatHashMap64::kAbsent || b != bricks_[last_].brick) last_ = brickSlot(b);
-    const int i = localIndex(k);
-    auto& words = occupied ? bricks_[last_].occupied : bricks_[last_].free;
-    words[i >> 6] |= std::uint64_t{1} << (i & 63);
+    if (cached_ == nullptr || b != cached_->brick) cached_ = &bricks_[brickSlot(b)];
+    return *cached_;
   }
   std::uint32_t brickSlot(const Key& b);
 
   std::vector<BrickUpdates> bricks_;
   detail::FlatHashMap64 index_;
-  std::uint32_t last_ = detail::FlatHashMap64::kAbsent;
+  BrickUpdates* cached_ = nullptr;
+  std::vector<const BrickUpdates*> sorted_;
 };
 
 }  // namespace rtog
