@@ -1,11 +1,22 @@
 #include "commands.hpp"
 
 #include <chrono>
+#include <cerrno>
+#include <cmath>
+#include <cstring>
 #include <cstdio>
 #include <fstream>
 #include <iomanip>
 #include <ostream>
+#include <set>
+#include <sstream>
+#include <vector>
 
+#include <opencv2/imgcodecs.hpp>
+
+#include "rtog/core/mesh_export.hpp"
+#include "rtog/core/octomap_export.hpp"
+#include "rtog/image/slice.hpp"
 #include "rtog/image/tum_dataset.hpp"
 
 namespace rtog::cli {
@@ -20,22 +31,37 @@ OccupancyMap loadMap(const std::string& path) {
   }
 }
 
+PendingFile::PendingFile(std::string path) : path_(std::move(path)), tmp_(path_ + ".partial") {
+  out_ = std::make_unique<std::ofstream>(tmp_, std::ios::binary | std::ios::trunc);
+  if (!*out_)
+    throw std::runtime_error("cannot write '" + path_ + "': cannot create '" + tmp_ + "': " + std::strerror(errno));
+}
+
+PendingFile::~PendingFile() {
+  if (committed_) return;
+  out_.reset();
+  std::remove(tmp_.c_str());
+}
+
+std::ostream& PendingFile::stream() { return *out_; }
+
+void PendingFile::close() {
+  if (!out_->is_open()) return;
+  out_->close();
+  if (!*out_) throw std::runtime_error("writing '" + tmp_ + "' failed");
+}
+
+void PendingFile::commit() {
+  close();
+  if (std::rename(tmp_.c_str(), path_.c_str()) != 0)
+    throw std::runtime_error("cannot rename '" + tmp_ + "' to '" + path_ + "'");
+  committed_ = true;
+}
+
 void saveMap(const OccupancyMap& map, const std::string& path) {
-  const std::string tmp = path + ".partial";
-  {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    if (!out) throw std::runtime_error("cannot write '" + tmp + "'");
-    map.write(out);
-    out.close();
-    if (!out) {
-      std::remove(tmp.c_str());
-      throw std::runtime_error("writing '" + tmp + "' failed");
-    }
-  }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-    std::remove(tmp.c_str());
-    throw std::runtime_error("cannot rename '" + tmp + "' to '" + path + "'");
-  }
+  PendingFile f(path);
+  map.write(f.stream());
+  f.commit();
 }
 
 void printStatistics(const OccupancyMap& map, std::ostream& out) {
@@ -101,6 +127,93 @@ int info(const std::string& map_path, bool json, std::ostream& out) {
       << ", \"free_leaves\": " << s.free_leaves << ", \"cells\": " << s.cells
       << ", \"occupied_cells\": " << s.occupied_cells << ", \"free_cells\": " << s.free_cells
       << ", \"memory_bytes\": " << s.memory_bytes << "}\n";
+  return 0;
+}
+
+namespace {
+
+std::string metres(double v) {
+  std::ostringstream os;
+  os << std::setprecision(6) << v;
+  return os.str();
+}
+
+}  // namespace
+
+int exportMap(const ExportOptions& opts, std::ostream& out) {
+  if (opts.ply_path.empty() && opts.bt_path.empty() && opts.png_path.empty())
+    throw std::invalid_argument("export: nothing to do; give --ply FILE, --bt FILE or --png FILE --slice-z Z");
+  if (!opts.png_path.empty() && !opts.slice_z)
+    throw std::invalid_argument("export: --png needs --slice-z Z (height of the slice in metres)");
+  if (opts.png_path.empty() && opts.slice_z)
+    throw std::invalid_argument("export: --slice-z is only used with --png FILE");
+  if (opts.slice_z && !std::isfinite(*opts.slice_z))
+    throw std::invalid_argument("export: --slice-z must be a finite height in metres");
+  {
+    std::set<std::string> seen{opts.map_path};
+    for (const std::string* p : {&opts.ply_path, &opts.bt_path, &opts.png_path})
+      if (!p->empty() && !seen.insert(*p).second)
+        throw std::invalid_argument("export: '" + *p + "' is named twice (or is the input map)");
+  }
+  const OccupancyMap map = loadMap(opts.map_path);
+
+  // Everything is written to FILE.partial first and renamed only when all exports succeeded.
+  std::vector<std::unique_ptr<PendingFile>> files;
+  std::vector<std::string> messages;
+  const auto fail = [](const std::string& path, const std::exception& e) {
+    return std::runtime_error("'" + path + "': " + e.what());
+  };
+
+  if (!opts.png_path.empty()) {
+    const double z = *opts.slice_z;
+    const Box bounds = map.keyBounds();
+    if (bounds.isEmpty()) throw std::invalid_argument("export: the map is empty, there is no slice to draw");
+    const double zlo = map.lattice().boxMin(bounds).z(), zhi = map.lattice().boxMax(bounds).z();
+    if (!(z >= zlo && z < zhi))
+      throw std::invalid_argument("export: --slice-z " + metres(z) + " m is outside the map's height range [" +
+                                  metres(zlo) + ", " + metres(zhi) + ") m");
+    const cv::Mat img = image::rasterizeSliceZ(map, z);
+    std::vector<unsigned char> png;
+    if (!cv::imencode(".png", img, png)) throw std::runtime_error("'" + opts.png_path + "': PNG encoding failed");
+    files.push_back(std::make_unique<PendingFile>(opts.png_path));
+    try {
+      files.back()->stream().write(reinterpret_cast<const char*>(png.data()), static_cast<std::streamsize>(png.size()));
+      files.back()->close();
+    } catch (const std::exception& e) {
+      throw fail(opts.png_path, e);
+    }
+    messages.push_back("wrote " + opts.png_path + ": slice at z = " + metres(z) + " m, " + std::to_string(img.cols) +
+                       " x " + std::to_string(img.rows) + " pixels (one per cell; occupied black, free white, unknown grey)");
+  }
+  if (!opts.ply_path.empty()) {
+    files.push_back(std::make_unique<PendingFile>(opts.ply_path));
+    MeshExportStats st;
+    try {
+      st = writeOccupiedPly(map, files.back()->stream(),
+                            opts.ply_ascii ? PlyEncoding::Ascii : PlyEncoding::BinaryLittleEndian);
+      files.back()->close();
+    } catch (const std::exception& e) {
+      throw fail(opts.ply_path, e);
+    }
+    messages.push_back("wrote " + opts.ply_path + ": " + std::to_string(st.cuboids) + " occupied cuboids, " +
+                       std::to_string(st.vertices) + " vertices, " + std::to_string(st.faces) + " triangles (" +
+                       (opts.ply_ascii ? "ASCII" : "binary") + " PLY)");
+  }
+  if (!opts.bt_path.empty()) {
+    files.push_back(std::make_unique<PendingFile>(opts.bt_path));
+    OctoMapExportStats st;
+    try {
+      st = writeOctoMapBinary(map, files.back()->stream());
+      files.back()->close();
+    } catch (const std::exception& e) {
+      throw fail(opts.bt_path, e);
+    }
+    messages.push_back("wrote " + opts.bt_path + ": OctoMap tree of " + std::to_string(st.nodes) + " nodes (" +
+                       std::to_string(st.occupied_leaves) + " occupied and " + std::to_string(st.free_leaves) +
+                       " free leaves)");
+  }
+  for (auto& f : files) f->commit();
+  for (const auto& m : messages) out << m << "\n";
   return 0;
 }
 

@@ -2,6 +2,8 @@
 #pragma once
 
 #include <iosfwd>
+#include <memory>
+#include <optional>
 #include <string>
 
 #include "rtog/core/occupancy_map.hpp"
@@ -24,6 +26,44 @@ int buildFromTum(const BuildTumOptions& opts, std::ostream& out);
 int info(const std::string& map_path, bool json, std::ostream& out);
 
 void printStatistics(const OccupancyMap& map, std::ostream& out);
+
+struct ExportOptions {
+  std::string map_path;          ///< .rtog map to read
+  std::string ply_path;          ///< occupied cuboids as a triangle mesh; empty: none
+  bool ply_ascii = false;        ///< ASCII PLY instead of binary little-endian (Default: false)
+  std::string bt_path;           ///< OctoMap binary tree (.bt); empty: none
+  std::string png_path;          ///< horizontal slice image; empty: none (needs slice_z)
+  std::optional<double> slice_z; ///< height of the slice [m]
+};
+
+/// Writes the requested exports of a saved map. All outputs are written to `FILE.partial`
+/// first and renamed only when every one succeeded, so a failure leaves no output behind.
+/// Throws std::invalid_argument for bad options and std::runtime_error (naming the file) for
+/// unreadable maps or failed writes. Returns the process exit code.
+int exportMap(const ExportOptions& opts, std::ostream& out);
+
+/// An output file written to `path + ".partial"` and renamed to `path` by commit(); if it is
+/// destroyed before, the partial file is removed.
+class PendingFile {
+ public:
+  /// Throws std::runtime_error if the temporary file cannot be created.
+  explicit PendingFile(std::string path);
+  ~PendingFile();
+  PendingFile(const PendingFile&) = delete;
+  PendingFile& operator=(const PendingFile&) = delete;
+
+  std::ostream& stream();
+  const std::string& path() const { return path_; }
+  /// Flushes and closes; throws std::runtime_error if any write failed.
+  void close();
+  /// close() (if not done), then renames into place; throws std::runtime_error on failure.
+  void commit();
+
+ private:
+  std::string path_, tmp_;
+  std::unique_ptr<std::ofstream> out_;
+  bool committed_ = false;
+};
 
 /// Loads a .rtog map; throws std::runtime_error naming the file on failure.
 OccupancyMap loadMap(const std::string& path);

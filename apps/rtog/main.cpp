@@ -1,4 +1,4 @@
-// rtog: build and inspect R-tree occupancy grids.
+// rtog: build, inspect and export R-tree occupancy grids.
 #include <iostream>
 
 #include <CLI/CLI.hpp>
@@ -28,12 +28,34 @@ int main(int argc, char** argv) {
   i->add_option("map", map_path, "Map file (.rtog)")->required();
   i->add_flag("--json", json, "JSON output");
 
-  CLI11_PARSE(app, argc, argv);
+  rtog::cli::ExportOptions ex;
+  double slice_z = 0.0;
+  auto* e = app.add_subcommand("export", "Export a map: mesh of occupied cuboids, OctoMap tree, image slice");
+  e->add_option("map", ex.map_path, "Map file (.rtog)")->required();
+  auto* ply = e->add_option("--ply", ex.ply_path, "Occupied cuboids as a triangle mesh (.ply)");
+  e->add_flag("--ascii", ex.ply_ascii, "Write the PLY as ASCII (default: binary little-endian)")->needs(ply);
+  e->add_option("--bt", ex.bt_path, "OctoMap binary tree (.bt; octovis, OcTree::readBinary)");
+  auto* png = e->add_option("--png", ex.png_path, "Horizontal slice as an image (.png), with --slice-z");
+  auto* sz = e->add_option("--slice-z", slice_z, "Height of the slice [m]");
+  png->needs(sz);
+  sz->needs(png);
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& err) {
+    if (err.get_exit_code() == 0) return app.exit(err);  // --help
+    std::cerr << "rtog: error: " << err.what() << " (see --help)\n";
+    return 2;
+  }
   try {
     if (b->parsed()) {
       build.insert.model = rtog::sensorModelFromString(model);
       build.map.merge = rtog::mergePolicyFromString(merge);
       return rtog::cli::buildFromTum(build, std::cout);
+    }
+    if (e->parsed()) {
+      if (sz->count() > 0) ex.slice_z = slice_z;
+      return rtog::cli::exportMap(ex, std::cout);
     }
     return rtog::cli::info(map_path, json, std::cout);
   } catch (const std::exception& e) {

@@ -55,16 +55,19 @@ void OccupancyMap::computeUpdate(const Eigen::Vector3d& origin, const Eigen::Vec
       continue;
     }
     const Eigen::Vector3d diff = p - origin;
-    const double dist = diff.norm();
-    if (!(dist > 0.0)) {
+    const double dist2 = diff.squaredNorm();
+    if (!(dist2 > 0.0)) {
       ++stats.skipped_zero_length;
       continue;
     }
     bool hit = is_hit == nullptr || is_hit[i] != 0;
     Eigen::Vector3d end = p;
-    if (limited && dist > ip.max_range) {
-      end = origin + diff * (ip.max_range / dist);
-      hit = false;
+    if (limited) {
+      const double dist = std::sqrt(dist2);
+      if (dist > ip.max_range) {
+        end = origin + diff * (ip.max_range / dist);
+        hit = false;
+      }
     }
     Key end_key;
     if (!lattice_.tryKey(end, end_key)) {
@@ -81,7 +84,7 @@ void OccupancyMap::computeUpdate(const Eigen::Vector3d& origin, const Eigen::Vec
       if (hit) batch.markOccupied(end_key);
       end_l = lattice_.toLattice(end);
     }
-    if (trace) traverseRay(origin_l, end_l, origin_key, end_key, [&](const Key& k) { batch.markFree(k); });
+    if (trace) batch.markRayFree(origin_l, end_l, origin_key, end_key);
   }
 }
 

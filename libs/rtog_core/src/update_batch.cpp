@@ -26,6 +26,33 @@ std::uint32_t UpdateBatch::brickSlot(const Key& b) {
   return slot;
 }
 
+void UpdateBatch::markRayFree(const Eigen::Vector3d& from, const Eigen::Vector3d& to, const Key& from_key,
+                              const Key& to_key) {
+  // Tracks the cell's brick and bit incrementally: a carry out of the brick's local range is
+  // the only time the brick is looked up again.
+  struct BrickCursor {
+    UpdateBatch& batch;
+    Key cell;
+    int local[3];
+    std::uint64_t* words;
+    void visit() {
+      const int i = local[0] | (local[1] << kBrickBits) | (local[2] << (2 * kBrickBits));
+      words[i >> 6] |= std::uint64_t{1} << (i & 63);
+    }
+    void move(int axis, int s) {
+      cell[axis] += s;
+      local[axis] += s;
+      if (local[axis] & ~(kBrickSize - 1)) {
+        local[axis] &= kBrickSize - 1;
+        words = batch.brickFor(cell).free.data();
+      }
+    }
+  };
+  constexpr int m = kBrickSize - 1;
+  BrickCursor cursor{*this, from_key, {from_key.x & m, from_key.y & m, from_key.z & m}, brickFor(from_key).free.data()};
+  walkRay(from, to, from_key, to_key, cursor);
+}
+
 void UpdateBatch::merge(const UpdateBatch& other) {
   for (const BrickUpdates& o : other.bricks_) {
     BrickUpdates& b = bricks_[brickSlot(o.brick)];

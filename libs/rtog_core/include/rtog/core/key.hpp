@@ -102,6 +102,13 @@ void forEachCell(const Box& b, Fn&& fn) {
       for (std::int32_t x = b.min.x; x <= b.max.x; ++x) fn(Key{x, y, z});
 }
 
+/// floor() for values known to fit in int32: without SSE4.1 std::floor is a library call,
+/// and this runs once per axis per beam.
+inline std::int32_t floorToInt(double v) {
+  const auto i = static_cast<std::int32_t>(v);  // truncates towards zero
+  return i - static_cast<std::int32_t>(v < static_cast<double>(i));
+}
+
 /// The lattice geometry: resolution with cell boundaries at integer multiples of it (the
 /// same alignment as OctoMap, so that both maps can be compared cell by cell).
 class Lattice {
@@ -123,8 +130,7 @@ class Lattice {
     const Eigen::Vector3d l = p * inv_resolution_;
     constexpr double lo = kKeyMin, hi = double{kKeyMax} + 1.0;
     if (!(l.x() >= lo && l.x() < hi && l.y() >= lo && l.y() < hi && l.z() >= lo && l.z() < hi)) return false;
-    out = Key{static_cast<std::int32_t>(std::floor(l.x())), static_cast<std::int32_t>(std::floor(l.y())),
-              static_cast<std::int32_t>(std::floor(l.z()))};
+    out = Key{floorToInt(l.x()), floorToInt(l.y()), floorToInt(l.z())};
     return true;
   }
   /// Throws std::out_of_range for points that have no key.

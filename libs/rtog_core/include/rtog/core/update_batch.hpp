@@ -8,6 +8,7 @@
 
 #include "rtog/core/detail/flat_hash_map.hpp"
 #include "rtog/core/key.hpp"
+#include "rtog/core/ray_traversal.hpp"
 
 namespace rtog {
 
@@ -47,6 +48,8 @@ class UpdateBatch {
     const int i = localIndex(k);
     brickFor(k).free[static_cast<std::size_t>(i >> 6)] |= std::uint64_t{1} << (i & 63);
   }
+  /// Marks the cells of traverseRay(from, to, from_key, to_key) free.
+  void markRayFree(const Eigen::Vector3d& from, const Eigen::Vector3d& to, const Key& from_key, const Key& to_key);
   /// Returns false if the cell was already marked occupied in this batch.
   bool markOccupied(const Key& k) {
     const int i = localIndex(k);

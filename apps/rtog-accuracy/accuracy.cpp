@@ -1,0 +1,456 @@
+#include "accuracy.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <fstream>
+#include <functional>
+#include <iomanip>
+#include <iostream>
+#include <limits>
+#include <sstream>
+#include <stdexcept>
+
+#include <mrpt/maps/COccupancyGridMap2D.h>
+#include <mrpt/maps/COccupancyGridMap3D.h>
+#include <mrpt/maps/CSimplePointsMap.h>
+#include <mrpt/obs/CObservation2DRangeScan.h>
+#include <mrpt/poses/CPose3D.h>
+#include <mrpt/version.h>
+#include <octomap/octomap.h>
+
+#include "rtog/core/occupancy_map.hpp"
+
+#ifndef RTOG_OCTOMAP_VERSION
+#define RTOG_OCTOMAP_VERSION "unknown"
+#endif
+
+namespace rtog::accuracy {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double secondsSince(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+constexpr double kPi = 3.14159265358979323846;
+
+/// What one map says about every cell of the region: P(occupied) and its class.
+struct MapView {
+  std::string name;
+  double insert_seconds = 0;
+  std::vector<float> p;                 // P(occupied); only meaningful when state != Unknown
+  std::vector<sim::Predicted> state;
+  std::size_t outside = 0;              // known cells outside the region
+  explicit MapView(std::string n, std::size_t cells)
+      : name(std::move(n)), p(cells, 0.5f), state(cells, sim::Predicted::Unknown) {}
+};
+
+// ---- rtog ------------------------------------------------------------------------------
+
+MapView buildRtog(const std::vector<sim::Scan>& scans, double res, double max_range, const sim::TruthGrid& region) {
+  MapParams mp;
+  mp.resolution = res;
+  OccupancyMap map(mp);
+  InsertParams ip;
+  ip.model = SensorModel::BeamBased;
+  ip.max_range = max_range;
+  const auto t0 = Clock::now();
+  for (const auto& s : scans) map.insertPointCloud(s.origin, s.points.data(), s.points.size(), ip, s.is_hit.data());
+  MapView v("rtog", region.size());
+  v.insert_seconds = secondsSince(t0);
+  const Box& R = region.region();
+  const LogOddsModel& model = map.logOddsModel();
+  map.forEachLeaf([&](const Box& b, float value) {
+    const Box c = b.intersection(R);
+    v.outside += static_cast<std::size_t>(b.volume() - (c.isEmpty() ? 0 : c.volume()));
+    if (c.isEmpty()) return;
+    const float prob = static_cast<float>(probability(value));
+    const sim::Predicted st =
+        model.classify(value) == CellState::Occupied ? sim::Predicted::Occupied : sim::Predicted::Free;
+    forEachCell(c, [&](const Key& k) {
+      const std::size_t i = region.index(k);
+      v.p[i] = prob;
+      v.state[i] = st;
+    });
+  });
+  return v;
+}
+
+// ---- OctoMap ----------------------------------------------------------------------------
+
+MapView buildOctomap(const std::vector<sim::Scan>& scans, double res, double max_range, const sim::TruthGrid& region) {
+  octomap::OcTree tree(res);  // OctoMap's defaults: hit 0.7, miss 0.4, clamp 0.1192/0.971
+  const auto t0 = Clock::now();
+  for (const auto& s : scans) {
+    octomap::Pointcloud pc;
+    pc.reserve(s.points.size());
+    for (std::size_t i = 0; i < s.points.size(); ++i) {
+      Eigen::Vector3f p = s.points[i];
+      if (!s.is_hit[i]) {  // no return: place it beyond max_range so OctoMap only clears up to it
+        const Eigen::Vector3f o = s.origin.cast<float>();
+        p = o + (p - o).normalized() * static_cast<float>(max_range + 1.0);
+      }
+      pc.push_back(p.x(), p.y(), p.z());
+    }
+    tree.insertPointCloud(pc, octomap::point3d(static_cast<float>(s.origin.x()), static_cast<float>(s.origin.y()),
+                                               static_cast<float>(s.origin.z())),
+                          max_range);
+  }
+  MapView v("octomap", region.size());
+  v.insert_seconds = secondsSince(t0);
+  const Box& R = region.region();
+  const int depth = static_cast<int>(tree.getTreeDepth());
+  const std::int32_t off = static_cast<std::int32_t>(tree.getTreeMaxVal());  // key of cell 0 (32768)
+  for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) {
+    const octomap::OcTreeKey k0 = it.getIndexKey();
+    const std::int32_t n = 1 << (depth - static_cast<int>(it.getDepth()));
+    const Key lo{static_cast<std::int32_t>(k0[0]) - off, static_cast<std::int32_t>(k0[1]) - off,
+                 static_cast<std::int32_t>(k0[2]) - off};
+    const Box b{lo, Key{lo.x + n - 1, lo.y + n - 1, lo.z + n - 1}};
+    const Box c = b.intersection(R);
+    v.outside += static_cast<std::size_t>(b.volume() - (c.isEmpty() ? 0 : c.volume()));
+    if (c.isEmpty()) continue;
+    const float prob = static_cast<float>(it->getOccupancy());
+    const sim::Predicted st = tree.isNodeOccupied(*it) ? sim::Predicted::Occupied : sim::Predicted::Free;
+    forEachCell(c, [&](const Key& k) {
+      const std::size_t i = region.index(k);
+      v.p[i] = prob;
+      v.state[i] = st;
+    });
+  }
+  return v;
+}
+
+// ---- MRPT --------------------------------------------------------------------------------
+
+// Same sensor model as the others, as far as MRPT's options go: P(occ | hit) = 0.7 and
+// P(free | miss) = 0.6. (MRPT's 3D grid triples the occupied log-odds increment internally.)
+constexpr float kMrptOcc = 0.7f, kMrptFree = 0.6f;
+
+void readMrpt(MapView& v, const sim::TruthGrid& region, double res, const std::function<float(double, double, double)>& freeness) {
+  for (std::size_t i = 0; i < region.size(); ++i) {
+    const Key k = region.key(i);
+    const float f = freeness((k.x + 0.5) * res, (k.y + 0.5) * res, (k.z + 0.5) * res);
+    if (f == 0.5f) continue;  // log-odds 0: never observed (or observed to exactly the prior)
+    v.p[i] = 1.0f - f;
+    v.state[i] = f < 0.5f ? sim::Predicted::Occupied : sim::Predicted::Free;
+  }
+}
+
+MapView buildMrpt3D(const std::vector<sim::Scan>& scans, double res, double max_range, const sim::TruthGrid& region) {
+  const Box& R = region.region();
+  mrpt::maps::COccupancyGridMap3D grid(mrpt::math::TPoint3D(R.min.x * res, R.min.y * res, R.min.z * res),
+                                       mrpt::math::TPoint3D((R.max.x + 1) * res, (R.max.y + 1) * res, (R.max.z + 1) * res),
+                                       static_cast<float>(res));
+  grid.insertionOptions.maxOccupancyUpdateCertainty = kMrptOcc;
+  grid.insertionOptions.maxFreenessUpdateCertainty = kMrptFree;
+  grid.insertionOptions.maxDistanceInsertion = static_cast<float>(max_range + 1.0);
+  grid.insertionOptions.decimation = 1;
+  const auto t0 = Clock::now();
+  for (const auto& s : scans) {
+    mrpt::maps::CSimplePointsMap pts;
+    pts.reserve(s.points.size());
+    const mrpt::math::TPoint3D o(s.origin.x(), s.origin.y(), s.origin.z());
+    for (std::size_t i = 0; i < s.points.size(); ++i)
+      if (s.is_hit[i]) pts.insertPointFast(s.points[i].x(), s.points[i].y(), s.points[i].z());
+    grid.insertPointCloud(o, pts);
+    for (std::size_t i = 0; i < s.points.size(); ++i)
+      if (!s.is_hit[i])
+        grid.insertRay(o, mrpt::math::TPoint3D(s.points[i].x(), s.points[i].y(), s.points[i].z()), false);
+  }
+  MapView v("mrpt_grid3d", region.size());
+  v.insert_seconds = secondsSince(t0);
+  readMrpt(v, region, res, [&](double x, double y, double z) {
+    return grid.getFreenessByPos(static_cast<float>(x), static_cast<float>(y), static_cast<float>(z));
+  });
+  return v;
+}
+
+MapView buildMrpt2D(const std::vector<sim::Scan>& scans, const std::vector<sim::Pose>& poses,
+                    const sim::ScannerParams& sp, double res, const sim::TruthGrid& region) {
+  const Box& R = region.region();
+  mrpt::maps::COccupancyGridMap2D grid(static_cast<float>(R.min.x * res), static_cast<float>((R.max.x + 1) * res),
+                                       static_cast<float>(R.min.y * res), static_cast<float>((R.max.y + 1) * res),
+                                       static_cast<float>(res));
+  grid.insertionOptions.maxOccupancyUpdateCertainty = kMrptOcc;
+  grid.insertionOptions.maxFreenessUpdateCertainty = kMrptFree;
+  grid.insertionOptions.maxFreenessInvalidRanges = kMrptFree;
+  grid.insertionOptions.maxDistanceInsertion = static_cast<float>(sp.max_range + 1.0);
+  grid.insertionOptions.considerInvalidRangesAsFreeSpace = true;
+  grid.insertionOptions.wideningBeamsWithDistance = false;
+  const int n = sp.beams();
+  const auto t0 = Clock::now();
+  for (std::size_t s = 0; s < scans.size(); ++s) {
+    mrpt::obs::CObservation2DRangeScan obs;
+    obs.aperture = static_cast<float>(sp.fov_deg * kPi / 180.0);
+    obs.rightToLeft = true;
+    obs.maxRange = static_cast<float>(sp.max_range);
+    obs.sensorPose = mrpt::poses::CPose3D(0, 0, sp.height, 0, 0, 0);
+    obs.resizeScan(static_cast<std::size_t>(n));
+    for (int i = 0; i < n; ++i) {
+      obs.setScanRange(static_cast<std::size_t>(i), scans[s].range[static_cast<std::size_t>(i)]);
+      obs.setScanRangeValidity(static_cast<std::size_t>(i), scans[s].is_hit[static_cast<std::size_t>(i)] != 0);
+    }
+    const sim::Pose& p = poses[s];
+    grid.insertObservation(obs, mrpt::poses::CPose3D(p.position.x(), p.position.y(), p.position.z(), p.yaw, 0, 0));
+  }
+  MapView v("mrpt_grid2d", region.size());
+  v.insert_seconds = secondsSince(t0);
+  readMrpt(v, region, res, [&](double x, double y, double) {
+    return grid.getPos(static_cast<float>(x), static_cast<float>(y));
+  });
+  return v;
+}
+
+// ---- scoring -----------------------------------------------------------------------------
+
+void score(const std::string& scenario_name, const std::vector<MapView>& maps, const sim::TruthGrid& truth,
+           Scenario& sc, std::vector<MapResult>& out) {
+  // The evaluation region: every cell at least one of the maps observed.
+  std::vector<std::uint8_t> eval(truth.size(), 0);
+  for (const auto& m : maps)
+    for (std::size_t i = 0; i < truth.size(); ++i)
+      if (m.state[i] != sim::Predicted::Unknown) eval[i] = 1;
+  sc.region_cells = truth.size();
+  for (std::size_t i = 0; i < truth.size(); ++i)
+    if (eval[i]) {
+      ++sc.evaluated_cells;
+      (truth.occupiedAt(i) ? sc.truth_occupied : sc.truth_free) += 1;
+    }
+  for (const auto& m : maps) {
+    sim::Evaluator ev;
+    std::size_t observed = 0;
+    for (std::size_t i = 0; i < truth.size(); ++i) {
+      if (!eval[i]) continue;
+      observed += m.state[i] != sim::Predicted::Unknown;
+      ev.add(m.p[i], m.state[i], truth.occupiedAt(i));
+    }
+    MapResult r;
+    r.scenario = scenario_name;
+    r.map = m.name;
+    r.insert_seconds = m.insert_seconds;
+    r.observed_cells = observed;
+    r.observed_outside = m.outside;
+    r.metrics = ev.finish();
+    out.push_back(std::move(r));
+  }
+}
+
+std::string mrptVersion() {
+  std::ostringstream os;
+  os << ((MRPT_VERSION >> 8) & 0xF) << '.' << ((MRPT_VERSION >> 4) & 0xF) << '.' << (MRPT_VERSION & 0xF);
+  return os.str();
+}
+
+}  // namespace
+
+Report run(const Config& cfg, std::ostream& log) {
+  const auto t_start = Clock::now();
+  Report rep;
+  rep.config = cfg;
+  rep.octomap_version = RTOG_OCTOMAP_VERSION;
+  rep.mrpt_version = mrptVersion();
+
+  const sim::World world = sim::World::generate(cfg.world, cfg.seed);
+  rep.world_summary = world.summary();
+  log << "world (seed " << cfg.seed << "): " << rep.world_summary << "\n";
+  auto t0 = Clock::now();
+  const sim::SimulatedLog simlog =
+      sim::simulate(world, cfg.lidar, cfg.scanner, cfg.lidar_seed, cfg.scanner_seed, cfg.stride);
+  log << "simulated " << simlog.lidar.size() << " LiDAR and " << simlog.planar.size() << " 2D scans in "
+      << secondsSince(t0) << " s\n";
+
+  const Lattice lat(cfg.resolution);
+  const Box region3 = sim::worldKeyBox(world, lat, 2);
+
+  // ---- 3D LiDAR ----
+  {
+    Scenario sc;
+    sc.name = "lidar3d";
+    std::ostringstream d;
+    d << cfg.lidar.rings << "-ring LiDAR, " << cfg.lidar.azimuth_steps << " azimuth steps, elevation ["
+      << cfg.lidar.elev_min_deg << ", " << cfg.lidar.elev_max_deg << "] deg, max range " << cfg.lidar.max_range
+      << " m, sigma " << cfg.lidar.sigma << " m, " << cfg.lidar.height << " m above the floor";
+    sc.description = d.str();
+    sc.scans = simlog.lidar.size();
+    for (const auto& s : simlog.lidar) {
+      sc.beams += s.points.size();
+      sc.returns += s.hits();
+    }
+    const sim::TruthGrid truth = sim::TruthGrid::rasterize(world, lat, region3);
+    std::vector<MapView> maps;
+    maps.push_back(buildRtog(simlog.lidar, cfg.resolution, cfg.lidar.max_range, truth));
+    log << "  rtog        " << maps.back().insert_seconds << " s\n";
+    maps.push_back(buildOctomap(simlog.lidar, cfg.resolution, cfg.lidar.max_range, truth));
+    log << "  octomap     " << maps.back().insert_seconds << " s\n";
+    maps.push_back(buildMrpt3D(simlog.lidar, cfg.resolution, cfg.lidar.max_range, truth));
+    log << "  mrpt_grid3d " << maps.back().insert_seconds << " s\n";
+    score(sc.name, maps, truth, sc, rep.results);
+    rep.scenarios.push_back(sc);
+  }
+
+  // ---- 2D scanner: the layer of cells containing the scan plane ----
+  {
+    Scenario sc;
+    sc.name = "scanner2d";
+    const double plane_z = simlog.planar.empty() ? world.floorZ() + cfg.scanner.height : simlog.planar.front().origin.z();
+    const std::int32_t kz = static_cast<std::int32_t>(std::floor(lat.toLattice(plane_z)));
+    std::ostringstream d;
+    d << "planar scanner, " << cfg.scanner.fov_deg << " deg field of view in " << cfg.scanner.step_deg
+      << " deg steps, max range " << cfg.scanner.max_range << " m, sigma " << cfg.scanner.sigma << " m, plane z = "
+      << plane_z << " m (cell layer " << kz << ")";
+    sc.description = d.str();
+    sc.scans = simlog.planar.size();
+    for (const auto& s : simlog.planar) {
+      sc.beams += s.points.size();
+      sc.returns += s.hits();
+    }
+    Box region2 = region3;
+    region2.min.z = region2.max.z = kz;
+    const sim::TruthGrid truth = sim::TruthGrid::rasterizeSlice(world, lat, region2, plane_z);
+    std::vector<MapView> maps;
+    maps.push_back(buildRtog(simlog.planar, cfg.resolution, cfg.scanner.max_range, truth));
+    log << "  rtog        " << maps.back().insert_seconds << " s\n";
+    maps.push_back(buildOctomap(simlog.planar, cfg.resolution, cfg.scanner.max_range, truth));
+    log << "  octomap     " << maps.back().insert_seconds << " s\n";
+    maps.push_back(buildMrpt2D(simlog.planar, simlog.poses, cfg.scanner, cfg.resolution, truth));
+    log << "  mrpt_grid2d " << maps.back().insert_seconds << " s\n";
+    score(sc.name, maps, truth, sc, rep.results);
+    rep.scenarios.push_back(sc);
+  }
+  rep.total_seconds = secondsSince(t_start);
+  return rep;
+}
+
+// ---- output ------------------------------------------------------------------------------
+
+namespace {
+std::string jsonEscape(const std::string& s) {
+  std::string o;
+  for (char c : s) {
+    if (c == '"' || c == '\\') o += '\\';
+    o += c;
+  }
+  return o;
+}
+}  // namespace
+
+void writeJson(const Report& r, std::ostream& os) {
+  os << std::setprecision(6);
+  const Config& c = r.config;
+  os << "{\n  \"config\": {\"seed\": " << c.seed << ", \"lidar_seed\": " << c.lidar_seed
+     << ", \"scanner_seed\": " << c.scanner_seed << ", \"resolution\": " << c.resolution
+     << ", \"stride\": " << c.stride << ", \"lidar\": {\"rings\": " << c.lidar.rings
+     << ", \"azimuth_steps\": " << c.lidar.azimuth_steps << ", \"elev_min_deg\": " << c.lidar.elev_min_deg
+     << ", \"elev_max_deg\": " << c.lidar.elev_max_deg << ", \"max_range\": " << c.lidar.max_range
+     << ", \"sigma\": " << c.lidar.sigma << ", \"height\": " << c.lidar.height
+     << "}, \"scanner\": {\"fov_deg\": " << c.scanner.fov_deg << ", \"step_deg\": " << c.scanner.step_deg
+     << ", \"max_range\": " << c.scanner.max_range << ", \"sigma\": " << c.scanner.sigma
+     << ", \"height\": " << c.scanner.height << "}},\n";
+  os << "  \"world\": \"" << jsonEscape(r.world_summary) << "\",\n";
+  os << "  \"versions\": {\"octomap\": \"" << r.octomap_version << "\", \"mrpt\": \"" << r.mrpt_version << "\"},\n";
+  os << "  \"total_seconds\": " << r.total_seconds << ",\n  \"scenarios\": [\n";
+  for (std::size_t i = 0; i < r.scenarios.size(); ++i) {
+    const Scenario& s = r.scenarios[i];
+    os << "    {\"name\": \"" << s.name << "\", \"description\": \"" << jsonEscape(s.description)
+       << "\", \"scans\": " << s.scans << ", \"beams\": " << s.beams << ", \"returns\": " << s.returns
+       << ", \"region_cells\": " << s.region_cells << ", \"evaluated_cells\": " << s.evaluated_cells
+       << ", \"truth_occupied\": " << s.truth_occupied << ", \"truth_free\": " << s.truth_free << "}"
+       << (i + 1 < r.scenarios.size() ? "," : "") << "\n";
+  }
+  os << "  ],\n  \"results\": [\n";
+  for (std::size_t i = 0; i < r.results.size(); ++i) {
+    const MapResult& m = r.results[i];
+    const sim::ClassMetrics& x = m.metrics;
+    os << "    {\"scenario\": \"" << m.scenario << "\", \"map\": \"" << m.map << "\", \"insert_seconds\": "
+       << m.insert_seconds << ", \"observed_cells\": " << m.observed_cells
+       << ", \"observed_outside\": " << m.observed_outside << ",\n     \"cells\": " << x.cells
+       << ", \"pred_occupied\": " << x.pred_occupied << ", \"pred_free\": " << x.pred_free
+       << ", \"unknown\": " << x.unknown << ", \"tp_occupied\": " << x.tp_occupied << ", \"tp_free\": " << x.tp_free
+       << ",\n     \"precision_occupied\": " << x.precision_occupied << ", \"recall_occupied\": " << x.recall_occupied
+       << ", \"precision_free\": " << x.precision_free << ", \"recall_free\": " << x.recall_free
+       << ", \"auc\": " << x.auc << ",\n     \"roc\": [";
+    for (std::size_t k = 0; k < x.roc.size(); ++k)
+      os << (k ? ", " : "") << "[" << x.roc[k].first << ", " << x.roc[k].second << "]";
+    os << "]}" << (i + 1 < r.results.size() ? "," : "") << "\n";
+  }
+  os << "  ]\n}\n";
+}
+
+void writeMarkdown(const Report& r, std::ostream& os) {
+  os << std::fixed;
+  for (const Scenario& s : r.scenarios) {
+    os << "**" << s.name << "** — " << s.description << "; " << s.scans << " scans, " << s.beams << " beams ("
+       << s.returns << " returns); evaluated cells " << s.evaluated_cells << " (truth: " << s.truth_occupied
+       << " occupied, " << s.truth_free << " free)\n\n";
+    os << "| map | observed cells | occupied precision | occupied recall | free precision | free recall | ROC AUC | "
+          "insert time [s] |\n|---|---:|---:|---:|---:|---:|---:|---:|\n";
+    for (const MapResult& m : r.results) {
+      if (m.scenario != s.name) continue;
+      const auto& x = m.metrics;
+      os << "| " << m.map << " | " << m.observed_cells << " | " << std::setprecision(4) << x.precision_occupied
+         << " | " << x.recall_occupied << " | " << x.precision_free << " | " << x.recall_free << " | " << x.auc
+         << " | " << std::setprecision(2) << m.insert_seconds << " |\n";
+    }
+    os << "\n";
+  }
+}
+
+// ---- command line ------------------------------------------------------------------------
+
+int main(int argc, char** argv, std::ostream& out, std::ostream& err) {
+  Config cfg;
+  std::string json, markdown, png;
+  const std::string usage =
+      "usage: rtog-accuracy [--seed N] [--resolution M] [--stride K] [--sigma M] [--quick]\n"
+      "                     [--json FILE] [--markdown FILE] [--png FILE]\n";
+  try {
+    for (int i = 1; i < argc; ++i) {
+      const std::string a = argv[i];
+      auto value = [&]() -> std::string {
+        if (i + 1 >= argc) throw std::invalid_argument("missing value after " + a);
+        return argv[++i];
+      };
+      if (a == "--seed") cfg.seed = static_cast<std::uint32_t>(std::stoul(value()));
+      else if (a == "--resolution") cfg.resolution = std::stod(value());
+      else if (a == "--stride") cfg.stride = std::stoi(value());
+      else if (a == "--sigma") cfg.lidar.sigma = cfg.scanner.sigma = std::stod(value());
+      else if (a == "--quick") cfg.stride = 4;
+      else if (a == "--json") json = value();
+      else if (a == "--markdown") markdown = value();
+      else if (a == "--png") png = value();
+      else if (a == "-h" || a == "--help") {
+        out << usage;
+        return 0;
+      } else
+        throw std::invalid_argument("unknown argument '" + a + "'");
+    }
+    if (!(cfg.resolution > 0) || cfg.stride < 1) throw std::invalid_argument("bad --resolution or --stride");
+  } catch (const std::exception& e) {
+    err << "rtog-accuracy: " << e.what() << "\n" << usage;
+    return 2;
+  }
+  try {
+    const Report rep = run(cfg, err);
+    writeMarkdown(rep, out);
+    auto writeFile = [](const std::string& path, const std::function<void(std::ostream&)>& fn) {
+      const std::string tmp = path + ".tmp";
+      {
+        std::ofstream f(tmp);
+        if (!f) throw std::runtime_error("cannot write " + path);
+        fn(f);
+        if (!f) throw std::runtime_error("error writing " + path);
+      }
+      if (std::rename(tmp.c_str(), path.c_str()) != 0) throw std::runtime_error("cannot write " + path);
+    };
+    if (!json.empty()) writeFile(json, [&](std::ostream& os) { writeJson(rep, os); });
+    if (!markdown.empty()) writeFile(markdown, [&](std::ostream& os) { writeMarkdown(rep, os); });
+    if (!png.empty()) writeRocPng(rep, png);
+    err << "total " << rep.total_seconds << " s\n";
+  } catch (const std::exception& e) {
+    err << "rtog-accuracy: " << e.what() << "\n";
+    return 1;
+  }
+  return 0;
+}
+
+}  // namespace rtog::accuracy

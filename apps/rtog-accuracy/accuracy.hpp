@@ -1,0 +1,68 @@
+// Accuracy against ground truth: rtog, OctoMap and MRPT's dense grids built from the same
+// simulated scans of a seeded synthetic world, scored cell by cell against the exact truth.
+#pragma once
+
+#include <cstdint>
+#include <iosfwd>
+#include <string>
+#include <vector>
+
+#include "rtog/sim/metrics.hpp"
+#include "rtog/sim/sensors.hpp"
+#include "rtog/sim/world.hpp"
+
+namespace rtog::accuracy {
+
+struct Config {
+  std::uint32_t seed = 42;            ///< world seed
+  std::uint32_t lidar_seed = 1001;    ///< LiDAR noise seed
+  std::uint32_t scanner_seed = 2002;  ///< 2D scanner noise seed
+  double resolution = 0.1;            ///< [m], every map
+  int stride = 1;                     ///< use every stride-th trajectory pose
+  sim::WorldParams world;
+  sim::LidarParams lidar;
+  sim::ScannerParams scanner;
+};
+
+/// One map in one scenario.
+struct MapResult {
+  std::string scenario;  ///< "lidar3d" or "scanner2d"
+  std::string map;       ///< "rtog", "octomap", "mrpt_grid3d", "mrpt_grid2d"
+  double insert_seconds = 0;
+  std::size_t observed_cells = 0;  ///< cells of the evaluation region the map knows
+  std::size_t observed_outside = 0;  ///< known cells outside the region (not scored)
+  sim::ClassMetrics metrics;
+};
+
+struct Scenario {
+  std::string name;
+  std::string description;
+  std::size_t scans = 0, beams = 0, returns = 0;
+  std::size_t region_cells = 0;     ///< cells of the key box the truth was rasterized on
+  std::size_t evaluated_cells = 0;  ///< cells observed by at least one map
+  std::size_t truth_occupied = 0, truth_free = 0;  ///< among evaluated cells
+};
+
+struct Report {
+  Config config;
+  std::string world_summary;
+  std::string octomap_version, mrpt_version;
+  std::vector<Scenario> scenarios;
+  std::vector<MapResult> results;
+  double total_seconds = 0;
+};
+
+/// Builds everything and scores it; progress lines go to `log`.
+Report run(const Config& cfg, std::ostream& log);
+
+void writeJson(const Report& r, std::ostream& os);
+void writeMarkdown(const Report& r, std::ostream& os);
+/// ROC curves, one panel per scenario, one coloured curve per map, with a legend (OpenCV).
+/// Throws std::runtime_error if the file cannot be written.
+void writeRocPng(const Report& r, const std::string& path);
+
+/// The command line: `rtog-accuracy [--seed N] [--resolution R] [--stride K] [--json FILE]
+/// [--markdown FILE] [--png FILE] [--quick]`. Returns the exit code.
+int main(int argc, char** argv, std::ostream& out, std::ostream& err);
+
+}  // namespace rtog::accuracy
