@@ -4,48 +4,13 @@
 
 #include <octomap/OcTree.h>
 
+#include "octomap_compare.hpp"
+
 #include "test_support.hpp"
 
 using namespace rtog;
 
 namespace {
-
-struct Agreement {
-  std::int64_t both = 0, agree = 0, only_rtog = 0, only_octomap = 0;
-  double ratio() const { return both ? double(agree) / double(both) : 0.0; }
-};
-
-Agreement compare(const OccupancyMap& map, const octomap::OcTree& tree) {
-  // OctoMap keys are lattice keys offset by 2^15 at the finest depth; pruned leaves cover
-  // cubes of cells.
-  const int offset = 1 << 15;
-  std::unordered_map<Key, bool, KeyHash> octo;
-  for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) {
-    const octomap::OcTreeKey k = it.getKey();
-    const int size = 1 << (tree.getTreeDepth() - it.getDepth());
-    const Key base{(k[0] & ~(size - 1)) - offset, (k[1] & ~(size - 1)) - offset, (k[2] & ~(size - 1)) - offset};
-    const bool occ = tree.isNodeOccupied(*it);
-    forEachCell(Box{base, Key{base.x + size - 1, base.y + size - 1, base.z + size - 1}},
-                [&](const Key& c) { octo[c] = occ; });
-  }
-  Agreement a;
-  std::int64_t rtog_cells = 0;
-  map.forEachLeaf([&](const Box& b, float v) {
-    const bool occ = map.logOddsModel().classify(v) == CellState::Occupied;
-    forEachCell(b, [&](const Key& k) {
-      ++rtog_cells;
-      const auto it = octo.find(k);
-      if (it == octo.end()) {
-        ++a.only_rtog;
-        return;
-      }
-      ++a.both;
-      a.agree += it->second == occ;
-    });
-  });
-  a.only_octomap = static_cast<std::int64_t>(octo.size()) - a.both;
-  return a;
-}
 
 void runAgreement(SensorModel model, MergePolicy merge) {
   const auto scans = test::loadTumScans(2);
@@ -67,7 +32,7 @@ void runAgreement(SensorModel model, MergePolicy merge) {
       for (const auto& q : s.points) tree.updateNode(octomap::point3d(q.x(), q.y(), q.z()), true);
     }
   }
-  const Agreement a = compare(map, tree);
+  const bench::Agreement a = bench::compareWithOctomap(map, tree);
   std::cout << "[ octomap ] model " << toString(model) << ", merge " << toString(merge) << ": class agreement "
             << 100.0 * a.ratio() << " % of " << a.both << " voxels seen by both (" << a.only_rtog
             << " only in rtog, " << a.only_octomap << " only in OctoMap)\n";

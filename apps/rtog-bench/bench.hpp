@@ -1,0 +1,58 @@
+// rtog-bench: rtog against OctoMap and MRPT's grids, side by side in one process, on the
+// same scans, resolution and sensor parameters.
+#pragma once
+
+#include <functional>
+#include <map>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+namespace rtog::bench {
+
+/// One scan in the map frame.
+struct Scan {
+  Eigen::Vector3d origin;
+  std::vector<Eigen::Vector3f> points;
+};
+
+struct Dataset {
+  std::string name;
+  std::vector<Scan> scans;
+  bool planar = false;  ///< 2D laser data (also compared with COccupancyGridMap2D)
+  std::size_t points() const;
+};
+
+/// What one method measured on one dataset at one resolution.
+struct Result {
+  std::string dataset, method;
+  double resolution = 0;
+  double insert_seconds = 0;      ///< median over the repeats
+  double points_per_second = 0;
+  std::size_t structure_bytes = 0;
+  double rss_growth_bytes = 0;    ///< resident set growth while building one map
+  std::size_t leaves = 0;
+  double point_query_ns = 0;
+  std::size_t file_bytes = 0;
+  double octomap_agreement = -1;  ///< class agreement with plain OctoMap, -1: not computed
+  std::map<std::string, double> extra;
+};
+
+struct Options {
+  int repeats = 5;                          ///< (Default: 5)
+  std::vector<double> resolutions{0.05, 0.1};
+  std::size_t query_count = 200000;         ///< random point queries per map (Default: 200000)
+  double max_range = -1;                    ///< beams cut here (<= 0: none) (Default: -1)
+};
+
+Dataset loadTum(const std::string& dir);
+
+/// Runs every method on `data`; appends to `out`. Progress lines go to `log`.
+void runDataset(const Dataset& data, const Options& opts, std::vector<Result>& out, std::ostream& log);
+
+/// JSON with machine/version info; a Markdown report with target ratios and PASS/FAIL.
+void writeJson(const std::vector<Result>& results, const std::string& path);
+void writeMarkdown(const std::vector<Result>& results, const std::string& path, const std::string& img_dir);
+
+}  // namespace rtog::bench

@@ -1,0 +1,179 @@
+// Writes benchmark results: JSON for machines, Markdown + PNG plots for people.
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <iomanip>
+#include <memory>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+
+#include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "bench.hpp"
+
+namespace rtog::bench {
+namespace {
+
+std::string run(const char* cmd) {
+  std::array<char, 256> buf{};
+  std::string out;
+  std::unique_ptr<FILE, int (*)(FILE*)> p(popen(cmd, "r"), pclose);
+  if (!p) return {};
+  while (fgets(buf.data(), buf.size(), p.get())) out += buf.data();
+  while (!out.empty() && (out.back() == '\n' || out.back() == ' ')) out.pop_back();
+  return out;
+}
+
+nlohmann::json machine() {
+  return {{"cpu", run("grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //'")},
+          {"cores", run("nproc")},
+          {"memory", run("free -h | awk '/Mem:/{print $2}'")},
+          {"compiler", run("c++ --version | head -1")},
+          {"octomap", run("dpkg-query -W -f='${Version}' liboctomap-dev")},
+          {"mrpt", run("dpkg-query -W -f='${Version}' libmrpt-dev")},
+          {"date", run("date -u +%Y-%m-%dT%H:%MZ")}};
+}
+
+const Result* find(const std::vector<Result>& rs, const std::string& dataset, double res, const std::string& method) {
+  for (const auto& r : rs)
+    if (r.dataset == dataset && r.resolution == res && r.method == method) return &r;
+  return nullptr;
+}
+
+/// Fastest OctoMap variant on a dataset/resolution: the reference the targets use.
+const Result* bestOctomap(const std::vector<Result>& rs, const std::string& dataset, double res) {
+  const Result* best = nullptr;
+  for (const auto& r : rs)
+    if (r.dataset == dataset && r.resolution == res && r.method.rfind("OctoMap", 0) == 0 &&
+        (!best || r.insert_seconds < best->insert_seconds))
+      best = &r;
+  return best;
+}
+
+void barChart(const std::vector<std::pair<std::string, double>>& bars, const std::string& title,
+              const std::string& path) {
+  const int w = 900, row = 26, top = 40, left = 330;
+  cv::Mat img(top + row * int(bars.size()) + 20, w, CV_8UC3, cv::Scalar(255, 255, 255));
+  cv::putText(img, title, {10, 25}, cv::FONT_HERSHEY_SIMPLEX, 0.6, {0, 0, 0}, 1, cv::LINE_AA);
+  double maxv = 0;
+  for (const auto& b : bars) maxv = std::max(maxv, b.second);
+  for (std::size_t i = 0; i < bars.size(); ++i) {
+    const int y = top + row * int(i);
+    const bool ours = bars[i].first.rfind("rtog", 0) == 0;
+    const int len = maxv > 0 ? int((w - left - 90) * bars[i].second / maxv) : 0;
+    cv::rectangle(img, {left, y + 4}, {left + std::max(len, 1), y + row - 4},
+                  ours ? cv::Scalar(60, 140, 30) : cv::Scalar(180, 120, 40), cv::FILLED);
+    cv::putText(img, bars[i].first, {8, y + 17}, cv::FONT_HERSHEY_SIMPLEX, 0.42, {0, 0, 0}, 1, cv::LINE_AA);
+    std::ostringstream v;
+    v << std::setprecision(3) << bars[i].second;
+    cv::putText(img, v.str(), {left + len + 6, y + 17}, cv::FONT_HERSHEY_SIMPLEX, 0.42, {0, 0, 0}, 1, cv::LINE_AA);
+  }
+  if (!cv::imwrite(path, img)) throw std::runtime_error("cannot write " + path);
+}
+
+std::string slug(std::string s) {
+  for (char& c : s)
+    if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
+  return s;
+}
+
+}  // namespace
+
+void writeJson(const std::vector<Result>& results, const std::string& path) {
+  nlohmann::json j;
+  j["machine"] = machine();
+  for (const auto& r : results)
+    j["results"].push_back({{"dataset", r.dataset},
+                            {"method", r.method},
+                            {"resolution", r.resolution},
+                            {"insert_seconds_median", r.insert_seconds},
+                            {"points_per_second", r.points_per_second},
+                            {"structure_bytes", r.structure_bytes},
+                            {"rss_growth_bytes", r.rss_growth_bytes},
+                            {"leaves", r.leaves},
+                            {"point_query_ns", r.point_query_ns},
+                            {"file_bytes", r.file_bytes},
+                            {"octomap_class_agreement", r.octomap_agreement}});
+  std::ofstream out(path);
+  out << j.dump(2) << "\n";
+  if (!out) throw std::runtime_error("cannot write " + path);
+}
+
+void writeMarkdown(const std::vector<Result>& results, const std::string& path, const std::string& img_dir) {
+  std::ostringstream md;
+  const nlohmann::json m = machine();
+  md << "# Benchmarks\n\nMeasured by `rtog-bench` (Release build), every method in one process on the same scans,\n"
+     << "resolution and sensor model (OctoMap's defaults). Insertion time is the median of the repeats.\n\n"
+     << "Machine: " << m["cpu"].get<std::string>() << ", " << m["cores"].get<std::string>() << " cores, "
+     << m["memory"].get<std::string>() << " RAM; " << m["compiler"].get<std::string>() << "; OctoMap "
+     << m["octomap"].get<std::string>() << ", MRPT " << m["mrpt"].get<std::string>() << "; "
+     << m["date"].get<std::string>() << ".\n\n"
+     << "Reproduce: `./build/apps/rtog-bench/rtog-bench --markdown doc/benchmarks.md --json doc/benchmarks.json "
+        "--img-dir doc/img`\n\n";
+
+  std::set<std::pair<std::string, double>> groups;
+  for (const auto& r : results) groups.insert({r.dataset, r.resolution});
+
+  md << "## Targets\n\n| dataset | res | target | measured | verdict |\n|---|---|---|---|---|\n";
+  for (const auto& [ds, res] : groups) {
+    const Result* oct = bestOctomap(results, ds, res);
+    const Result* beam = find(results, ds, res, "rtog beam, merge equal");
+    const Result* beam2 = find(results, ds, res, "rtog beam, merge equal, 2 threads");
+    const Result* disc2 = find(results, ds, res, "rtog beam discretize, merge equal, 2 threads");
+    const Result* octplain = find(results, ds, res, "OctoMap");
+    const Result* dense = find(results, ds, res, "MRPT COccupancyGridMap3D (dense)");
+    if (!oct || !beam) continue;
+    const auto row = [&](const std::string& target, double value, bool pass, const std::string& unit) {
+      md << "| " << ds << " | " << res << " | " << target << " | " << std::setprecision(3) << value << unit << " | "
+         << (pass ? "PASS" : "FAIL") << " |\n";
+    };
+    const Result* fastest = beam;
+    for (const Result* c : {beam2, disc2})
+      if (c && c->insert_seconds < fastest->insert_seconds) fastest = c;
+    row("insertion ≥ 20× faster than OctoMap's best (" + oct->method + "), best rtog mode (" + fastest->method + ")",
+        oct->insert_seconds / fastest->insert_seconds, oct->insert_seconds / fastest->insert_seconds >= 20.0, "×");
+    row("insertion, exact beam model, 1 thread, vs OctoMap's best", oct->insert_seconds / beam->insert_seconds,
+        oct->insert_seconds / beam->insert_seconds >= 20.0, "×");
+    if (octplain)
+      row("memory ≤ 0.5× OctoMap memoryUsage()", double(beam->structure_bytes) / double(octplain->structure_bytes),
+          double(beam->structure_bytes) <= 0.5 * double(octplain->structure_bytes), "×");
+    if (dense)
+      row("memory ≤ 1/100 of the dense 3D grid", double(beam->structure_bytes) / double(dense->structure_bytes),
+          double(beam->structure_bytes) * 100.0 <= double(dense->structure_bytes), "×");
+    if (beam2)
+      row("--threads 2 throughput ≥ 1.7× of 1 thread", beam->insert_seconds / beam2->insert_seconds,
+          beam->insert_seconds / beam2->insert_seconds >= 1.7, "×");
+  }
+
+  for (const auto& [ds, res] : groups) {
+    md << "\n## " << ds << ", " << res << " m\n\n"
+       << "| method | insert [s] | M points/s | structure [MiB] | RSS growth [MiB] | leaves | point query [ns] | file [MiB] "
+          "| class agreement with OctoMap |\n|---|---|---|---|---|---|---|---|---|\n";
+    std::vector<std::pair<std::string, double>> bars;
+    for (const auto& r : results) {
+      if (r.dataset != ds || r.resolution != res) continue;
+      md << "| " << r.method << " | " << std::fixed << std::setprecision(4) << r.insert_seconds << " | "
+         << std::setprecision(2) << r.points_per_second / 1e6 << " | " << std::setprecision(2)
+         << r.structure_bytes / 1048576.0 << " | " << r.rss_growth_bytes / 1048576.0 << " | " << r.leaves << " | "
+         << std::setprecision(0) << r.point_query_ns << " | " << std::setprecision(2)
+         << (r.file_bytes ? std::to_string(r.file_bytes / 1048576.0).substr(0, 5) : std::string("–")) << " | "
+         << (r.octomap_agreement >= 0 ? std::to_string(100.0 * r.octomap_agreement).substr(0, 6) + " %"
+                                      : std::string("–"))
+         << " |\n";
+      md.unsetf(std::ios::floatfield);
+      bars.push_back({r.method, r.insert_seconds});
+    }
+    const std::string img = slug(ds) + "_" + slug(std::to_string(res)) + "_insert.png";
+    barChart(bars, "insertion time [s], " + ds + ", " + std::to_string(res).substr(0, 4) + " m", img_dir + "/" + img);
+    md << "\n![insertion time](img/" << img << ")\n";
+  }
+  std::ofstream out(path);
+  out << md.str();
+  if (!out) throw std::runtime_error("cannot write " + path);
+}
+
+}  // namespace rtog::bench
