@@ -1,6 +1,7 @@
 #include "accuracy.hpp"
 
 #include <chrono>
+#include <cstdio>
 #include <cmath>
 #include <fstream>
 #include <functional>
@@ -99,7 +100,7 @@ MapView buildOctomap(const std::vector<sim::Scan>& scans, double res, double max
   v.insert_seconds = secondsSince(t0);
   const Box& R = region.region();
   const int depth = static_cast<int>(tree.getTreeDepth());
-  const std::int32_t off = static_cast<std::int32_t>(tree.getTreeMaxVal());  // key of cell 0 (32768)
+  const std::int32_t off = std::int32_t{1} << (depth - 1);  // OctoMap key of cell 0 (32768)
   for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) {
     const octomap::OcTreeKey k0 = it.getIndexKey();
     const std::int32_t n = 1 << (depth - static_cast<int>(it.getDepth()));
@@ -231,6 +232,10 @@ void score(const std::string& scenario_name, const std::vector<MapView>& maps, c
     r.observed_cells = observed;
     r.observed_outside = m.outside;
     r.metrics = ev.finish();
+    // Class agreement with the second map (OctoMap) over the evaluated cells.
+    std::size_t same = 0;
+    for (std::size_t i = 0; i < truth.size(); ++i) same += eval[i] && m.state[i] == maps[1].state[i];
+    r.agreement_octomap = sc.evaluated_cells ? static_cast<double>(same) / static_cast<double>(sc.evaluated_cells) : 0.0;
     out.push_back(std::move(r));
   }
 }
@@ -335,7 +340,7 @@ std::string jsonEscape(const std::string& s) {
 }  // namespace
 
 void writeJson(const Report& r, std::ostream& os) {
-  os << std::setprecision(6);
+  os << std::setprecision(9);
   const Config& c = r.config;
   os << "{\n  \"config\": {\"seed\": " << c.seed << ", \"lidar_seed\": " << c.lidar_seed
      << ", \"scanner_seed\": " << c.scanner_seed << ", \"resolution\": " << c.resolution
@@ -363,7 +368,8 @@ void writeJson(const Report& r, std::ostream& os) {
     const sim::ClassMetrics& x = m.metrics;
     os << "    {\"scenario\": \"" << m.scenario << "\", \"map\": \"" << m.map << "\", \"insert_seconds\": "
        << m.insert_seconds << ", \"observed_cells\": " << m.observed_cells
-       << ", \"observed_outside\": " << m.observed_outside << ",\n     \"cells\": " << x.cells
+       << ", \"observed_outside\": " << m.observed_outside << ", \"class_agreement_with_octomap\": "
+       << m.agreement_octomap << ",\n     \"cells\": " << x.cells
        << ", \"pred_occupied\": " << x.pred_occupied << ", \"pred_free\": " << x.pred_free
        << ", \"unknown\": " << x.unknown << ", \"tp_occupied\": " << x.tp_occupied << ", \"tp_free\": " << x.tp_free
        << ",\n     \"precision_occupied\": " << x.precision_occupied << ", \"recall_occupied\": " << x.recall_occupied
@@ -383,13 +389,13 @@ void writeMarkdown(const Report& r, std::ostream& os) {
        << s.returns << " returns); evaluated cells " << s.evaluated_cells << " (truth: " << s.truth_occupied
        << " occupied, " << s.truth_free << " free)\n\n";
     os << "| map | observed cells | occupied precision | occupied recall | free precision | free recall | ROC AUC | "
-          "insert time [s] |\n|---|---:|---:|---:|---:|---:|---:|---:|\n";
+          "same class as OctoMap | insert time [s] |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|\n";
     for (const MapResult& m : r.results) {
       if (m.scenario != s.name) continue;
       const auto& x = m.metrics;
       os << "| " << m.map << " | " << m.observed_cells << " | " << std::setprecision(4) << x.precision_occupied
          << " | " << x.recall_occupied << " | " << x.precision_free << " | " << x.recall_free << " | " << x.auc
-         << " | " << std::setprecision(2) << m.insert_seconds << " |\n";
+         << " | " << m.agreement_octomap << " | " << std::setprecision(2) << m.insert_seconds << " |\n";
     }
     os << "\n";
   }

@@ -20,7 +20,12 @@ struct Config {
   double resolution = 0.1;            ///< [m], every map
   int stride = 1;                     ///< use every stride-th trajectory pose
   sim::WorldParams world;
-  sim::LidarParams lidar;
+  /// A VLP-16-like LiDAR: 16 rings over +-15 deg, 0.2 deg azimuth steps.
+  sim::LidarParams lidar = [] {
+    sim::LidarParams p;
+    p.azimuth_steps = 1800;
+    return p;
+  }();
   sim::ScannerParams scanner;
 };
 
@@ -31,6 +36,7 @@ struct MapResult {
   double insert_seconds = 0;
   std::size_t observed_cells = 0;  ///< cells of the evaluation region the map knows
   std::size_t observed_outside = 0;  ///< known cells outside the region (not scored)
+  double agreement_octomap = 0;      ///< share of evaluated cells with OctoMap's class (incl. unknown)
   sim::ClassMetrics metrics;
 };
 

@@ -14,6 +14,8 @@
 #include <mrpt/maps/COccupancyGridMap3D.h>
 #include <mrpt/maps/COctoMap.h>
 #include <mrpt/maps/CSimplePointsMap.h>
+#include <mrpt/obs/CObservation.h>
+#include <mrpt/obs/CRawlog.h>
 #include <octomap/OcTree.h>
 
 #include "octomap_compare.hpp"
@@ -258,6 +260,31 @@ Dataset loadTum(const std::string& dir) {
     image::WorldScan w = image::loadDepthScan(f, seq.intrinsics, 1);
     d.scans.push_back(Scan{w.origin, std::move(w.points)});
   }
+  return d;
+}
+
+Dataset loadRawlog3D(const std::string& path, const std::string& name) {
+  mrpt::obs::CRawlog log;
+  if (!log.loadFromRawLogFile(path)) throw std::runtime_error("cannot read rawlog " + path);
+  Dataset d;
+  d.name = name;
+  for (std::size_t i = 0; i < log.size(); ++i) {
+    if (log.getType(i) != mrpt::obs::CRawlog::etObservation) continue;
+    const auto obs = log.getAsObservation(i);
+    // MRPT's own conversion to points in the robot frame (the sensor pose applied).
+    mrpt::maps::CSimplePointsMap pm;
+    pm.insertObservation(*obs);
+    mrpt::poses::CPose3D sensor;
+    obs->getSensorPose(sensor);
+    Scan s;
+    s.origin = Eigen::Vector3d(sensor.x(), sensor.y(), sensor.z());
+    const auto& xs = pm.getPointsBufferRef_x();
+    const auto& ys = pm.getPointsBufferRef_y();
+    const auto& zs = pm.getPointsBufferRef_z();
+    for (std::size_t k = 0; k < xs.size(); ++k) s.points.emplace_back(xs[k], ys[k], zs[k]);
+    if (!s.points.empty()) d.scans.push_back(std::move(s));
+  }
+  if (d.scans.empty()) throw std::runtime_error(path + ": no 3D scans");
   return d;
 }
 

@@ -47,6 +47,8 @@ struct Options {
 };
 
 Dataset loadTum(const std::string& dir);
+/// 3D scans of an MRPT rawlog (Velodyne, rotating scans, point clouds), robot at the origin.
+Dataset loadRawlog3D(const std::string& path, const std::string& name);
 
 /// Runs every method on `data`; appends to `out`. Progress lines go to `log`.
 void runDataset(const Dataset& data, const Options& opts, std::vector<Result>& out, std::ostream& log);

@@ -1,4 +1,5 @@
 // rtog-bench: run by hand on a quiet machine (Release build); not a test.
+#include <algorithm>
 #include <iostream>
 
 #include <CLI/CLI.hpp>
@@ -8,8 +9,12 @@
 int main(int argc, char** argv) {
   CLI::App app{"rtog-bench: rtog vs OctoMap and MRPT grids on real data, side by side"};
   rtog::bench::Options opts;
+  std::string datasets_dir = "/usr/share/mrpt/datasets";
+  std::vector<std::string> only;
   std::string tum = RTOG_DEFAULT_TUM_DIR, json = "benchmarks.json", markdown = "benchmarks.md", img_dir = ".";
   app.add_option("--tum", tum, "TUM depth sequence directory")->capture_default_str();
+  app.add_option("--mrpt-datasets", datasets_dir, "Debian mrpt-common datasets directory")->capture_default_str();
+  app.add_option("--only", only, "Run only these datasets: tum, vlp16");
   app.add_option("--repeats", opts.repeats, "Builds per method (median reported)")->capture_default_str()->check(CLI::PositiveNumber);
   app.add_option("--resolutions", opts.resolutions, "Cell sizes [m]")->capture_default_str();
   app.add_option("--json", json, "JSON output")->capture_default_str();
@@ -18,9 +23,15 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
   try {
     std::vector<rtog::bench::Result> results;
-    const auto data = rtog::bench::loadTum(tum);
-    std::cout << data.name << ": " << data.points() << " points\n";
-    rtog::bench::runDataset(data, opts, results, std::cout);
+    const auto wanted = [&](const std::string& n) { return only.empty() || std::find(only.begin(), only.end(), n) != only.end(); };
+    std::vector<rtog::bench::Dataset> sets;
+    if (wanted("tum")) sets.push_back(rtog::bench::loadTum(tum));
+    if (wanted("vlp16"))
+      sets.push_back(rtog::bench::loadRawlog3D(datasets_dir + "/test_velodyne_VLP16.rawlog", "Velodyne VLP-16 (test_velodyne_VLP16)"));
+    for (const auto& data : sets) {
+      std::cout << data.name << ": " << data.points() << " points\n";
+      rtog::bench::runDataset(data, opts, results, std::cout);
+    }
     rtog::bench::writeJson(results, json);
     rtog::bench::writeMarkdown(results, markdown, img_dir);
     std::cout << "wrote " << json << ", " << markdown << "\n";

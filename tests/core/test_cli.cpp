@@ -1,17 +1,26 @@
 // The rtog tool as a user runs it: real data in, a map file out, errors reported cleanly.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <sstream>
 
+#include <unistd.h>
+
+#include <opencv2/imgcodecs.hpp>
+
 #include "commands.hpp"
+#include "rtog/core/mesh_export.hpp"
+#include "rtog/core/octomap_export.hpp"
+#include "rtog/image/slice.hpp"
 
 namespace {
 
 int run(const std::string& args, std::string* output = nullptr) {
-  const std::string out_file = ::testing::TempDir() + "/rtog_cli_out.txt";
+  // Per process: ctest runs the cases of this file in parallel processes.
+  const std::string out_file = ::testing::TempDir() + "/rtog_cli_out_" + std::to_string(getpid()) + ".txt";
   const int rc = std::system((std::string(RTOG_EXE) + " " + args + " > " + out_file + " 2>&1").c_str());
   if (output) {
     std::ifstream in(out_file);
@@ -48,6 +57,109 @@ TEST(Cli, BadArgumentsAndFilesGiveOneClearErrorAndNonZeroExit) {
   EXPECT_NE(out.find("not an rtog map"), std::string::npos) << out;
   // A failed save leaves nothing behind.
   EXPECT_NE(run(std::string("build --tum ") + RTOG_TEST_TUM_DIR + " --stride 8 --out /nonexistent/dir/m.rtog", &out), 0);
+}
+
+bool exists(const std::string& path) { return std::ifstream(path).good(); }
+
+std::string readAll(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+/// A small map built by the tool from the bundled frames, shared by the export cases.
+const std::string& builtMap() {
+  static const std::string path = [] {
+    const std::string p = ::testing::TempDir() + "/cli_export_" + std::to_string(getpid()) + ".rtog";
+    std::string out;
+    EXPECT_EQ(run(std::string("build --tum ") + RTOG_TEST_TUM_DIR + " --resolution 0.1 --stride 4 --merge equal --out " + p,
+                  &out),
+              0)
+        << out;
+    return p;
+  }();
+  return path;
+}
+
+TEST(Cli, ExportsEveryFormatInOneCall) {
+  const std::string dir = ::testing::TempDir() + "/cli_export_";
+  const std::string ply = dir + "m.ply", bt = dir + "m.bt", png = dir + "slice.png", ascii = dir + "a.ply";
+  for (const auto& f : {ply, bt, png, ascii}) std::remove(f.c_str());
+  std::string out;
+  ASSERT_EQ(run("export " + builtMap() + " --ply " + ply + " --bt " + bt + " --png " + png + " --slice-z 0.3", &out), 0)
+      << out;
+  EXPECT_NE(out.find("wrote " + ply), std::string::npos) << out;
+  EXPECT_NE(out.find("wrote " + bt), std::string::npos) << out;
+  EXPECT_NE(out.find("wrote " + png), std::string::npos) << out;
+  for (const auto& f : {ply, bt, png}) EXPECT_FALSE(exists(f + ".partial")) << f;
+
+  // Each file is exactly what the library writes for the saved map.
+  const rtog::OccupancyMap map = rtog::cli::loadMap(builtMap());
+  std::ostringstream want_ply, want_bt;
+  const rtog::MeshExportStats ms = rtog::writeOccupiedPly(map, want_ply);
+  EXPECT_EQ(ms.cuboids, map.statistics().occupied_leaves);
+  EXPECT_TRUE(readAll(ply) == want_ply.str()) << "PLY differs";
+  rtog::writeOctoMapBinary(map, want_bt);
+  EXPECT_TRUE(readAll(bt) == want_bt.str()) << ".bt differs";
+  EXPECT_EQ(readAll(bt).rfind("# Octomap OcTree binary file\n", 0), 0u);
+  const cv::Mat img = cv::imread(png, cv::IMREAD_UNCHANGED), want_img = rtog::image::rasterizeSliceZ(map, 0.3);
+  ASSERT_FALSE(img.empty());
+  ASSERT_EQ(img.type(), CV_8UC1);
+  ASSERT_EQ(img.size(), want_img.size());
+  EXPECT_EQ(cv::norm(img, want_img, cv::NORM_INF), 0.0);
+
+  ASSERT_EQ(run("export " + builtMap() + " --ply " + ascii + " --ascii", &out), 0) << out;
+  EXPECT_EQ(readAll(ascii).rfind("ply\nformat ascii 1.0\n", 0), 0u);
+  EXPECT_NE(readAll(ascii).find("element vertex " + std::to_string(ms.vertices) + "\n"), std::string::npos);
+  EXPECT_NE(readAll(ascii).find("element face " + std::to_string(ms.faces) + "\n"), std::string::npos);
+}
+
+TEST(Cli, ExportErrorsExitNonZeroAndWriteNothing) {
+  const std::string dir = ::testing::TempDir() + "/cli_export_bad_";
+  const std::string ply = dir + "m.ply", bt = dir + "m.bt", png = dir + "s.png";
+  const auto nothing_written = [&] {
+    for (const auto& f : {ply, bt, png}) {
+      EXPECT_FALSE(exists(f)) << f;
+      EXPECT_FALSE(exists(f + ".partial")) << f;
+    }
+  };
+  for (const auto& f : {ply, bt, png}) std::remove(f.c_str());
+  const std::string& map = builtMap();
+  std::string out;
+  const auto expect_error = [&](const std::string& args, const std::string& message) {
+    EXPECT_NE(run(args, &out), 0) << args;
+    EXPECT_NE(out.find("rtog: error: "), std::string::npos) << args << ": " << out;
+    EXPECT_NE(out.find(message), std::string::npos) << args << ": " << out;
+    EXPECT_EQ(std::count(out.begin(), out.end(), '\n'), 1) << "one error line expected: " << out;
+    nothing_written();
+  };
+  expect_error("export " + map, "nothing to do");
+  expect_error("export", "map is required");
+  expect_error("export " + map + " --png " + png, "--slice-z");
+  expect_error("export " + map + " --slice-z 0.3", "--png");
+  expect_error("export " + map + " --png " + png + " --slice-z high", "high");
+  expect_error("export " + map + " --png " + png + " --slice-z 40", "outside the map's height range");
+  expect_error("export " + map + " --ascii", "--ply");
+  expect_error("export " + map + " --ply " + ply + " --bt " + ply, "named twice");
+  expect_error("export /nonexistent/m.rtog --ply " + ply, "cannot open map file");
+  const std::string junk = ::testing::TempDir() + "/junk_export.rtog";
+  std::ofstream(junk) << "this is not a map";
+  expect_error("export " + junk + " --bt " + bt, "not an rtog map");
+  // One output failing leaves none of the others behind.
+  expect_error("export " + map + " --ply " + ply + " --png " + png + " --slice-z 0.3 --bt /nonexistent/dir/m.bt",
+               "/nonexistent/dir/m.bt");
+
+  // Cells beyond OctoMap's 16-bit keys (here 4 km out at 10 cm): a clear error, no .bt.
+  rtog::MapParams p;
+  p.resolution = 0.1;
+  rtog::OccupancyMap far(p);
+  rtog::InsertParams ip;
+  ip.model = rtog::SensorModel::BeamEndPoint;
+  far.insertPointCloud(Eigen::Vector3d(4000.05, 0.05, 0.05), {Eigen::Vector3f(4000.35f, 0.05f, 0.05f)}, ip);
+  const std::string far_map = ::testing::TempDir() + "/far.rtog";
+  rtog::cli::saveMap(far, far_map);
+  expect_error("export " + far_map + " --bt " + bt, "outside OctoMap's key range");
 }
 
 }  // namespace

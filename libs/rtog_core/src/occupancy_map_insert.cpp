@@ -91,7 +91,31 @@ void OccupancyMap::computeUpdate(const Eigen::Vector3d& origin, const Eigen::Vec
 void OccupancyMap::applyUpdate(const UpdateBatch& batch, InsertStats& stats) {
   stats.cells_occupied += batch.occupiedCount();
   stats.cells_free += batch.freeCount();
+  reshaped_bricks_.clear();
   for (const UpdateBatch::BrickUpdates* upd : batch.bricks()) applyBrick(*upd, stats);
+  // Leaf nodes whose boxes changed go into the upper tree one by one, unless they are many
+  // compared with the tree (a first scan, a new area): then one bulk load is cheaper.
+  std::size_t touched_nodes = 0;
+  for (const std::uint32_t slot : reshaped_bricks_)
+    touched_nodes += (bricks_[slot].leaves.size() + leafNodeSize() - 1) / leafNodeSize();
+  if (touched_nodes * 2 > upper_.size()) {
+    rebuildUpperTree();
+  } else {
+    for (const std::uint32_t slot : reshaped_bricks_) syncLeafNodes(slot);
+  }
+}
+
+void OccupancyMap::rebuildUpperTree() {
+  std::vector<std::pair<Box, LeafNodeRef>> nodes;
+  nodes.reserve(upper_.size() + 16);
+  for (std::uint32_t slot = 0; slot < bricks_.size(); ++slot) {
+    Brick& br = bricks_[slot];
+    br.nodes.clear();
+    const std::size_t n = (br.leaves.size() + leafNodeSize() - 1) / leafNodeSize();
+    for (std::size_t k = 0; k < n; ++k) nodes.push_back({leafNodeBox(br, k), LeafNodeRef{slot, static_cast<std::uint32_t>(k)}});
+  }
+  upper_.bulkLoad(nodes);  // handles 0..n-1 follow `nodes`
+  for (std::size_t h = 0; h < nodes.size(); ++h) bricks_[nodes[h].second.brick].nodes.push_back(static_cast<Handle>(h));
 }
 
 namespace {
@@ -146,6 +170,17 @@ static const std::array<std::uint16_t, kBrickCells>& mortonOrder() {
     return o;
   }();
   return order;
+}
+
+// Inverse of mortonOrder(): the Morton rank of each local cell index.
+static const std::array<std::uint16_t, kBrickCells>& mortonRank() {
+  static const std::array<std::uint16_t, kBrickCells> rank = [] {
+    std::array<std::uint16_t, kBrickCells> r{};
+    const auto& order = mortonOrder();
+    for (std::size_t m = 0; m < order.size(); ++m) r[order[m]] = static_cast<std::uint16_t>(m);
+    return r;
+  }();
+  return rank;
 }
 
 void OccupancyMap::applyBrick(const UpdateBatch::BrickUpdates& upd, InsertStats& stats) {
@@ -212,11 +247,12 @@ void OccupancyMap::applyBrick(const UpdateBatch::BrickUpdates& upd, InsertStats&
   }
   if (reshaped || leaves.size() != leaves_before) {
     packLeaves(slot);
-    syncLeafNodes(slot);
+    reshaped_bricks_.push_back(slot);
   }
   leaf_count_ += leaves.size();
   leaf_count_ -= leaves_before;
-  std::fill(local.begin(), local.end(), -1);
+  // Leave the scratch table empty for the next brick; only painted cells need it.
+  for (const LeafEntry& e : leaves) forEachLocal(e.lo, e.hi, [&](int idx) { local[idx] = -1; });
 }
 
 std::size_t OccupancyMap::mergeInBrick(std::vector<LeafEntry>& leaves, const std::vector<std::uint32_t>& candidates) {
@@ -260,11 +296,23 @@ void OccupancyMap::packLeaves(std::uint32_t slot) {
   // The scratch table names each live leaf at its first cell; dead leaves were repainted.
   std::vector<LeafEntry>& packed = pack_scratch_;
   packed.clear();
-  for (const std::uint16_t idx : mortonOrder()) {
-    const std::int32_t i = local_[idx];
-    if (i < 0) continue;
-    const LeafEntry& e = br.leaves[static_cast<std::size_t>(i)];
-    if (localIdx(e.lo[0], e.lo[1], e.lo[2]) == idx) packed.push_back(e);
+  if (br.leaves.size() * 16 >= static_cast<std::size_t>(kBrickCells)) {
+    // Dense brick: one pass over the cells in Morton order.
+    for (const std::uint16_t idx : mortonOrder()) {
+      const std::int32_t i = local_[idx];
+      if (i < 0) continue;
+      const LeafEntry& e = br.leaves[static_cast<std::size_t>(i)];
+      if (localIdx(e.lo[0], e.lo[1], e.lo[2]) == idx) packed.push_back(e);
+    }
+  } else {
+    // Sparse brick: sort the few live leaves by the Morton rank of their first cell.
+    for (const LeafEntry& e : br.leaves)
+      if (e.lo[0] != kDead) packed.push_back(e);
+    const auto& rank = mortonRank();
+    std::sort(packed.begin(), packed.end(), [&](const LeafEntry& a, const LeafEntry& b) {
+      return rank[static_cast<std::size_t>(localIdx(a.lo[0], a.lo[1], a.lo[2]))] <
+             rank[static_cast<std::size_t>(localIdx(b.lo[0], b.lo[1], b.lo[2]))];
+    });
   }
   br.leaves = std::vector<LeafEntry>(packed.begin(), packed.end());  // exact capacity
 }

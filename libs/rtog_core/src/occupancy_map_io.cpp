@@ -152,7 +152,6 @@ OccupancyMap OccupancyMap::read(std::istream& is) {
 
   // Leaves must be disjoint: paint each brick's cells once, then pack the brick and index
   // all leaf nodes with one bulk load.
-  std::vector<std::pair<Box, LeafNodeRef>> nodes;
   for (std::uint32_t slot = 0; slot < map.bricks_.size(); ++slot) {
     Brick& br = map.bricks_[slot];
     for (std::size_t i = 0; i < br.leaves.size(); ++i) {
@@ -170,13 +169,8 @@ OccupancyMap OccupancyMap::read(std::istream& is) {
     map.packLeaves(slot);
     std::fill(map.local_.begin(), map.local_.end(), -1);
     map.leaf_count_ += br.leaves.size();
-    const std::size_t n = (br.leaves.size() + map.leafNodeSize() - 1) / map.leafNodeSize();
-    for (std::size_t k = 0; k < n; ++k)
-      nodes.push_back({map.leafNodeBox(br, k), LeafNodeRef{slot, static_cast<std::uint32_t>(k)}});
   }
-  map.upper_.bulkLoad(nodes);  // handles 0..n-1 follow `nodes`
-  for (std::size_t h = 0; h < nodes.size(); ++h)
-    map.bricks_[nodes[h].second.brick].nodes.push_back(static_cast<Handle>(h));
+  map.rebuildUpperTree();
   return map;
 }
 

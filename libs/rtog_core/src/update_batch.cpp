@@ -1,7 +1,6 @@
 #include "rtog/core/update_batch.hpp"
 
 #include <algorithm>
-#include <bitset>
 #include <numeric>
 
 namespace rtog {
@@ -74,8 +73,14 @@ void UpdateBatch::finalize() {
 }
 
 static std::size_t popcount(const std::array<std::uint64_t, kBrickWords>& words) {
+  // SWAR count: the baseline x86-64 target has no POPCNT instruction.
   std::size_t n = 0;
-  for (std::uint64_t w : words) n += std::bitset<64>(w).count();
+  for (std::uint64_t w : words) {
+    w = w - ((w >> 1) & 0x5555555555555555ull);
+    w = (w & 0x3333333333333333ull) + ((w >> 2) & 0x3333333333333333ull);
+    w = (w + (w >> 4)) & 0x0f0f0f0f0f0f0f0full;
+    n += static_cast<std::size_t>((w * 0x0101010101010101ull) >> 56);
+  }
   return n;
 }
 

@@ -163,7 +163,7 @@ World World::generate(const WorldParams& p, std::uint32_t seed) {
     const double len = ab.norm();
     if (len < 1e-9) continue;
     const double yaw = std::atan2(ab.y(), ab.x());
-    const int n = std::max(1, static_cast<int>(std::floor(len / p.pose_spacing)));
+    const int n = std::max(1, static_cast<int>(std::ceil(len / p.pose_spacing)));
     for (int s = 0; s < n; ++s) {
       const Eigen::Vector2d q = a + ab * (static_cast<double>(s) / n);
       poses.push_back(Pose{Eigen::Vector3d(q.x(), q.y(), zf), yaw});

@@ -215,6 +215,8 @@ class OccupancyMap {
   void packLeaves(std::uint32_t slot);
   /// Brings the brick's leaf nodes in the upper tree up to date with its leaves.
   void syncLeafNodes(std::uint32_t slot);
+  /// Packs every brick's leaf nodes into a fresh upper tree (STR bulk load).
+  void rebuildUpperTree();
   /// Visits the leaf entries of one upper-tree item.
   template <class Fn>
   void forEachInLeafNode(Handle h, Fn&& fn) const {
@@ -235,6 +237,7 @@ class OccupancyMap {
   std::vector<std::int32_t> local_;  // scratch: brick-local cell -> leaf index, -1 when none
   std::vector<LeafEntry> pack_scratch_;
   std::vector<UpdateBatch> batches_;  // per-thread scratch, reused across insertions
+  std::vector<std::uint32_t> reshaped_bricks_;  // bricks whose leaf nodes changed in this batch
 };
 
 }  // namespace rtog

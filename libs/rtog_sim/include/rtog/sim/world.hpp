@@ -44,7 +44,7 @@ struct WorldParams {
   int pillars_max = 2;                            ///< per room, 0..max
   int furniture_min = 2, furniture_max = 5;       ///< per room
   double clearance = 0.6;                         ///< furniture keeps this far from the path [m]
-  double pose_spacing = 0.5;                      ///< distance between trajectory poses [m]
+  double pose_spacing = 0.5;                      ///< largest distance between consecutive poses [m]
   void validate() const;                          ///< throws std::invalid_argument
 };
 
