@@ -1,5 +1,7 @@
 #include "commands.hpp"
 
+#include <nlohmann/json.hpp>
+
 #include <chrono>
 #include <cerrno>
 #include <cmath>
@@ -77,6 +79,10 @@ void printStatistics(const OccupancyMap& map, std::ostream& out) {
       << "R-tree            height " << s.tree_height << ", " << s.tree_nodes << " nodes, " << s.bricks
       << " bricks\n"
       << "memory            " << std::setprecision(2) << s.memory_bytes / 1048576.0 << " MiB\n";
+  const LogOddsParams& lp = map.params().log_odds;
+  out << std::setprecision(4) << "sensor model      hit " << lp.prob_hit << ", miss " << lp.prob_miss << ", clamp ["
+      << lp.clamp_min << ", " << lp.clamp_max << "], occupied >= " << lp.occupied_threshold << ", prior "
+      << lp.prior << "\n";
   if (!s.bounds.isEmpty()) {
     const auto lo = map.lattice().boxMin(s.bounds), hi = map.lattice().boxMax(s.bounds);
     out << std::setprecision(2) << "bounds            [" << lo.x() << ", " << lo.y() << ", " << lo.z() << "] .. ["
@@ -122,11 +128,32 @@ int info(const std::string& map_path, bool json, std::ostream& out) {
     return 0;
   }
   const MapStatistics s = map.statistics();
-  out << "{\"resolution\": " << map.resolution() << ", \"merge\": \"" << toString(map.params().merge)
-      << "\", \"leaves\": " << s.leaves << ", \"occupied_leaves\": " << s.occupied_leaves
-      << ", \"free_leaves\": " << s.free_leaves << ", \"cells\": " << s.cells
-      << ", \"occupied_cells\": " << s.occupied_cells << ", \"free_cells\": " << s.free_cells
-      << ", \"memory_bytes\": " << s.memory_bytes << "}\n";
+  const LogOddsParams& lp = map.params().log_odds;
+  nlohmann::json j = {{"resolution", map.resolution()},
+                      {"merge", toString(map.params().merge)},
+                      {"leaves", s.leaves},
+                      {"occupied_leaves", s.occupied_leaves},
+                      {"free_leaves", s.free_leaves},
+                      {"cells", s.cells},
+                      {"occupied_cells", s.occupied_cells},
+                      {"free_cells", s.free_cells},
+                      {"memory_bytes", s.memory_bytes},
+                      {"bricks", s.bricks},
+                      {"tree_height", s.tree_height},
+                      {"tree_nodes", s.tree_nodes},
+                      {"log_odds",
+                       {{"prob_hit", lp.prob_hit},
+                        {"prob_miss", lp.prob_miss},
+                        {"clamp_min", lp.clamp_min},
+                        {"clamp_max", lp.clamp_max},
+                        {"occupied_threshold", lp.occupied_threshold},
+                        {"prior", lp.prior}}}};
+  if (!s.bounds.isEmpty()) {
+    const auto lo = map.lattice().boxMin(s.bounds), hi = map.lattice().boxMax(s.bounds);
+    j["bounds_min"] = {lo.x(), lo.y(), lo.z()};
+    j["bounds_max"] = {hi.x(), hi.y(), hi.z()};
+  }
+  out << j.dump(2) << "\n";
   return 0;
 }
 

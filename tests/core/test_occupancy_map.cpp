@@ -62,10 +62,13 @@ TEST(OccupancyMapTum, MergingKeepsEveryCellAndUsesFewerLeaves) {
   }
 }
 
-TEST(OccupancyMapTum, EndPointModelAndMaxRangeEqualReference) {
+TEST(OccupancyMapTum, EndPointDiscretizedAndMaxRangeEqualReference) {
   InsertParams endpoint;
   endpoint.model = SensorModel::BeamEndPoint;
   test::expectMatchesReference(buildMap(MergePolicy::Off, endpoint), tumReference(endpoint, 1), true);
+  InsertParams discretized;
+  discretized.discretize = true;
+  test::expectMatchesReference(buildMap(MergePolicy::Equal, discretized), tumReference(discretized, 3), true);
   InsertParams limited;
   limited.max_range = 2.0;
   const OccupancyMap map = buildMap(MergePolicy::Equal, limited);
@@ -204,6 +207,32 @@ TEST(OccupancyMap, QueriesMatchBruteForceOverCells) {
     ASSERT_TRUE(nh.found);
     ASSERT_NEAR(nh.distance, std::sqrt(best) * 0.1, 1e-9);
   }
+}
+
+TEST(OccupancyMapTum, ThreadCountDoesNotChangeTheMap) {
+  for (const bool discretize : {false, true}) {
+    std::string bytes[2];
+    InsertStats stats[2];
+    for (const int threads : {1, 2}) {
+      MapParams p;
+      p.merge = MergePolicy::Equal;
+      OccupancyMap map(p);
+      InsertParams ip;
+      ip.threads = threads;
+      ip.discretize = discretize;
+      for (const auto& s : tumScans()) stats[threads - 1] += map.insertPointCloud(s.origin, s.points, ip);
+      EXPECT_EQ(map.checkInvariants(), "");
+      std::ostringstream os;
+      map.write(os);
+      bytes[threads - 1] = os.str();
+    }
+    EXPECT_TRUE(bytes[0] == bytes[1]) << "maps differ with discretize=" << discretize;
+    EXPECT_TRUE(stats[0] == stats[1]);
+  }
+  InsertParams bad;
+  bad.threads = 0;
+  OccupancyMap map;
+  EXPECT_THROW(map.insertPointCloud(Eigen::Vector3d::Zero(), tumScans()[0].points, bad), std::invalid_argument);
 }
 
 TEST(OccupancyMap, BadInputIsCountedNotCrashed) {

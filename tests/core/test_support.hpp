@@ -41,8 +41,14 @@ class ReferenceGrid {
       }
       Key ek;
       if (!lattice_.tryKey(end, ek)) continue;
+      Eigen::Vector3d end_l = lattice_.toLattice(end);
+      if (ip.discretize) {
+        // Beams go to the centre of their end cell, and only the first beam to a cell counts.
+        if (hit && occupied.count(ek)) continue;
+        end_l = Eigen::Vector3d(ek.x + 0.5, ek.y + 0.5, ek.z + 0.5);
+      }
       if (ip.model == SensorModel::BeamBased)
-        traverseRay(lattice_.toLattice(origin), lattice_.toLattice(end), ok, ek, [&](const Key& k) { free.insert(k); });
+        traverseRay(lattice_.toLattice(origin), end_l, ok, ek, [&](const Key& k) { free.insert(k); });
       if (hit) occupied.insert(ek);
     }
     for (const Key& k : free)
