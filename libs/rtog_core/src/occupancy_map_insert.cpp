@@ -246,7 +246,17 @@ void OccupancyMap::applyBrick(const UpdateBatch::BrickUpdates& upd, InsertStats&
     reshaped |= merges > 0;
   }
   if (reshaped || leaves.size() != leaves_before) {
-    packLeaves(slot);
+    // Leaves merged away are replaced by the last ones, new leaves were appended: only the
+    // leaf nodes at those places change, and syncLeafNodes() updates just those boxes.
+    for (std::size_t i = 0; i < leaves.size();) {
+      if (leaves[i].lo[0] == kDead) {
+        leaves[i] = leaves.back();
+        leaves.pop_back();
+      } else {
+        ++i;
+      }
+    }
+    if (leaves.capacity() > 2 * leaves.size() + 16) leaves.shrink_to_fit();
     reshaped_bricks_.push_back(slot);
   }
   leaf_count_ += leaves.size();

@@ -179,8 +179,9 @@ class OccupancyMap {
   static OccupancyMap read(std::istream& is);
 
  private:
-  // The R-tree's leaf level is clustered by brick: a brick's cuboids, kept in Morton order of
-  // their first cell, are cut into leaf nodes of at most M consecutive entries. The levels
+  // The R-tree's leaf level is clustered by brick: a brick's cuboids (in Morton order of their
+  // first cell when loaded; later updates append and fill holes from the end) are cut into
+  // leaf nodes of at most M consecutive entries. The levels
   // above are a Guttman R-tree over the leaf nodes' boxes. A brick's array is thus the storage
   // of its leaf nodes, and the brick hash finds a cell's leaf without descending the tree.
   struct LeafEntry {
