@@ -13,7 +13,12 @@
 
 #include <mrpt/maps/COccupancyGridMap3D.h>
 #include <mrpt/maps/COctoMap.h>
+#include <mrpt/maps/COccupancyGridMap2D.h>
 #include <mrpt/maps/CSimplePointsMap.h>
+#include <mrpt/obs/CActionCollection.h>
+#include <mrpt/obs/CActionRobotMovement2D.h>
+#include <mrpt/obs/CObservation2DRangeScan.h>
+#include <mrpt/obs/CSensoryFrame.h>
 #include <mrpt/obs/CObservation.h>
 #include <mrpt/obs/CRawlog.h>
 #include <octomap/OcTree.h>
@@ -21,6 +26,7 @@
 #include "octomap_compare.hpp"
 #include "rtog/core/occupancy_map.hpp"
 #include "rtog/image/tum_dataset.hpp"
+#include "rtog/mrpt/CRTreeOccupancyGridMap.h"
 
 namespace rtog::bench {
 namespace {
@@ -286,6 +292,77 @@ Dataset loadRawlog3D(const std::string& path, const std::string& name) {
   }
   if (d.scans.empty()) throw std::runtime_error(path + ": no 3D scans");
   return d;
+}
+
+void run2D(const std::string& rawlog, const Options& opts, std::vector<Result>& out, std::ostream& log) {
+  mrpt::obs::CRawlog rl;
+  if (!rl.loadFromRawLogFile(rawlog) || rl.size() == 0) throw std::runtime_error("cannot read rawlog " + rawlog);
+  std::vector<std::pair<mrpt::poses::CPose3D, mrpt::obs::CObservation2DRangeScan::Ptr>> scans;
+  mrpt::poses::CPose2D odo;
+  for (std::size_t i = 0; i < rl.size(); ++i) {
+    if (rl.getType(i) == mrpt::obs::CRawlog::etActionCollection) {
+      if (const auto mv = rl.getAsAction(i)->getBestMovementEstimation()) odo = odo + mv->poseChange->getMeanVal();
+    } else if (rl.getType(i) == mrpt::obs::CRawlog::etSensoryFrame) {
+      if (auto scan = rl.getAsObservations(i)->getObservationByClass<mrpt::obs::CObservation2DRangeScan>())
+        scans.emplace_back(mrpt::poses::CPose3D(odo), scan);
+    }
+  }
+  const std::string name = "SENA 2D laser (" + std::to_string(scans.size()) + " scans)";
+  std::size_t beams = 0;
+  for (const auto& s : scans) beams += s.second->getScanSize();
+  log << name << ": " << beams << " beams\n";
+  const float max_range = 15.0f;  // COccupancyGridMap2D's default maxDistanceInsertion, for both
+  for (const double res : opts.resolutions) {
+    const auto measure = [&](const std::string& method, auto make, auto bytes) {
+      Result r;
+      r.dataset = name;
+      r.method = method;
+      r.resolution = res;
+      std::vector<double> times;
+      std::shared_ptr<mrpt::maps::CMetricMap> map;
+      for (int i = 0; i < opts.repeats; ++i) {
+        map = make();
+        const auto t0 = Clock::now();
+        for (const auto& [pose, scan] : scans) map->insertObservation(*scan, pose);
+        times.push_back(seconds(t0, Clock::now()));
+      }
+      r.insert_seconds = median(times);
+      r.points_per_second = double(beams) / r.insert_seconds;
+      r.structure_bytes = bytes(*map);
+      // Likelihood of every scan at its own pose: one pass to warm caches, one timed.
+      double sink = 0;
+      for (const auto& [pose, scan] : scans) sink += map->computeObservationLikelihood(*scan, pose);
+      const auto t0 = Clock::now();
+      for (const auto& [pose, scan] : scans) sink += map->computeObservationLikelihood(*scan, pose);
+      r.extra["likelihood_us_per_scan"] = seconds(t0, Clock::now()) / double(scans.size()) * 1e6;
+      r.extra["likelihood_sum"] = sink;
+      log << "  " << std::left << std::setw(48) << method << " res " << res << ": " << r.insert_seconds << " s, "
+          << r.extra["likelihood_us_per_scan"] << " us/likelihood\n";
+      out.push_back(r);
+    };
+    measure(
+        "rtog (CRTreeOccupancyGridMap), merge equal",
+        [&] {
+          CRTreeOccupancyGridMap::TInsertionOptions io;
+          io.maxDistanceInsertion = max_range;
+          io.mergePolicy = "equal";
+          return std::make_shared<CRTreeOccupancyGridMap>(res, io);
+        },
+        [](const mrpt::maps::CMetricMap& m) {
+          return dynamic_cast<const CRTreeOccupancyGridMap&>(m).map().memoryBytes();
+        });
+    measure(
+        "MRPT COccupancyGridMap2D",
+        [&] {
+          auto g = std::make_shared<mrpt::maps::COccupancyGridMap2D>(-10.0f, 10.0f, -10.0f, 10.0f, float(res));
+          g->insertionOptions.maxDistanceInsertion = max_range;
+          return g;
+        },
+        [](const mrpt::maps::CMetricMap& m) {
+          const auto& g = dynamic_cast<const mrpt::maps::COccupancyGridMap2D&>(m);
+          return g.getRawMap().size() * sizeof(mrpt::maps::COccupancyGridMap2D::cellType);
+        });
+  }
 }
 
 void runDataset(const Dataset& data, const Options& opts, std::vector<Result>& out, std::ostream& log) {

@@ -50,6 +50,11 @@ Dataset loadTum(const std::string& dir);
 /// 3D scans of an MRPT rawlog (Velodyne, rotating scans, point clouds), robot at the origin.
 Dataset loadRawlog3D(const std::string& path, const std::string& name);
 
+/// A 2D laser log: MRPT's SENA rawlog (odometry poses), rtog against COccupancyGridMap2D,
+/// both through CMetricMap::insertObservation and computeObservationLikelihood (LF Thrun,
+/// each map's default decimation). Appends to `out`.
+void run2D(const std::string& rawlog, const Options& opts, std::vector<Result>& out, std::ostream& log);
+
 /// Runs every method on `data`; appends to `out`. Progress lines go to `log`.
 void runDataset(const Dataset& data, const Options& opts, std::vector<Result>& out, std::ostream& log);
 

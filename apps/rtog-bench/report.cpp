@@ -97,7 +97,8 @@ void writeJson(const std::vector<Result>& results, const std::string& path) {
                             {"leaves", r.leaves},
                             {"point_query_ns", r.point_query_ns},
                             {"file_bytes", r.file_bytes},
-                            {"octomap_class_agreement", r.octomap_agreement}});
+                            {"octomap_class_agreement", r.octomap_agreement},
+                            {"extra", r.extra}});
   std::ofstream out(path);
   out << j.dump(2) << "\n";
   if (!out) throw std::runtime_error("cannot write " + path);
@@ -126,6 +127,16 @@ void writeMarkdown(const std::vector<Result>& results, const std::string& path, 
     const Result* disc2 = find(results, ds, res, "rtog beam discretize, merge equal, 2 threads");
     const Result* octplain = find(results, ds, res, "OctoMap");
     const Result* dense = find(results, ds, res, "MRPT COccupancyGridMap3D (dense)");
+    const Result* grid2d = find(results, ds, res, "MRPT COccupancyGridMap2D");
+    const Result* rtog2d = find(results, ds, res, "rtog (CRTreeOccupancyGridMap), merge equal");
+    if (grid2d && rtog2d) {
+      const double ins = rtog2d->insert_seconds / grid2d->insert_seconds;
+      const double lik = rtog2d->extra.at("likelihood_us_per_scan") / grid2d->extra.at("likelihood_us_per_scan");
+      md << "| " << ds << " | " << res << " | 2D insertion time ≤ 2× COccupancyGridMap2D | " << std::setprecision(3)
+         << ins << "× | " << (ins <= 2.0 ? "PASS" : "FAIL") << " |\n";
+      md << "| " << ds << " | " << res << " | LF likelihood time per scan ≤ 2× COccupancyGridMap2D | "
+         << std::setprecision(3) << lik << "× | " << (lik <= 2.0 ? "PASS" : "FAIL") << " |\n";
+    }
     if (!oct || !beam) continue;
     const auto row = [&](const std::string& target, double value, bool pass, const std::string& unit) {
       md << "| " << ds << " | " << res << " | " << target << " | " << std::setprecision(3) << value << unit << " | "
@@ -152,7 +163,7 @@ void writeMarkdown(const std::vector<Result>& results, const std::string& path, 
   for (const auto& [ds, res] : groups) {
     md << "\n## " << ds << ", " << res << " m\n\n"
        << "| method | insert [s] | M points/s | structure [MiB] | RSS growth [MiB] | leaves | point query [ns] | file [MiB] "
-          "| class agreement with OctoMap |\n|---|---|---|---|---|---|---|---|---|\n";
+          "| class agreement with OctoMap | LF likelihood [µs/scan] |\n|---|---|---|---|---|---|---|---|---|---|\n";
     std::vector<std::pair<std::string, double>> bars;
     for (const auto& r : results) {
       if (r.dataset != ds || r.resolution != res) continue;
@@ -163,6 +174,9 @@ void writeMarkdown(const std::vector<Result>& results, const std::string& path, 
          << (r.file_bytes ? std::to_string(r.file_bytes / 1048576.0).substr(0, 5) : std::string("–")) << " | "
          << (r.octomap_agreement >= 0 ? std::to_string(100.0 * r.octomap_agreement).substr(0, 6) + " %"
                                       : std::string("–"))
+         << " | "
+         << (r.extra.count("likelihood_us_per_scan") ? std::to_string(r.extra.at("likelihood_us_per_scan")).substr(0, 6)
+                                                     : std::string("–"))
          << " |\n";
       md.unsetf(std::ios::floatfield);
       bars.push_back({r.method, r.insert_seconds});

@@ -1,5 +1,7 @@
 #include "commands.hpp"
 
+#include "rtog/mrpt/CRTreeOccupancyGridMap.h"
+
 #include <nlohmann/json.hpp>
 
 #include <chrono>
@@ -27,6 +29,11 @@ OccupancyMap loadMap(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw std::runtime_error("cannot open map file '" + path + "'");
   try {
+    // A gzip stream is the MRPT map's own file (CRTreeOccupancyGridMap::saveToFile, as the
+    // MRPT apps write it); anything else must be the core format.
+    const int b0 = in.get(), b1 = in.get();
+    in.seekg(0);
+    if (b0 == 0x1f && b1 == 0x8b) return CRTreeOccupancyGridMap::loadFromFile(path)->map();
     return OccupancyMap::read(in);
   } catch (const std::exception& e) {
     throw std::runtime_error("'" + path + "': " + e.what());
@@ -80,6 +87,7 @@ void printStatistics(const OccupancyMap& map, std::ostream& out) {
       << " bricks\n"
       << "memory            " << std::setprecision(2) << s.memory_bytes / 1048576.0 << " MiB\n";
   const LogOddsParams& lp = map.params().log_odds;
+  out.unsetf(std::ios::floatfield);
   out << std::setprecision(4) << "sensor model      hit " << lp.prob_hit << ", miss " << lp.prob_miss << ", clamp ["
       << lp.clamp_min << ", " << lp.clamp_max << "], occupied >= " << lp.occupied_threshold << ", prior "
       << lp.prior << "\n";
@@ -89,36 +97,6 @@ void printStatistics(const OccupancyMap& map, std::ostream& out) {
         << hi.x() << ", " << hi.y() << ", " << hi.z() << "] m\n";
   }
   out.unsetf(std::ios::floatfield);
-}
-
-int buildFromTum(const BuildTumOptions& opts, std::ostream& out) {
-  const image::DepthSequence seq = image::readTumSequence(opts.tum_dir);
-  OccupancyMap map(opts.map);
-  InsertStats total;
-  double seconds = 0.0;
-  std::size_t points = 0;
-  for (std::size_t i = 0; i < seq.frames.size(); ++i) {
-    const image::WorldScan scan = image::loadDepthScan(seq.frames[i], seq.intrinsics, opts.stride);
-    const auto t0 = std::chrono::steady_clock::now();
-    total += map.insertPointCloud(scan.origin, scan.points, opts.insert);
-    seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    points += scan.points.size();
-    out << "frame " << (i + 1) << "/" << seq.frames.size() << ": " << scan.points.size() << " points, "
-        << map.leafCount() << " leaves\n";
-  }
-  out << "inserted " << points << " points from " << seq.frames.size() << " frames in " << std::fixed
-      << std::setprecision(3) << seconds << " s (" << std::setprecision(2) << points / seconds / 1e6
-      << " M points/s), sensor model " << toString(opts.insert.model) << "\n";
-  out.unsetf(std::ios::floatfield);
-  out << "skipped: " << total.skipped_non_finite << " non-finite, " << total.skipped_zero_length << " zero-length, "
-      << total.skipped_out_of_range << " out of range; " << total.leaves_merged << " merges, "
-      << total.leaves_split << " splits\n";
-  printStatistics(map, out);
-  if (!opts.out_path.empty()) {
-    saveMap(map, opts.out_path);
-    out << "saved             " << opts.out_path << "\n";
-  }
-  return 0;
 }
 
 int info(const std::string& map_path, bool json, std::ostream& out) {

@@ -10,17 +10,26 @@
 
 namespace rtog::cli {
 
-struct BuildTumOptions {
-  std::string tum_dir;      ///< directory with groundtruth_poses.txt and depth/
-  std::string out_path;     ///< .rtog file to write; empty: do not save
-  MapParams map;            ///< resolution, log-odds, merging
-  InsertParams insert;      ///< sensor model, max range
-  int stride = 1;           ///< use every stride-th pixel in each direction (Default: 1)
+struct BuildOptions {
+  // Exactly one source:
+  std::string tum_dir;        ///< directory with groundtruth_poses.txt and depth/
+  std::string rawlog_path;    ///< MRPT rawlog (poses from odometry, if any)
+  std::string simplemap_path; ///< MRPT simplemap (poses from the map)
+  /// MRPT map definition: the first `rtreeOccupancyGrid` map of the CMultiMetricMap defined in
+  /// `ini_section` gives resolution and options; the command-line map options are then unused.
+  std::string ini_path;
+  std::string ini_section = "MappingApplication";  ///< (Default: MappingApplication)
+  std::string out_path;       ///< .rtog file to write; empty: do not save
+  MapParams map;              ///< resolution, log-odds, merging (without --ini)
+  InsertParams insert;        ///< sensor model, max range, threads (without --ini)
+  int stride = 1;             ///< TUM: use every stride-th pixel in each direction (Default: 1)
+  bool progress_bar = false;  ///< redraw one progress line (terminal) instead of printing lines
 };
 
-/// Builds a map from a TUM depth sequence, prints progress and a summary to `out`.
-/// Returns the process exit code.
-int buildFromTum(const BuildTumOptions& opts, std::ostream& out);
+/// Builds a map from real logs, prints progress and a summary (scans, points, time, leaves,
+/// memory) to `out`, and saves it. Throws std::invalid_argument / std::runtime_error with a
+/// clear message on bad options or unreadable inputs. Returns the process exit code.
+int build(const BuildOptions& opts, std::ostream& out);
 
 /// Prints a saved map's statistics (plain or JSON). Returns the process exit code.
 int info(const std::string& map_path, bool json, std::ostream& out);

@@ -1,4 +1,6 @@
 // rtog: build, inspect and export R-tree occupancy grids.
+#include <unistd.h>
+
 #include <iostream>
 
 #include <CLI/CLI.hpp>
@@ -9,10 +11,16 @@ int main(int argc, char** argv) {
   CLI::App app{"rtog: R-tree occupancy grids for MRPT"};
   app.require_subcommand(1);
 
-  rtog::cli::BuildTumOptions build;
+  rtog::cli::BuildOptions build;
   std::string model = "beam", merge = "clamped";
   auto* b = app.add_subcommand("build", "Build a map from real sensor data");
-  b->add_option("--tum", build.tum_dir, "TUM RGB-D depth sequence directory")->required()->check(CLI::ExistingDirectory);
+  auto* tum = b->add_option("--tum", build.tum_dir, "TUM RGB-D depth sequence directory")->check(CLI::ExistingDirectory);
+  auto* rawlog = b->add_option("--rawlog", build.rawlog_path, "MRPT rawlog (odometry poses)")->check(CLI::ExistingFile);
+  auto* simplemap = b->add_option("--simplemap", build.simplemap_path, "MRPT simplemap (.simplemap[.gz])")->check(CLI::ExistingFile);
+  tum->excludes(rawlog)->excludes(simplemap);
+  rawlog->excludes(simplemap);
+  b->add_option("--ini", build.ini_path, "MRPT .ini with a CMultiMetricMap holding rtreeOccupancyGrid_count=1")->check(CLI::ExistingFile);
+  b->add_option("--section", build.ini_section, "Section of the map definition in --ini")->capture_default_str();
   b->add_option("--out", build.out_path, "Output map (.rtog)");
   b->add_option("--resolution", build.map.resolution, "Cell size [m]")->capture_default_str()->check(CLI::PositiveNumber);
   b->add_option("--model", model, "Sensor model: beam | endpoint")->capture_default_str();
@@ -51,7 +59,8 @@ int main(int argc, char** argv) {
     if (b->parsed()) {
       build.insert.model = rtog::sensorModelFromString(model);
       build.map.merge = rtog::mergePolicyFromString(merge);
-      return rtog::cli::buildFromTum(build, std::cout);
+      build.progress_bar = isatty(STDOUT_FILENO) != 0;
+      return rtog::cli::build(build, std::cout);
     }
     if (e->parsed()) {
       if (sz->count() > 0) ex.slice_z = slice_z;

@@ -45,6 +45,37 @@ TEST(Cli, BuildsFromBundledTumDataAndReportsInfo) {
   EXPECT_NE(out.find("\"leaves\": " + std::to_string(loaded.leafCount())), std::string::npos) << out;
 }
 
+TEST(Cli, BuildsFromMrptLogsWithAnIniMapDefinition) {
+  const std::string datasets = RTOG_MRPT_DATASETS;
+  const std::string map = ::testing::TempDir() + "/cli_malaga.rtog";
+  std::string out;
+  // A simplemap (poses from the map), options from the project's .ini.
+  ASSERT_EQ(run("build --simplemap " + datasets + "/malaga-cs-fac-building.simplemap.gz --ini " + RTOG_CONFIG_DIR +
+                    "/rtog_build.ini --out " + map,
+                &out),
+            0)
+      << out;
+  EXPECT_NE(out.find("from 99 scans"), std::string::npos) << out;
+  ASSERT_EQ(run("info --json " + map, &out), 0);
+  EXPECT_NE(out.find("\"resolution\": 0.1"), std::string::npos) << out;
+  EXPECT_NE(out.find("\"merge\": \"equal\""), std::string::npos) << out;
+  EXPECT_GT(rtog::cli::loadMap(map).statistics().occupied_cells, 1000);
+  // A rawlog in actions/sensory-frame format (odometry poses), options from the command line.
+  ASSERT_EQ(run("build --rawlog \"" + datasets + "/2006-01ENE-21-SENA_Telecom Faculty_one_loop_only.rawlog\" --resolution 0.1 "
+                "--max-range 30 --out " + map, &out), 0) << out;
+  EXPECT_NE(out.find("from 225 scans"), std::string::npos) << out;
+  EXPECT_GT(rtog::cli::loadMap(map).statistics().occupied_cells, 1000);
+  // An .ini that defines no R-tree map, a file that is no rawlog, two sources at once.
+  const std::string grid_only = ::testing::TempDir() + "/grid_only.ini";
+  std::ofstream(grid_only) << "[MappingApplication]\noccupancyGrid_count=1\n";
+  EXPECT_NE(run("build --simplemap " + datasets + "/malaga-cs-fac-building.simplemap.gz --ini " + grid_only +
+                    " --out " + map, &out), 0);
+  EXPECT_NE(out.find("defines no rtreeOccupancyGrid map"), std::string::npos) << out;
+  EXPECT_NE(run("build --rawlog " + map + " --out " + map + ".x", &out), 0);
+  EXPECT_NE(out.find("cannot read rawlog"), std::string::npos) << out;
+  EXPECT_NE(run("build --rawlog " + map + " --simplemap " + map, &out), 0);
+}
+
 TEST(Cli, BadArgumentsAndFilesGiveOneClearErrorAndNonZeroExit) {
   std::string out;
   EXPECT_NE(run("build --tum /nonexistent/dir", &out), 0);

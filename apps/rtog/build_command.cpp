@@ -1,0 +1,198 @@
+// `rtog build`: real logs (TUM depth frames, MRPT rawlogs and simplemaps) into a map.
+#include <unistd.h>
+
+#include <chrono>
+#include <iostream>
+#include <sstream>
+#include <iomanip>
+#include <ostream>
+#include <stdexcept>
+
+#include <mrpt/config/CConfigFile.h>
+#include <mrpt/maps/CMultiMetricMap.h>
+#include <mrpt/maps/CSimpleMap.h>
+#include <mrpt/maps/TMetricMapInitializer.h>
+#include <mrpt/obs/CActionCollection.h>
+#include <mrpt/obs/CActionRobotMovement2D.h>
+#include <mrpt/obs/CObservationOdometry.h>
+#include <mrpt/obs/CRawlog.h>
+#include <mrpt/obs/CSensoryFrame.h>
+
+#include "commands.hpp"
+#include "rtog/image/tum_dataset.hpp"
+#include "rtog/mrpt/CRTreeOccupancyGridMap.h"
+
+namespace rtog::cli {
+namespace {
+
+/// One redrawn line on a terminal, a plain line per 10 % otherwise.
+class Progress {
+ public:
+  Progress(std::ostream& out, std::size_t total, bool bar) : out_(out), total_(total), bar_(bar) {}
+  void update(std::size_t done, std::size_t leaves) {
+    const int pct = total_ ? int(100 * done / total_) : 100;
+    if (bar_) {
+      const int filled = pct * 30 / 100;
+      out_ << "\r[" << std::string(std::size_t(filled), '#') << std::string(std::size_t(30 - filled), ' ') << "] "
+           << std::setw(3) << pct << "% " << done << "/" << total_ << " scans, " << leaves << " leaves" << std::flush;
+      if (done == total_) out_ << "\n";
+    } else if (pct / 10 != last_ / 10 || done == total_) {
+      out_ << "progress " << pct << "% (" << done << "/" << total_ << " scans, " << leaves << " leaves)\n";
+    }
+    last_ = pct;
+  }
+
+ private:
+  std::ostream& out_;
+  std::size_t total_;
+  bool bar_;
+  int last_ = -1;
+};
+
+/// Runs an MRPT loader with its diagnostics (printed to std::cerr) captured; throws with a
+/// one-line message if it fails or reads nothing.
+template <class Load>
+void loadQuietly(const std::string& what, const std::string& path, Load&& load) {
+  std::ostringstream captured;
+  std::streambuf* old = std::cerr.rdbuf(captured.rdbuf());
+  bool ok = false;
+  try {
+    ok = load();
+  } catch (...) {
+    ok = false;
+  }
+  std::cerr.rdbuf(old);
+  if (!ok) throw std::runtime_error("cannot read " + what + " '" + path + "' (not a valid " + what + " file?)");
+}
+
+std::shared_ptr<CRTreeOccupancyGridMap> makeMap(const BuildOptions& o) {
+  if (o.ini_path.empty()) {
+    // The command-line options, in the map's MRPT terms.
+    CRTreeOccupancyGridMap::TInsertionOptions io;
+    const LogOddsParams& lp = o.map.log_odds;
+    io.sensorModel = toString(o.insert.model);
+    io.mergePolicy = toString(o.map.merge);
+    io.discretize = o.insert.discretize;
+    io.threads = o.insert.threads;
+    io.maxDistanceInsertion = o.insert.max_range > 0 ? float(o.insert.max_range) : 0.0f;
+    io.maxOccupancyUpdateCertainty = float(lp.prob_hit);
+    io.maxFreenessUpdateCertainty = float(1.0 - lp.prob_miss);
+    io.clampingMin = float(lp.clamp_min);
+    io.clampingMax = float(lp.clamp_max);
+    io.occupiedThreshold = float(lp.occupied_threshold);
+    io.validate();
+    return std::make_shared<CRTreeOccupancyGridMap>(o.map.resolution, io);
+  }
+  mrpt::config::CConfigFile cfg(o.ini_path);
+  if (!cfg.sectionExists(o.ini_section))
+    throw std::invalid_argument("'" + o.ini_path + "' has no section [" + o.ini_section + "]");
+  mrpt::maps::TSetOfMetricMapInitializers inits;
+  inits.loadFromConfigFile(cfg, o.ini_section);
+  mrpt::maps::CMultiMetricMap multi;
+  multi.setListOfMaps(inits);
+  auto m = multi.mapByClass<CRTreeOccupancyGridMap>();
+  if (!m)
+    throw std::invalid_argument("section [" + o.ini_section + "] of '" + o.ini_path +
+                                "' defines no rtreeOccupancyGrid map (add rtreeOccupancyGrid_count=1)");
+  return m;
+}
+
+}  // namespace
+
+int build(const BuildOptions& o, std::ostream& out) {
+  const int sources = !o.tum_dir.empty() + !o.rawlog_path.empty() + !o.simplemap_path.empty();
+  if (sources != 1) throw std::invalid_argument("give exactly one of --tum, --rawlog, --simplemap");
+  auto map = makeMap(o);
+  std::size_t scans = 0, points = 0;
+  double seconds = 0.0;
+  const auto timed = [&](auto&& insert) {
+    const auto t0 = std::chrono::steady_clock::now();
+    insert();
+    seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  };
+
+  if (!o.tum_dir.empty()) {
+    const image::DepthSequence seq = image::readTumSequence(o.tum_dir);
+    Progress progress(out, seq.frames.size(), o.progress_bar);
+    const auto& io = map->insertionOptions;
+    InsertParams ip;
+    ip.model = sensorModelFromString(io.sensorModel);
+    ip.max_range = io.maxDistanceInsertion;
+    ip.discretize = io.discretize;
+    ip.threads = io.threads;
+    for (std::size_t i = 0; i < seq.frames.size(); ++i) {
+      const image::WorldScan scan = image::loadDepthScan(seq.frames[i], seq.intrinsics, o.stride);
+      timed([&] { map->map().insertPointCloud(scan.origin, scan.points, ip); });
+      map->notifyMapChanged();
+      ++scans;
+      points += scan.points.size();
+      progress.update(i + 1, map->map().leafCount());
+    }
+  } else if (!o.simplemap_path.empty()) {
+    mrpt::maps::CSimpleMap sm;
+    loadQuietly("simplemap", o.simplemap_path, [&] { return sm.loadFromFile(o.simplemap_path) && !sm.empty(); });
+    Progress progress(out, sm.size(), o.progress_bar);
+    for (std::size_t i = 0; i < sm.size(); ++i) {
+      const auto [pose, sf] = sm.get(i);
+      const mrpt::poses::CPose3D robot = pose->getMeanVal();
+      for (const auto& obs : *sf) {
+        const std::size_t before = map->totalInsertStats.raysTotal();
+        timed([&] { map->insertObservation(*obs, robot); });
+        points += map->totalInsertStats.raysTotal() - before;
+      }
+      ++scans;
+      progress.update(i + 1, map->map().leafCount());
+    }
+  } else {
+    mrpt::obs::CRawlog log;
+    loadQuietly("rawlog", o.rawlog_path, [&] { return log.loadFromRawLogFile(o.rawlog_path) && log.size() > 0; });
+    Progress progress(out, log.size(), o.progress_bar);
+    mrpt::poses::CPose2D odometry;  // dead reckoning: a rawlog carries no better pose
+    const auto insert = [&](const mrpt::obs::CObservation& obs) {
+      const std::size_t before = map->totalInsertStats.raysTotal();
+      bool used = false;
+      timed([&] { used = map->insertObservation(obs, mrpt::poses::CPose3D(odometry)); });
+      points += map->totalInsertStats.raysTotal() - before;
+      scans += used;
+    };
+    for (std::size_t i = 0; i < log.size(); ++i) {
+      switch (log.getType(i)) {
+        case mrpt::obs::CRawlog::etActionCollection:
+          if (const auto mv = log.getAsAction(i)->getBestMovementEstimation())
+            odometry = odometry + mv->poseChange->getMeanVal();
+          break;
+        case mrpt::obs::CRawlog::etSensoryFrame:
+          for (const auto& obs : *log.getAsObservations(i)) insert(*obs);
+          break;
+        case mrpt::obs::CRawlog::etObservation: {
+          const auto obs = log.getAsObservation(i);
+          if (const auto odo = std::dynamic_pointer_cast<mrpt::obs::CObservationOdometry>(obs)) {
+            odometry = odo->odometry;
+          } else {
+            insert(*obs);
+          }
+          break;
+        }
+        default:
+          break;
+      }
+      progress.update(i + 1, map->map().leafCount());
+    }
+  }
+
+  const InsertStats& st = map->totalInsertStats;
+  out << "inserted " << points << " beams from " << scans << " scans in " << std::fixed << std::setprecision(3)
+      << seconds << " s (" << std::setprecision(2) << (seconds > 0 ? points / seconds / 1e6 : 0.0)
+      << " M beams/s), sensor model " << map->insertionOptions.sensorModel << "\n";
+  out.unsetf(std::ios::floatfield);
+  out << "skipped: " << st.skipped_non_finite << " non-finite, " << st.skipped_zero_length << " zero-length, "
+      << st.skipped_out_of_range << " out of range, " << map->invalidRangesSkipped << " invalid ranges\n";
+  printStatistics(map->map(), out);
+  if (!o.out_path.empty()) {
+    saveMap(map->map(), o.out_path);
+    out << "saved             " << o.out_path << "\n";
+  }
+  return 0;
+}
+
+}  // namespace rtog::cli

@@ -1,0 +1,60 @@
+// rtog::CRTreeBackedGridMap2D: an mrpt::maps::COccupancyGridMap2D whose cells are a view of an
+// R-tree occupancy map. Observations go into the R-tree map (the source of truth, and what is
+// serialized); after each insertion the 2D cells the observation touched are refreshed from it.
+// Every code path that needs a COccupancyGridMap2D (mapByClass<COccupancyGridMap2D>(): ICP
+// against the grid, the optimal-proposal RBPF, pf-localization's uniform init over free space,
+// .gridmap outputs) therefore works, with MRPT's own grid algorithms on the derived 2D view.
+#pragma once
+
+#include <mrpt/maps/COccupancyGridMap2D.h>
+
+#include "rtog/mrpt/CRTreeOccupancyGridMap.h"
+
+namespace rtog {
+
+class CRTreeBackedGridMap2D : public mrpt::maps::COccupancyGridMap2D {
+  DEFINE_SERIALIZABLE(CRTreeBackedGridMap2D, rtog)
+
+ public:
+  explicit CRTreeBackedGridMap2D(double resolution = 0.10);
+
+  /// The source of truth. After changing it directly, call refreshGrid().
+  CRTreeOccupancyGridMap& rtreeMap() { return rtree_; }
+  const CRTreeOccupancyGridMap& rtreeMap() const { return rtree_; }
+
+  /// Height band [m] of R-tree cells that decide a 2D cell: a 2D cell takes the highest
+  /// log-odds among the observed cells of its column within the band; unknown if none.
+  float gridView_minZ{-1000.0f};  ///< (Default: -1000)
+  float gridView_maxZ{1000.0f};   ///< (Default: 1000)
+
+  /// Rebuilds every 2D cell from the R-tree map (e.g. after deserialization or direct edits).
+  void refreshGrid();
+
+  /// Writes the COccupancyGridMap2D outputs (<prefix>.png, ...) and the R-tree map's
+  /// (<prefix>.rtog, <prefix>.3Dscene, <prefix>_slice.png).
+  void saveMetricMapRepresentationToFile(const std::string& filNamePrefix) const override;
+  std::string asString() const override;
+
+  MAP_DEFINITION_START(CRTreeBackedGridMap2D)
+  /// Cell edge length [m] of both the R-tree map and its 2D view. (Default: 0.10)
+  double resolution{0.10};
+  float gridView_minZ{-1000.0f};  ///< see CRTreeBackedGridMap2D::gridView_minZ (Default: -1000)
+  float gridView_maxZ{1000.0f};   ///< (Default: 1000)
+  rtog::CRTreeOccupancyGridMap::TInsertionOptions insertionOpts;
+  /// The stock grid's likelihood options: the likelihood is computed on the 2D view.
+  mrpt::maps::COccupancyGridMap2D::TLikelihoodOptions likelihoodOpts;
+  MAP_DEFINITION_END(CRTreeBackedGridMap2D)
+
+ protected:
+  void internal_clear() override;
+  bool internal_insertObservation(const mrpt::obs::CObservation& obs,
+                                  const std::optional<const mrpt::poses::CPose3D>& robotPose) override;
+
+ private:
+  /// Refreshes the 2D cells within the metric rectangle (grows the grid to contain it).
+  void refreshRegion(double x0, double y0, double x1, double y1);
+
+  CRTreeOccupancyGridMap rtree_;
+};
+
+}  // namespace rtog

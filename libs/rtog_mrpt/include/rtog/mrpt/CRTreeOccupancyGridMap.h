@@ -1,0 +1,222 @@
+// rtog::CRTreeOccupancyGridMap: the R-tree occupancy grid as an mrpt::maps::CMetricMap, so that
+// MRPT's applications (icp-slam, rbpf-slam, pf-localization, observations2map, ...) can use it
+// from any CMultiMetricMap .ini with `rtreeOccupancyGrid_count=1`. See doc/mrpt_map.md.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+#include <Eigen/Core>
+#include <mrpt/config/CLoadableOptions.h>
+#include <mrpt/maps/CMetricMap.h>
+#include <mrpt/maps/CSimplePointsMap.h>
+#include <mrpt/poses/CPose3D.h>
+
+#include "rtog/core/occupancy_map.hpp"
+
+namespace rtog {
+
+/// Beams of one observation in the map frame, ready for the core map.
+struct ObservationBeams {
+  Eigen::Vector3d origin = Eigen::Vector3d::Zero();  ///< sensor position (map frame)
+  std::vector<Eigen::Vector3f> points;               ///< beam end points (map frame)
+  std::vector<std::uint8_t> is_hit;                  ///< 1: return, 0: no-return beam
+  std::vector<float> ranges;                         ///< measured range of each beam [m]
+  std::size_t invalid = 0;                           ///< beams dropped as invalid (no range)
+};
+
+class CRTreeOccupancyGridMap : public mrpt::maps::CMetricMap {
+  DEFINE_SERIALIZABLE(CRTreeOccupancyGridMap, rtog)
+
+ public:
+  /// Options for inserting observations ([<prefix>_insertOpts]).
+  struct TInsertionOptions : public mrpt::config::CLoadableOptions {
+    void loadFromConfigFile(const mrpt::config::CConfigFileBase& source, const std::string& section) override;
+    void saveToConfigFile(mrpt::config::CConfigFileBase& target, const std::string& section) const override;
+    /// Throws std::invalid_argument naming the first bad option.
+    void validate() const;
+
+    /// "beam" (ray traced: free along the beam, occupied at its end) or "endpoint". (Default: beam)
+    std::string sensorModel{"beam"};
+    /// P(occupied) of a cell where a beam ends, as in COccupancyGridMap2D. (Default: 0.65)
+    float maxOccupancyUpdateCertainty{0.65f};
+    /// 1 - P(occupied) of a cell a beam crosses; 0 means "same as maxOccupancyUpdateCertainty",
+    /// as in COccupancyGridMap2D. (Default: 0)
+    float maxFreenessUpdateCertainty{0.0f};
+    /// Lower clamping probability of a cell. (Default: 0.1192)
+    float clampingMin{0.1192f};
+    /// Upper clamping probability of a cell. (Default: 0.971)
+    float clampingMax{0.971f};
+    /// Cells at or above this probability are occupied. (Default: 0.5)
+    float occupiedThreshold{0.5f};
+    /// Beams longer than this [m] clear space up to it and mark nothing occupied; <=0: no limit.
+    /// (Default: 15)
+    float maxDistanceInsertion{15.0f};
+    /// Use one of every N beams of 2D scans, Velodyne/rotating scans and point clouds. (Default: 1)
+    uint16_t decimation{1};
+    /// Pixel decimation of depth images (CObservation3DRangeScan), as in COccupancyGridMap3D.
+    /// (Default: 8)
+    uint16_t decimation_3d_range{8};
+    /// Leaf merging: "off", "clamped" (cells clamped to the same bound) or "equal". (Default: clamped)
+    std::string mergePolicy{"clamped"};
+    /// Trace each beam to the centre of its end cell and beams ending in one cell once. (Default: false)
+    bool discretize{false};
+    /// Threads tracing beams (the result does not depend on it). (Default: 1)
+    int threads{1};
+    /// Lowest / highest elevation [deg] of the rings of a CObservationRotatingScan (MRPT 2.5 carries
+    /// no ring calibration): row r is at min + r*(max-min)/(rows-1). (Default: -15 / 15, a VLP-16)
+    float rotatingScan_minElevation_deg{-15.0f};
+    float rotatingScan_maxElevation_deg{15.0f};
+
+    MapParams toMapParams(double resolution) const;
+  };
+
+  enum TLikelihoodMethod { lmLikelihoodField_Thrun = 0, lmRayTracing = 1 };
+
+  /// Options for computeObservationLikelihood ([<prefix>_likelihoodOpts]).
+  struct TLikelihoodOptions : public mrpt::config::CLoadableOptions {
+    void loadFromConfigFile(const mrpt::config::CConfigFileBase& source, const std::string& section) override;
+    void saveToConfigFile(mrpt::config::CConfigFileBase& target, const std::string& section) const override;
+    void validate() const;
+
+    /// lmLikelihoodField_Thrun or lmRayTracing. (Default: lmLikelihoodField_Thrun)
+    TLikelihoodMethod likelihoodMethod{lmLikelihoodField_Thrun};
+    /// Std. dev. [m] of the likelihood field's Gaussian. (Default: 0.35)
+    float LF_stdHit{0.35f};
+    /// Weight of the Gaussian term. (Default: 0.95)
+    float LF_zHit{0.95f};
+    /// Weight of the uniform term (divided by LF_maxRange). (Default: 0.05)
+    float LF_zRandom{0.05f};
+    /// Beams longer than this [m] are ignored. (Default: 81)
+    float LF_maxRange{81.0f};
+    /// Use one of every N beams. (Default: 5)
+    uint32_t LF_decimation{5};
+    /// Distances to the nearest occupied cell are capped here [m]. (Default: 0.3)
+    float LF_maxCorrsDistance{0.3f};
+    /// Sum squared distances instead of Gaussian log terms (faster, unnormalized). (Default: false)
+    bool LF_useSquareDist{false};
+    /// Cache the distance to the nearest occupied cell per lattice cell. (Default: true)
+    bool enableLikelihoodCache{true};
+    /// Use one of every N beams in ray tracing. (Default: 10)
+    int32_t rayTracing_decimation{10};
+    /// Std. dev. [m] of the measured vs. ray-traced range. (Default: 1.0)
+    float rayTracing_stdHit{1.0f};
+  };
+
+  /// How getVisualizationInto draws the map.
+  struct TRenderingOptions {
+    bool showOccupied{true};    ///< Draw occupied cuboids. (Default: true)
+    bool showFree{false};       ///< Draw free cuboids, translucent. (Default: false)
+    bool colorByHeight{true};   ///< Colour by height (true) or by occupancy (false). (Default: true)
+    std::size_t maxBoxes{2000000};  ///< Cap on drawn cuboids. (Default: 2e6)
+  };
+
+  explicit CRTreeOccupancyGridMap(double resolution = 0.10);
+  CRTreeOccupancyGridMap(double resolution, const TInsertionOptions& io);
+
+  TInsertionOptions insertionOptions;
+  TLikelihoodOptions likelihoodOptions;
+  TRenderingOptions renderingOptions;
+
+  /// The wrapped core map. Changing it directly does not invalidate the caches: call
+  /// notifyMapChanged() afterwards.
+  OccupancyMap& map() { return map_; }
+  const OccupancyMap& map() const { return map_; }
+  void notifyMapChanged();
+  double resolution() const { return map_.resolution(); }
+
+  /// Beams of an observation in the map frame; false for an unsupported type.
+  bool extractBeams(const mrpt::obs::CObservation& obs, const mrpt::poses::CPose3D& robotPose,
+                    ObservationBeams& out, bool forInsertion) const;
+
+  /// Figures of the last and of all insertions.
+  InsertStats lastInsertStats, totalInsertStats;
+  std::size_t invalidRangesSkipped{0};  ///< over all insertions
+
+  /// Occupied cell centres (cached until the map changes).
+  const mrpt::maps::CSimplePointsMap& occupiedCellCenters() const;
+
+  // ---- CMetricMap ---------------------------------------------------------------------
+  bool isEmpty() const override;
+  void determineMatching2D(const mrpt::maps::CMetricMap* otherMap, const mrpt::poses::CPose2D& otherMapPose,
+                           mrpt::tfest::TMatchingPairList& correspondences,
+                           const mrpt::maps::TMatchingParams& params,
+                           mrpt::maps::TMatchingExtraResults& extraResults) const override;
+  void determineMatching3D(const mrpt::maps::CMetricMap* otherMap, const mrpt::poses::CPose3D& otherMapPose,
+                           mrpt::tfest::TMatchingPairList& correspondences,
+                           const mrpt::maps::TMatchingParams& params,
+                           mrpt::maps::TMatchingExtraResults& extraResults) const override;
+  float compute3DMatchingRatio(const mrpt::maps::CMetricMap* otherMap, const mrpt::poses::CPose3D& otherMapPose,
+                               const mrpt::maps::TMatchingRatioParams& params) const override;
+  float squareDistanceToClosestCorrespondence(float x0, float y0) const override;
+  void saveMetricMapRepresentationToFile(const std::string& filNamePrefix) const override;
+  void getVisualizationInto(mrpt::opengl::CSetOfObjects& outObj) const override;
+  std::string asString() const override;
+  const mrpt::maps::CSimplePointsMap* getAsSimplePointsMap() const override { return &occupiedCellCenters(); }
+
+  /// Writes `file` as a gzip-compressed CArchive holding this map; loadFromFile reads it back.
+  void saveToFile(const std::string& file) const;
+  static std::shared_ptr<CRTreeOccupancyGridMap> loadFromFile(const std::string& file);
+
+  /// Log-likelihood of beams already in the map frame (used by computeObservationLikelihood).
+  double beamsLikelihood(const ObservationBeams& b) const;
+
+  MAP_DEFINITION_START(CRTreeOccupancyGridMap)
+  /// Cell edge length [m], as in COccupancyGridMap2D. (Default: 0.10)
+  double resolution{0.10};
+  rtog::CRTreeOccupancyGridMap::TInsertionOptions insertionOpts;
+  rtog::CRTreeOccupancyGridMap::TLikelihoodOptions likelihoodOpts;
+  MAP_DEFINITION_END(CRTreeOccupancyGridMap)
+
+ private:
+  void internal_clear() override;
+  bool internal_insertObservation(const mrpt::obs::CObservation& obs,
+                                  const std::optional<const mrpt::poses::CPose3D>& robotPose) override;
+  double internal_computeObservationLikelihood(const mrpt::obs::CObservation& obs,
+                                               const mrpt::poses::CPose3D& takenFrom) const override;
+  bool internal_canComputeObservationLikelihood(const mrpt::obs::CObservation& obs) const override;
+
+  /// Re-creates the (empty) core map if the insertion options changed its parameters; throws
+  /// std::logic_error if they changed while the map holds cells.
+  void syncParams();
+  double likelihoodField(const ObservationBeams& b) const;
+  double rayTracing(const ObservationBeams& b) const;
+  float distanceToOccupied(const Eigen::Vector3d& p) const;
+  /// Sensor-frame points of `obs` (decoded by `decode` once per observation and decimation).
+  template <class Decode>
+  void localPointsCached(const mrpt::obs::CObservation& obs, std::size_t decimation, Decode&& decode,
+                         std::vector<Eigen::Vector3f>& pts, std::size_t& invalid) const;
+
+  /// Derived data; copies start empty (a copy rebuilds them on demand).
+  struct Caches {
+    std::mutex mutex;
+    std::unordered_map<std::uint64_t, float> lf;  ///< packed key -> distance to occupied
+    bool points_dirty{true};
+    mrpt::maps::CSimplePointsMap occupied_points;
+    /// Sensor-frame points of the last decoded observation (Velodyne raw packets, depth image),
+    /// so that evaluating one observation at many poses (particle filters) decodes it once.
+    const void* local_obs{nullptr};
+    std::int64_t local_stamp{0};
+    std::size_t local_decimation{0};
+    std::vector<Eigen::Vector3f> local_points;
+    std::size_t local_invalid{0};
+    Caches() = default;
+    Caches(const Caches&) {}
+    Caches& operator=(const Caches&) {
+      std::lock_guard<std::mutex> lk(mutex);
+      lf.clear();
+      points_dirty = true;
+      local_obs = nullptr;
+      return *this;
+    }
+  };
+
+  OccupancyMap map_;
+  mutable Caches caches_;
+};
+
+}  // namespace rtog

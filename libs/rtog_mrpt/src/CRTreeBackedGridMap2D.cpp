@@ -1,0 +1,168 @@
+// rtog::CRTreeBackedGridMap2D: a COccupancyGridMap2D view of an R-tree map.
+#include "rtog/mrpt/CRTreeBackedGridMap2D.h"
+
+#include <cmath>
+#include <limits>
+#include <sstream>
+
+#include <mrpt/config/CConfigFileBase.h>
+#include <mrpt/serialization/CArchive.h>
+
+using namespace mrpt::maps;
+
+IMPLEMENTS_SERIALIZABLE(CRTreeBackedGridMap2D, COccupancyGridMap2D, rtog)
+
+MAP_DEFINITION_REGISTER("rtog::CRTreeBackedGridMap2D,rtreeGridMap2D", rtog::CRTreeBackedGridMap2D)
+
+namespace rtog {
+
+CRTreeBackedGridMap2D::TMapDefinition::TMapDefinition() = default;
+
+void CRTreeBackedGridMap2D::TMapDefinition::loadFromConfigFile_map_specific(
+    const mrpt::config::CConfigFileBase& source, const std::string& prefix) {
+  const std::string sec = prefix + "_creationOpts";
+  resolution = source.read_double(sec, "resolution", resolution);
+  if (!(std::isfinite(resolution) && resolution >= 1e-3 && resolution <= 1e2))
+    throw std::invalid_argument("rtog::CRTreeBackedGridMap2D: invalid option [" + sec +
+                                "] resolution: must lie in [1e-3, 1e2] m, got " + std::to_string(resolution));
+  gridView_minZ = source.read_float(sec, "gridView_minZ", gridView_minZ);
+  gridView_maxZ = source.read_float(sec, "gridView_maxZ", gridView_maxZ);
+  if (!(gridView_minZ <= gridView_maxZ))
+    throw std::invalid_argument("rtog::CRTreeBackedGridMap2D: invalid option [" + sec +
+                                "] gridView_minZ/gridView_maxZ: need minZ <= maxZ");
+  insertionOpts.loadFromConfigFile(source, prefix + "_insertOpts");
+  likelihoodOpts.loadFromConfigFile(source, prefix + "_likelihoodOpts");
+}
+
+void CRTreeBackedGridMap2D::TMapDefinition::dumpToTextStream_map_specific(std::ostream& out) const {
+  out << "resolution = " << resolution << "\ngridView_minZ = " << gridView_minZ
+      << "\ngridView_maxZ = " << gridView_maxZ << "\n";
+  insertionOpts.dumpToTextStream(out);
+  likelihoodOpts.dumpToTextStream(out);
+}
+
+mrpt::maps::CMetricMap* CRTreeBackedGridMap2D::internal_CreateFromMapDefinition(
+    const mrpt::maps::TMetricMapInitializer& def) {
+  const auto& d = dynamic_cast<const CRTreeBackedGridMap2D::TMapDefinition&>(def);
+  auto* m = new CRTreeBackedGridMap2D(d.resolution);
+  m->rtree_ = CRTreeOccupancyGridMap(d.resolution, d.insertionOpts);
+  m->likelihoodOptions = d.likelihoodOpts;
+  m->gridView_minZ = d.gridView_minZ;
+  m->gridView_maxZ = d.gridView_maxZ;
+  m->genericMapParams = d.genericMapParams;
+  return m;
+}
+
+CRTreeBackedGridMap2D::CRTreeBackedGridMap2D(double resolution)
+    : COccupancyGridMap2D(-1.0f, 1.0f, -1.0f, 1.0f, static_cast<float>(resolution)), rtree_(resolution) {}
+
+void CRTreeBackedGridMap2D::internal_clear() {
+  COccupancyGridMap2D::internal_clear();
+  rtree_.clear();
+}
+
+bool CRTreeBackedGridMap2D::internal_insertObservation(const mrpt::obs::CObservation& obs,
+                                                       const std::optional<const mrpt::poses::CPose3D>& robotPose) {
+  ObservationBeams beams;
+  const mrpt::poses::CPose3D pose = robotPose ? *robotPose : mrpt::poses::CPose3D();
+  if (!rtree_.extractBeams(obs, pose, beams, true)) return false;
+  if (!rtree_.insertObservation(obs, robotPose)) return false;
+  // The region the beams can have changed: their bounding box, beams cut at maxDistanceInsertion.
+  double x0 = beams.origin.x(), x1 = x0, y0 = beams.origin.y(), y1 = y0;
+  const double maxd = rtree_.insertionOptions.maxDistanceInsertion;
+  for (const auto& p : beams.points) {
+    Eigen::Vector3d q = p.cast<double>();
+    const Eigen::Vector3d d = q - beams.origin;
+    if (maxd > 0 && d.norm() > maxd) q = beams.origin + d * (maxd / d.norm());
+    x0 = std::min(x0, q.x()), x1 = std::max(x1, q.x());
+    y0 = std::min(y0, q.y()), y1 = std::max(y1, q.y());
+  }
+  const double pad = 2.0 * rtree_.resolution();
+  refreshRegion(x0 - pad, y0 - pad, x1 + pad, y1 + pad);
+  return true;
+}
+
+void CRTreeBackedGridMap2D::refreshRegion(double x0, double y0, double x1, double y1) {
+  const OccupancyMap& m = rtree_.map();
+  const Box kb = m.keyBounds();
+  if (kb.isEmpty()) return;
+  resizeGrid(static_cast<float>(x0), static_cast<float>(x1), static_cast<float>(y0), static_cast<float>(y1), 0.5f,
+             true);
+  const Lattice& lat = m.lattice();
+  Key k0, k1, z0, z1;
+  if (!lat.tryKey(Eigen::Vector3d(x0, y0, 0), k0) || !lat.tryKey(Eigen::Vector3d(x1, y1, 0), k1)) return;
+  const double zlo = std::max<double>(gridView_minZ, lat.boxMin(kb).z());
+  const double zhi = std::min<double>(gridView_maxZ, lat.boxMax(kb).z() - 0.5 * lat.resolution());
+  if (!(zlo <= zhi) || !lat.tryKey(Eigen::Vector3d(0, 0, zlo), z0) || !lat.tryKey(Eigen::Vector3d(0, 0, zhi), z1))
+    return;
+  const Box region{Key{k0.x, k0.y, z0.z}, Key{k1.x, k1.y, z1.z}};
+  const std::int64_t nx = region.extent(0), ny = region.extent(1);
+  std::vector<float> best(static_cast<std::size_t>(nx * ny), std::numeric_limits<float>::quiet_NaN());
+  m.forEachLeaf([&](const Box& b, float v) {
+    if (!b.intersects(region)) return;
+    const Box c = b.intersection(region);
+    for (std::int32_t y = c.min.y; y <= c.max.y; ++y)
+      for (std::int32_t x = c.min.x; x <= c.max.x; ++x) {
+        float& dst = best[static_cast<std::size_t>((y - region.min.y) * nx + (x - region.min.x))];
+        if (std::isnan(dst) || v > dst) dst = v;
+      }
+  });
+  // Sample the band at each 2D cell centre (the grid's cells need not align with the lattice).
+  const int cx0 = std::max(0, x2idx(x0)), cx1 = std::min<int>(static_cast<int>(getSizeX()) - 1, x2idx(x1));
+  const int cy0 = std::max(0, y2idx(y0)), cy1 = std::min<int>(static_cast<int>(getSizeY()) - 1, y2idx(y1));
+  for (int cy = cy0; cy <= cy1; ++cy)
+    for (int cx = cx0; cx <= cx1; ++cx) {
+      Key k;
+      if (!lat.tryKey(Eigen::Vector3d(idx2x(cx), idx2y(cy), 0), k)) continue;
+      if (k.x < region.min.x || k.x > region.max.x || k.y < region.min.y || k.y > region.max.y) continue;
+      const float v = best[static_cast<std::size_t>((k.y - region.min.y) * nx + (k.x - region.min.x))];
+      // MRPT grid cells hold P(free): 0 is occupied (black), 1 free (white).
+      setCell(cx, cy, std::isnan(v) ? 0.5f : static_cast<float>(1.0 - probability(v)));
+    }
+}
+
+void CRTreeBackedGridMap2D::refreshGrid() {
+  const OccupancyMap& m = rtree_.map();
+  const Box kb = m.keyBounds();
+  if (kb.isEmpty()) {
+    COccupancyGridMap2D::internal_clear();
+    return;
+  }
+  const Eigen::Vector3d lo = m.lattice().boxMin(kb), hi = m.lattice().boxMax(kb);
+  setSize(static_cast<float>(lo.x()), static_cast<float>(hi.x()), static_cast<float>(lo.y()),
+          static_cast<float>(hi.y()), static_cast<float>(m.resolution()), 0.5f);
+  refreshRegion(lo.x(), lo.y(), hi.x(), hi.y());
+  m_is_empty = false;
+}
+
+// Version 0: the COccupancyGridMap2D part (grid and its options), the R-tree map, the band.
+uint8_t CRTreeBackedGridMap2D::serializeGetVersion() const { return 0; }
+
+void CRTreeBackedGridMap2D::serializeTo(mrpt::serialization::CArchive& out) const {
+  COccupancyGridMap2D::serializeTo(out);
+  out << rtree_ << gridView_minZ << gridView_maxZ;
+}
+
+void CRTreeBackedGridMap2D::serializeFrom(mrpt::serialization::CArchive& in, uint8_t version) {
+  switch (version) {
+    case 0:
+      COccupancyGridMap2D::serializeFrom(in, COccupancyGridMap2D::serializeGetVersion());
+      in >> rtree_ >> gridView_minZ >> gridView_maxZ;
+      break;
+    default:
+      MRPT_THROW_UNKNOWN_SERIALIZATION_VERSION(version);
+  }
+}
+
+void CRTreeBackedGridMap2D::saveMetricMapRepresentationToFile(const std::string& prefix) const {
+  COccupancyGridMap2D::saveMetricMapRepresentationToFile(prefix);
+  rtree_.saveMetricMapRepresentationToFile(prefix);
+}
+
+std::string CRTreeBackedGridMap2D::asString() const {
+  std::ostringstream os;
+  os << "rtog::CRTreeBackedGridMap2D: " << getSizeX() << "x" << getSizeY() << " 2D view of " << rtree_.asString();
+  return os.str();
+}
+
+}  // namespace rtog

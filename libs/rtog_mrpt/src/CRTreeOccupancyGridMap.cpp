@@ -1,0 +1,288 @@
+// rtog::CRTreeOccupancyGridMap: construction, options, registration with MRPT.
+#include "rtog/mrpt/CRTreeOccupancyGridMap.h"
+
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+#include <mrpt/config/CConfigFileBase.h>
+#include <mrpt/core/initializer.h>
+#include <mrpt/rtti/CObject.h>
+
+#include "rtog/mrpt/CRTreeBackedGridMap2D.h"
+
+using namespace mrpt::maps;
+
+IMPLEMENTS_SERIALIZABLE(CRTreeOccupancyGridMap, CMetricMap, rtog)
+
+MAP_DEFINITION_REGISTER("rtog::CRTreeOccupancyGridMap,rtreeOccupancyGrid", rtog::CRTreeOccupancyGridMap)
+
+// MAP_DEFINITION_REGISTER makes CMultiMetricMap able to create the map from an .ini; the RTTI
+// registration lets CArchive deserialize it (rbpf-slam copies maps through serialization).
+MRPT_INITIALIZER(rtog_mrpt_register_classes) {
+  mrpt::rtti::registerClass(CLASS_ID(rtog::CRTreeOccupancyGridMap));
+  mrpt::rtti::registerClass(CLASS_ID(rtog::CRTreeBackedGridMap2D));
+}
+
+namespace rtog {
+
+namespace {
+[[noreturn]] void badOption(const std::string& section, const std::string& key, const std::string& why) {
+  throw std::invalid_argument("rtog::CRTreeOccupancyGridMap: invalid option [" + section + "] " + key + ": " + why);
+}
+bool isProbability(float p) { return std::isfinite(p) && p > 0.0f && p < 1.0f; }
+}  // namespace
+
+// ---- TInsertionOptions -------------------------------------------------------------------
+
+void CRTreeOccupancyGridMap::TInsertionOptions::loadFromConfigFile(const mrpt::config::CConfigFileBase& s,
+                                                                  const std::string& sec) {
+  sensorModel = s.read_string(sec, "sensorModel", sensorModel);
+  maxOccupancyUpdateCertainty = s.read_float(sec, "maxOccupancyUpdateCertainty", maxOccupancyUpdateCertainty);
+  maxFreenessUpdateCertainty = s.read_float(sec, "maxFreenessUpdateCertainty", maxFreenessUpdateCertainty);
+  clampingMin = s.read_float(sec, "clampingMin", clampingMin);
+  clampingMax = s.read_float(sec, "clampingMax", clampingMax);
+  occupiedThreshold = s.read_float(sec, "occupiedThreshold", occupiedThreshold);
+  maxDistanceInsertion = s.read_float(sec, "maxDistanceInsertion", maxDistanceInsertion);
+  const int dec = s.read_int(sec, "decimation", decimation);
+  const int dec3 = s.read_int(sec, "decimation_3d_range", decimation_3d_range);
+  if (dec < 1 || dec > 65535) badOption(sec, "decimation", "must be an integer in [1, 65535], got " + std::to_string(dec));
+  if (dec3 < 1 || dec3 > 255)
+    badOption(sec, "decimation_3d_range", "must be an integer in [1, 255], got " + std::to_string(dec3));
+  decimation = static_cast<uint16_t>(dec);
+  decimation_3d_range = static_cast<uint16_t>(dec3);
+  mergePolicy = s.read_string(sec, "mergePolicy", mergePolicy);
+  discretize = s.read_bool(sec, "discretize", discretize);
+  threads = s.read_int(sec, "threads", threads);
+  rotatingScan_minElevation_deg = s.read_float(sec, "rotatingScan_minElevation_deg", rotatingScan_minElevation_deg);
+  rotatingScan_maxElevation_deg = s.read_float(sec, "rotatingScan_maxElevation_deg", rotatingScan_maxElevation_deg);
+  try {
+    validate();
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(std::string(e.what()) + " (section [" + sec + "])");
+  }
+}
+
+void CRTreeOccupancyGridMap::TInsertionOptions::saveToConfigFile(mrpt::config::CConfigFileBase& c,
+                                                                const std::string& sec) const {
+  c.write(sec, "sensorModel", sensorModel);
+  c.write(sec, "maxOccupancyUpdateCertainty", maxOccupancyUpdateCertainty);
+  c.write(sec, "maxFreenessUpdateCertainty", maxFreenessUpdateCertainty);
+  c.write(sec, "clampingMin", clampingMin);
+  c.write(sec, "clampingMax", clampingMax);
+  c.write(sec, "occupiedThreshold", occupiedThreshold);
+  c.write(sec, "maxDistanceInsertion", maxDistanceInsertion);
+  c.write(sec, "decimation", static_cast<int>(decimation));
+  c.write(sec, "decimation_3d_range", static_cast<int>(decimation_3d_range));
+  c.write(sec, "mergePolicy", mergePolicy);
+  c.write(sec, "discretize", discretize);
+  c.write(sec, "threads", threads);
+  c.write(sec, "rotatingScan_minElevation_deg", rotatingScan_minElevation_deg);
+  c.write(sec, "rotatingScan_maxElevation_deg", rotatingScan_maxElevation_deg);
+}
+
+void CRTreeOccupancyGridMap::TInsertionOptions::validate() const {
+  const std::string sec = "insertOpts";
+  sensorModelFromString(sensorModel);  // throws std::invalid_argument with the accepted names
+  mergePolicyFromString(mergePolicy);
+  if (!isProbability(maxOccupancyUpdateCertainty) || maxOccupancyUpdateCertainty <= 0.5f)
+    badOption(sec, "maxOccupancyUpdateCertainty", "must lie in (0.5, 1), got " + std::to_string(maxOccupancyUpdateCertainty));
+  if (!(maxFreenessUpdateCertainty == 0.0f ||
+        (isProbability(maxFreenessUpdateCertainty) && maxFreenessUpdateCertainty > 0.5f)))
+    badOption(sec, "maxFreenessUpdateCertainty", "must be 0 or lie in (0.5, 1), got " +
+                                                     std::to_string(maxFreenessUpdateCertainty));
+  if (!isProbability(clampingMin) || !isProbability(clampingMax) || !(clampingMin < clampingMax))
+    badOption(sec, "clampingMin/clampingMax", "need 0 < clampingMin < clampingMax < 1");
+  if (!isProbability(occupiedThreshold)) badOption(sec, "occupiedThreshold", "must lie in (0, 1)");
+  if (!std::isfinite(maxDistanceInsertion)) badOption(sec, "maxDistanceInsertion", "must be finite");
+  if (decimation < 1) badOption(sec, "decimation", "must be >= 1");
+  if (decimation_3d_range < 1 || decimation_3d_range > 255) badOption(sec, "decimation_3d_range", "must be in [1, 255]");
+  if (threads < 1 || threads > 256) badOption(sec, "threads", "must be in [1, 256]");
+  if (!(rotatingScan_minElevation_deg <= rotatingScan_maxElevation_deg) ||
+      std::abs(rotatingScan_minElevation_deg) > 90 || std::abs(rotatingScan_maxElevation_deg) > 90)
+    badOption(sec, "rotatingScan_min/maxElevation_deg", "need -90 <= min <= max <= 90");
+  toMapParams(0.1).validate();
+}
+
+MapParams CRTreeOccupancyGridMap::TInsertionOptions::toMapParams(double resolution) const {
+  MapParams p;
+  p.resolution = resolution;
+  p.log_odds.prob_hit = maxOccupancyUpdateCertainty;
+  p.log_odds.prob_miss =
+      1.0 - (maxFreenessUpdateCertainty == 0.0f ? maxOccupancyUpdateCertainty : maxFreenessUpdateCertainty);
+  p.log_odds.clamp_min = clampingMin;
+  p.log_odds.clamp_max = clampingMax;
+  p.log_odds.occupied_threshold = occupiedThreshold;
+  p.merge = mergePolicyFromString(mergePolicy);
+  return p;
+}
+
+// ---- TLikelihoodOptions ------------------------------------------------------------------
+
+void CRTreeOccupancyGridMap::TLikelihoodOptions::loadFromConfigFile(const mrpt::config::CConfigFileBase& s,
+                                                                   const std::string& sec) {
+  const std::string m = s.read_string(sec, "likelihoodMethod", "");
+  if (!m.empty()) {
+    // Numbers as in COccupancyGridMap3D (0, 1); 4 is COccupancyGridMap2D's number of the
+    // likelihood field, so that a pasted 2D section keeps working.
+    if (m == "lmLikelihoodField_Thrun" || m == "0" || m == "4")
+      likelihoodMethod = lmLikelihoodField_Thrun;
+    else if (m == "lmRayTracing" || m == "1")
+      likelihoodMethod = lmRayTracing;
+    else
+      badOption(sec, "likelihoodMethod", "unknown method '" + m + "' (expected lmLikelihoodField_Thrun or lmRayTracing)");
+  }
+  LF_stdHit = s.read_float(sec, "LF_stdHit", LF_stdHit);
+  LF_zHit = s.read_float(sec, "LF_zHit", LF_zHit);
+  LF_zRandom = s.read_float(sec, "LF_zRandom", LF_zRandom);
+  LF_maxRange = s.read_float(sec, "LF_maxRange", LF_maxRange);
+  const int lfd = s.read_int(sec, "LF_decimation", static_cast<int>(LF_decimation));
+  if (lfd < 1) badOption(sec, "LF_decimation", "must be >= 1, got " + std::to_string(lfd));
+  LF_decimation = static_cast<uint32_t>(lfd);
+  LF_maxCorrsDistance = s.read_float(sec, "LF_maxCorrsDistance", LF_maxCorrsDistance);
+  LF_useSquareDist = s.read_bool(sec, "LF_useSquareDist", LF_useSquareDist);
+  enableLikelihoodCache = s.read_bool(sec, "enableLikelihoodCache", enableLikelihoodCache);
+  rayTracing_decimation = s.read_int(sec, "rayTracing_decimation", rayTracing_decimation);
+  rayTracing_stdHit = s.read_float(sec, "rayTracing_stdHit", rayTracing_stdHit);
+  try {
+    validate();
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(std::string(e.what()) + " (section [" + sec + "])");
+  }
+}
+
+void CRTreeOccupancyGridMap::TLikelihoodOptions::saveToConfigFile(mrpt::config::CConfigFileBase& c,
+                                                                 const std::string& sec) const {
+  c.write(sec, "likelihoodMethod",
+          std::string(likelihoodMethod == lmRayTracing ? "lmRayTracing" : "lmLikelihoodField_Thrun"));
+  c.write(sec, "LF_stdHit", LF_stdHit);
+  c.write(sec, "LF_zHit", LF_zHit);
+  c.write(sec, "LF_zRandom", LF_zRandom);
+  c.write(sec, "LF_maxRange", LF_maxRange);
+  c.write(sec, "LF_decimation", static_cast<int>(LF_decimation));
+  c.write(sec, "LF_maxCorrsDistance", LF_maxCorrsDistance);
+  c.write(sec, "LF_useSquareDist", LF_useSquareDist);
+  c.write(sec, "enableLikelihoodCache", enableLikelihoodCache);
+  c.write(sec, "rayTracing_decimation", rayTracing_decimation);
+  c.write(sec, "rayTracing_stdHit", rayTracing_stdHit);
+}
+
+void CRTreeOccupancyGridMap::TLikelihoodOptions::validate() const {
+  const std::string sec = "likelihoodOpts";
+  auto positive = [&](float v, const char* k) {
+    if (!(std::isfinite(v) && v > 0.0f)) badOption(sec, k, "must be a positive number, got " + std::to_string(v));
+  };
+  positive(LF_stdHit, "LF_stdHit");
+  positive(LF_maxRange, "LF_maxRange");
+  positive(LF_maxCorrsDistance, "LF_maxCorrsDistance");
+  positive(rayTracing_stdHit, "rayTracing_stdHit");
+  if (!(LF_zHit >= 0.0f && LF_zRandom >= 0.0f && LF_zHit + LF_zRandom > 0.0f))
+    badOption(sec, "LF_zHit/LF_zRandom", "must be non-negative and not both zero");
+  if (LF_decimation < 1) badOption(sec, "LF_decimation", "must be >= 1");
+  if (rayTracing_decimation < 1) badOption(sec, "rayTracing_decimation", "must be >= 1");
+}
+
+// ---- TMapDefinition ----------------------------------------------------------------------
+
+CRTreeOccupancyGridMap::TMapDefinition::TMapDefinition() = default;
+
+void CRTreeOccupancyGridMap::TMapDefinition::loadFromConfigFile_map_specific(
+    const mrpt::config::CConfigFileBase& source, const std::string& sectionNamePrefix) {
+  const std::string sec = sectionNamePrefix + "_creationOpts";
+  resolution = source.read_double(sec, "resolution", resolution);
+  if (!(std::isfinite(resolution) && resolution >= 1e-4 && resolution <= 1e3))
+    badOption(sec, "resolution", "must lie in [1e-4, 1e3] m, got " + std::to_string(resolution));
+  insertionOpts.loadFromConfigFile(source, sectionNamePrefix + "_insertOpts");
+  likelihoodOpts.loadFromConfigFile(source, sectionNamePrefix + "_likelihoodOpts");
+}
+
+void CRTreeOccupancyGridMap::TMapDefinition::dumpToTextStream_map_specific(std::ostream& out) const {
+  out << "resolution = " << resolution << "\n";
+  insertionOpts.dumpToTextStream(out);
+  likelihoodOpts.dumpToTextStream(out);
+}
+
+mrpt::maps::CMetricMap* CRTreeOccupancyGridMap::internal_CreateFromMapDefinition(
+    const mrpt::maps::TMetricMapInitializer& def) {
+  const auto& d = dynamic_cast<const CRTreeOccupancyGridMap::TMapDefinition&>(def);
+  auto* m = new CRTreeOccupancyGridMap(d.resolution, d.insertionOpts);
+  m->likelihoodOptions = d.likelihoodOpts;
+  m->genericMapParams = d.genericMapParams;
+  return m;
+}
+
+// ---- the map -----------------------------------------------------------------------------
+
+CRTreeOccupancyGridMap::CRTreeOccupancyGridMap(double resolution)
+    : map_(insertionOptions.toMapParams(resolution)) {}
+
+CRTreeOccupancyGridMap::CRTreeOccupancyGridMap(double resolution, const TInsertionOptions& io)
+    : insertionOptions(io), map_(io.toMapParams(resolution)) {
+  io.validate();
+}
+
+void CRTreeOccupancyGridMap::syncParams() {
+  insertionOptions.validate();
+  const MapParams want = insertionOptions.toMapParams(map_.resolution());
+  const MapParams& have = map_.params();
+  const LogOddsParams &a = want.log_odds, &b = have.log_odds;
+  const bool same = a.prob_hit == b.prob_hit && a.prob_miss == b.prob_miss && a.clamp_min == b.clamp_min &&
+                    a.clamp_max == b.clamp_max && a.occupied_threshold == b.occupied_threshold &&
+                    a.prior == b.prior && want.merge == have.merge;
+  if (same) return;
+  if (map_.leafCount() != 0)
+    throw std::logic_error(
+        "rtog::CRTreeOccupancyGridMap: insertionOptions (probabilities, clamping or mergePolicy) changed "
+        "while the map holds cells; call clear() first");
+  MapParams p = want;
+  p.rtree = have.rtree;
+  map_ = OccupancyMap(p);
+  notifyMapChanged();
+}
+
+void CRTreeOccupancyGridMap::notifyMapChanged() {
+  std::lock_guard<std::mutex> lk(caches_.mutex);
+  caches_.lf.clear();
+  caches_.points_dirty = true;
+}
+
+void CRTreeOccupancyGridMap::internal_clear() {
+  map_.clear();
+  lastInsertStats = InsertStats{};
+  totalInsertStats = InsertStats{};
+  invalidRangesSkipped = 0;
+  notifyMapChanged();
+}
+
+bool CRTreeOccupancyGridMap::isEmpty() const { return map_.leafCount() == 0; }
+
+const mrpt::maps::CSimplePointsMap& CRTreeOccupancyGridMap::occupiedCellCenters() const {
+  std::lock_guard<std::mutex> lk(caches_.mutex);
+  if (caches_.points_dirty) {
+    auto& pts = caches_.occupied_points;
+    pts.clear();
+    const LogOddsModel& lm = map_.logOddsModel();
+    const Lattice& lat = map_.lattice();
+    map_.forEachLeaf([&](const Box& b, float v) {
+      if (lm.classify(v) != CellState::Occupied) return;
+      forEachCell(b, [&](const Key& k) {
+        const Eigen::Vector3d c = lat.cellCenter(k);
+        pts.insertPointFast(static_cast<float>(c.x()), static_cast<float>(c.y()), static_cast<float>(c.z()));
+      });
+    });
+    pts.mark_as_modified();
+    caches_.points_dirty = false;
+  }
+  return caches_.occupied_points;
+}
+
+std::string CRTreeOccupancyGridMap::asString() const {
+  const MapStatistics s = map_.statistics();
+  std::ostringstream os;
+  os << "rtog::CRTreeOccupancyGridMap: resolution " << map_.resolution() << " m, " << s.leaves << " leaves ("
+     << s.occupied_leaves << " occupied), " << s.cells << " cells (" << s.occupied_cells << " occupied, "
+     << s.free_cells << " free), " << s.memory_bytes << " bytes";
+  return os.str();
+}
+
+}  // namespace rtog

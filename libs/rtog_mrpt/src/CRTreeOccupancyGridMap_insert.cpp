@@ -1,0 +1,231 @@
+// rtog::CRTreeOccupancyGridMap: turning MRPT observations into beams and inserting them.
+#include <cmath>
+
+#include <mrpt/maps/CPointsMap.h>
+#include <mrpt/maps/CSimplePointsMap.h>
+#include <mrpt/obs/CObservation2DRangeScan.h>
+#include <mrpt/obs/CObservation3DRangeScan.h>
+#include <mrpt/obs/CObservationPointCloud.h>
+#include <mrpt/obs/CObservationRotatingScan.h>
+#include <mrpt/obs/CObservationVelodyneScan.h>
+
+#include "rtog/mrpt/CRTreeOccupancyGridMap.h"
+
+namespace rtog {
+
+using mrpt::poses::CPose3D;
+
+namespace {
+
+void addLocalPoint(const CPose3D& sensor, double lx, double ly, double lz, ObservationBeams& out) {
+  double gx, gy, gz;
+  sensor.composePoint(lx, ly, lz, gx, gy, gz);
+  out.points.emplace_back(static_cast<float>(gx), static_cast<float>(gy), static_cast<float>(gz));
+  out.is_hit.push_back(1);
+  out.ranges.push_back(static_cast<float>(std::sqrt(lx * lx + ly * ly + lz * lz)));
+}
+
+void setOrigin(const CPose3D& sensor, ObservationBeams& out) {
+  out.origin = Eigen::Vector3d(sensor.x(), sensor.y(), sensor.z());
+}
+
+// Points of a points map, given in the frame `frame`, into `out`.
+void addPointsMap(const mrpt::maps::CPointsMap& pm, const CPose3D& frame, std::size_t decimation,
+                  ObservationBeams& out) {
+  const auto& xs = pm.getPointsBufferRef_x();
+  const auto& ys = pm.getPointsBufferRef_y();
+  const auto& zs = pm.getPointsBufferRef_z();
+  out.points.reserve(out.points.size() + xs.size() / decimation + 1);
+  for (std::size_t i = 0; i < xs.size(); i += decimation) {
+    if (!std::isfinite(xs[i]) || !std::isfinite(ys[i]) || !std::isfinite(zs[i])) {
+      ++out.invalid;
+      continue;
+    }
+    addLocalPoint(frame, xs[i], ys[i], zs[i], out);
+  }
+}
+
+void addLocalPoints(const CPose3D& sensor, const std::vector<Eigen::Vector3f>& local, ObservationBeams& out) {
+  out.points.reserve(out.points.size() + local.size());
+  for (const auto& p : local) addLocalPoint(sensor, p.x(), p.y(), p.z(), out);
+}
+
+}  // namespace
+
+template <class Decode>
+void CRTreeOccupancyGridMap::localPointsCached(const mrpt::obs::CObservation& obs, std::size_t decimation,
+                                               Decode&& decode, std::vector<Eigen::Vector3f>& pts,
+                                               std::size_t& invalid) const {
+  const std::int64_t stamp = obs.timestamp.time_since_epoch().count();
+  {
+    std::lock_guard<std::mutex> lk(caches_.mutex);
+    if (caches_.local_obs == &obs && caches_.local_stamp == stamp && caches_.local_decimation == decimation) {
+      pts = caches_.local_points;
+      invalid = caches_.local_invalid;
+      return;
+    }
+  }
+  pts.clear();
+  invalid = 0;
+  decode(pts, invalid);
+  std::lock_guard<std::mutex> lk(caches_.mutex);
+  caches_.local_obs = &obs;
+  caches_.local_stamp = stamp;
+  caches_.local_decimation = decimation;
+  caches_.local_points = pts;
+  caches_.local_invalid = invalid;
+}
+
+bool CRTreeOccupancyGridMap::extractBeams(const mrpt::obs::CObservation& obs, const CPose3D& robotPose,
+                                          ObservationBeams& out, bool forInsertion) const {
+  using namespace mrpt::obs;
+  out = ObservationBeams{};
+  std::size_t dec = insertionOptions.decimation;
+  if (!forInsertion)
+    dec = likelihoodOptions.likelihoodMethod == lmRayTracing ? likelihoodOptions.rayTracing_decimation
+                                                             : likelihoodOptions.LF_decimation;
+  dec = std::max<std::size_t>(dec, 1);
+
+  if (const auto* scan = dynamic_cast<const CObservation2DRangeScan*>(&obs)) {
+    const CPose3D sensor = robotPose + scan->sensorPose;
+    setOrigin(sensor, out);
+    const std::size_t n = scan->getScanSize();
+    out.points.reserve(n / dec + 1);
+    for (std::size_t i = 0; i < n; i += dec) {
+      const float r = scan->getScanRange(i);
+      if (!scan->getScanRangeValidity(i) || !std::isfinite(r) || !(r > 0.0f)) {
+        ++out.invalid;
+        continue;
+      }
+      const double a = scan->getScanAngle(i);
+      addLocalPoint(sensor, r * std::cos(a), r * std::sin(a), 0.0, out);
+    }
+    return true;
+  }
+  if (const auto* pc = dynamic_cast<const CObservationPointCloud*>(&obs)) {
+    pc->load();
+    if (!pc->pointcloud) return false;
+    const CPose3D sensor = robotPose + pc->sensorPose;
+    setOrigin(sensor, out);
+    addPointsMap(*pc->pointcloud, sensor, dec, out);
+    return true;
+  }
+  if (const auto* velo = dynamic_cast<const CObservationVelodyneScan*>(&obs)) {
+    const CPose3D sensor = robotPose + velo->sensorPose;
+    setOrigin(sensor, out);
+    std::vector<Eigen::Vector3f> local;
+    localPointsCached(
+        obs, dec,
+        [&](std::vector<Eigen::Vector3f>& pts, std::size_t& invalid) {
+          CObservationVelodyneScan tmp;
+          const CObservationVelodyneScan* src = velo;
+          if (velo->point_cloud.size() == 0) {  // raw packets only: let MRPT decode them (sensor frame)
+            tmp = *velo;
+            tmp.generatePointCloud();
+            src = &tmp;
+          }
+          const auto& pcl = src->point_cloud;
+          for (std::size_t i = 0; i < pcl.x.size(); i += dec) {
+            if (!std::isfinite(pcl.x[i]) || !std::isfinite(pcl.y[i]) || !std::isfinite(pcl.z[i])) {
+              ++invalid;
+              continue;
+            }
+            pts.emplace_back(pcl.x[i], pcl.y[i], pcl.z[i]);
+          }
+        },
+        local, out.invalid);
+    addLocalPoints(sensor, local, out);
+    return true;
+  }
+  if (const auto* rot = dynamic_cast<const CObservationRotatingScan*>(&obs)) {
+    const CPose3D sensor = robotPose + rot->sensorPose;
+    setOrigin(sensor, out);
+    const std::size_t rows = rot->rangeImage.rows(), cols = rot->rangeImage.cols();
+    const double el0 = insertionOptions.rotatingScan_minElevation_deg * M_PI / 180.0;
+    const double el1 = insertionOptions.rotatingScan_maxElevation_deg * M_PI / 180.0;
+    for (std::size_t r = 0; r < rows; ++r) {
+      const double el = rows > 1 ? el0 + (el1 - el0) * double(r) / double(rows - 1) : 0.0;
+      const double ce = std::cos(el), se = std::sin(el);
+      for (std::size_t c = 0; c < cols; c += dec) {
+        const uint16_t raw = rot->rangeImage(r, c);
+        const double range = raw * rot->rangeResolution;
+        if (raw == 0 || range < rot->minRange || range > rot->maxRange) {
+          ++out.invalid;
+          continue;
+        }
+        const double az = rot->startAzimuth + (cols > 1 ? rot->azimuthSpan * double(c) / double(cols - 1) : 0.0);
+        addLocalPoint(sensor, range * ce * std::cos(az), range * ce * std::sin(az), range * se, out);
+      }
+    }
+    return true;
+  }
+  if (const auto* depth = dynamic_cast<const CObservation3DRangeScan*>(&obs)) {
+    depth->load();
+    const CPose3D sensor = robotPose + depth->sensorPose;
+    if (!depth->hasRangeImage) {
+      if (!depth->hasPoints3D) return false;
+      // Only the point cloud was stored (sensor frame).
+      setOrigin(sensor, out);
+      for (std::size_t i = 0; i < depth->points3D_x.size(); i += dec) {
+        const float x = depth->points3D_x[i], y = depth->points3D_y[i], z = depth->points3D_z[i];
+        if (!std::isfinite(x) || !std::isfinite(y) || !std::isfinite(z) || (x == 0 && y == 0 && z == 0)) {
+          ++out.invalid;
+          continue;
+        }
+        addLocalPoint(sensor, x, y, z, out);
+      }
+      return true;
+    }
+    setOrigin(sensor, out);
+    // MRPT's own unprojection through the camera model, into the sensor frame (x forward), once
+    // per observation; then the sensor pose on the robot and the robot pose.
+    const std::size_t ddec = forInsertion ? insertionOptions.decimation_3d_range : std::min<std::size_t>(dec, 255);
+    std::vector<Eigen::Vector3f> local;
+    localPointsCached(
+        obs, ddec,
+        [&](std::vector<Eigen::Vector3f>& pts, std::size_t& invalid) {
+          mrpt::maps::CSimplePointsMap pm;
+          mrpt::obs::T3DPointsProjectionParams pp;
+          pp.takeIntoAccountSensorPoseOnRobot = false;
+          pp.decimation = static_cast<uint8_t>(ddec);
+          const_cast<CObservation3DRangeScan*>(depth)->unprojectInto(pm, pp);
+          const std::size_t pixels = static_cast<std::size_t>(depth->rangeImage.rows() / ddec) *
+                                     static_cast<std::size_t>(depth->rangeImage.cols() / ddec);
+          const auto& xs = pm.getPointsBufferRef_x();
+          const auto& ys = pm.getPointsBufferRef_y();
+          const auto& zs = pm.getPointsBufferRef_z();
+          for (std::size_t i = 0; i < xs.size(); ++i) {
+            if (!std::isfinite(xs[i]) || !std::isfinite(ys[i]) || !std::isfinite(zs[i])) {
+              ++invalid;
+              continue;
+            }
+            pts.emplace_back(xs[i], ys[i], zs[i]);
+          }
+          invalid += pixels > xs.size() ? pixels - xs.size() : 0;
+        },
+        local, out.invalid);
+    addLocalPoints(sensor, local, out);
+    return true;
+  }
+  return false;
+}
+
+bool CRTreeOccupancyGridMap::internal_insertObservation(const mrpt::obs::CObservation& obs,
+                                                        const std::optional<const CPose3D>& robotPose) {
+  ObservationBeams beams;
+  if (!extractBeams(obs, robotPose ? *robotPose : CPose3D(), beams, true)) return false;
+  syncParams();
+  InsertParams ip;
+  ip.model = sensorModelFromString(insertionOptions.sensorModel);
+  ip.max_range = insertionOptions.maxDistanceInsertion;
+  ip.discretize = insertionOptions.discretize;
+  ip.threads = insertionOptions.threads;
+  lastInsertStats = map_.insertPointCloud(beams.origin, beams.points.data(), beams.points.size(), ip,
+                                          beams.is_hit.data());
+  totalInsertStats += lastInsertStats;
+  invalidRangesSkipped += beams.invalid;
+  notifyMapChanged();
+  return true;
+}
+
+}  // namespace rtog

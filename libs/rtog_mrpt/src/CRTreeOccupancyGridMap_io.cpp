@@ -1,0 +1,114 @@
+// rtog::CRTreeOccupancyGridMap: versioned CSerializable and files.
+#include <sstream>
+#include <stdexcept>
+
+#include <mrpt/io/CFileGZInputStream.h>
+#include <mrpt/io/CFileGZOutputStream.h>
+#include <mrpt/opengl/COpenGLScene.h>
+#include <mrpt/opengl/CSetOfObjects.h>
+#include <mrpt/serialization/CArchive.h>
+#include <opencv2/imgcodecs.hpp>
+
+#include "rtog/image/slice.hpp"
+#include "rtog/mrpt/CRTreeOccupancyGridMap.h"
+
+namespace rtog {
+
+// Version 0: genericMapParams, insertion and likelihood options, then the core map's own
+// binary format (doc/format.md) as a length-prefixed byte block.
+uint8_t CRTreeOccupancyGridMap::serializeGetVersion() const { return 0; }
+
+void CRTreeOccupancyGridMap::serializeTo(mrpt::serialization::CArchive& out) const {
+  out << genericMapParams;
+  const auto& io = insertionOptions;
+  out << io.sensorModel << io.maxOccupancyUpdateCertainty << io.maxFreenessUpdateCertainty << io.clampingMin
+      << io.clampingMax << io.occupiedThreshold << io.maxDistanceInsertion << io.decimation << io.decimation_3d_range
+      << io.mergePolicy << io.discretize << static_cast<int32_t>(io.threads) << io.rotatingScan_minElevation_deg
+      << io.rotatingScan_maxElevation_deg;
+  const auto& lo = likelihoodOptions;
+  out << static_cast<int32_t>(lo.likelihoodMethod) << lo.LF_stdHit << lo.LF_zHit << lo.LF_zRandom << lo.LF_maxRange
+      << lo.LF_decimation << lo.LF_maxCorrsDistance << lo.LF_useSquareDist << lo.enableLikelihoodCache
+      << lo.rayTracing_decimation << lo.rayTracing_stdHit;
+  std::ostringstream os(std::ios::binary);
+  map_.write(os);
+  const std::string bytes = os.str();
+  out.WriteAs<uint64_t>(bytes.size());
+  out.WriteBuffer(bytes.data(), bytes.size());
+}
+
+void CRTreeOccupancyGridMap::serializeFrom(mrpt::serialization::CArchive& in, uint8_t version) {
+  switch (version) {
+    case 0: {
+      in >> genericMapParams;
+      auto& io = insertionOptions;
+      int32_t threads = 1;
+      in >> io.sensorModel >> io.maxOccupancyUpdateCertainty >> io.maxFreenessUpdateCertainty >> io.clampingMin >>
+          io.clampingMax >> io.occupiedThreshold >> io.maxDistanceInsertion >> io.decimation >>
+          io.decimation_3d_range >> io.mergePolicy >> io.discretize >> threads >> io.rotatingScan_minElevation_deg >>
+          io.rotatingScan_maxElevation_deg;
+      io.threads = threads;
+      auto& lo = likelihoodOptions;
+      int32_t method = 0;
+      in >> method >> lo.LF_stdHit >> lo.LF_zHit >> lo.LF_zRandom >> lo.LF_maxRange >> lo.LF_decimation >>
+          lo.LF_maxCorrsDistance >> lo.LF_useSquareDist >> lo.enableLikelihoodCache >> lo.rayTracing_decimation >>
+          lo.rayTracing_stdHit;
+      if (method != lmLikelihoodField_Thrun && method != lmRayTracing)
+        throw std::runtime_error("rtog::CRTreeOccupancyGridMap: corrupt stream (likelihood method)");
+      lo.likelihoodMethod = static_cast<TLikelihoodMethod>(method);
+      const uint64_t n = in.ReadAs<uint64_t>();
+      if (n > (uint64_t{1} << 40)) throw std::runtime_error("rtog::CRTreeOccupancyGridMap: corrupt stream (size)");
+      std::string bytes(static_cast<std::size_t>(n), '\0');
+      if (n && in.ReadBuffer(bytes.data(), bytes.size()) != bytes.size())
+        throw std::runtime_error("rtog::CRTreeOccupancyGridMap: truncated stream");
+      std::istringstream is(bytes, std::ios::binary);
+      map_ = OccupancyMap::read(is);
+      break;
+    }
+    default:
+      MRPT_THROW_UNKNOWN_SERIALIZATION_VERSION(version);
+  }
+  lastInsertStats = totalInsertStats = InsertStats{};
+  invalidRangesSkipped = 0;
+  notifyMapChanged();
+}
+
+void CRTreeOccupancyGridMap::saveToFile(const std::string& file) const {
+  mrpt::io::CFileGZOutputStream f;
+  if (!f.open(file)) throw std::runtime_error("rtog::CRTreeOccupancyGridMap: cannot write '" + file + "'");
+  auto ar = mrpt::serialization::archiveFrom(f);
+  ar << *this;
+}
+
+std::shared_ptr<CRTreeOccupancyGridMap> CRTreeOccupancyGridMap::loadFromFile(const std::string& file) {
+  mrpt::io::CFileGZInputStream f;
+  if (!f.open(file)) throw std::runtime_error("rtog::CRTreeOccupancyGridMap: cannot read '" + file + "'");
+  auto ar = mrpt::serialization::archiveFrom(f);
+  auto obj = ar.ReadObject();
+  auto m = std::dynamic_pointer_cast<CRTreeOccupancyGridMap>(obj);
+  if (!m)
+    throw std::runtime_error("rtog::CRTreeOccupancyGridMap: '" + file + "' holds a " +
+                             std::string(obj ? obj->GetRuntimeClass()->className : "null object"));
+  return m;
+}
+
+// <prefix>.rtog (gzip CArchive), <prefix>.3Dscene (SceneViewer3D) and <prefix>_slice.png (the
+// horizontal layer through the middle of the map's height range).
+void CRTreeOccupancyGridMap::saveMetricMapRepresentationToFile(const std::string& prefix) const {
+  saveToFile(prefix + ".rtog");
+  mrpt::opengl::COpenGLScene scene;
+  auto obj = mrpt::opengl::CSetOfObjects::Create();
+  getVisualizationInto(*obj);
+  scene.insert(obj);
+  scene.saveToFile(prefix + ".3Dscene");
+  if (!isEmpty()) {
+    const Box b = map_.keyBounds();
+    const double z = (0.5 * (double(b.min.z) + double(b.max.z)) + 0.5) * map_.resolution();
+    try {
+      cv::imwrite(prefix + "_slice.png", image::rasterizeSliceZ(map_, z));
+    } catch (const std::exception&) {
+      // A slice too large for an image is not an error of the map file itself.
+    }
+  }
+}
+
+}  // namespace rtog

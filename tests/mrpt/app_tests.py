@@ -1,0 +1,296 @@
+#!/usr/bin/env python3
+"""Integration tests: the unmodified MRPT 2.5 applications with librtog_mrpt.so preloaded, on
+the datasets of Debian's mrpt-common, with the configs of share/rtog/config.
+
+Usage: app_tests.py --plugin LIB --mapcheck EXE --config-dir DIR --datasets DIR --work-dir DIR CASE
+"""
+import argparse
+import glob
+import math
+import os
+import re
+import shutil
+import statistics
+import subprocess
+import sys
+import time
+
+SENA = "2006-01ENE-21-SENA_Telecom Faculty_one_loop_only.rawlog"
+
+
+def fail(msg):
+    print("FAIL: " + msg)
+    sys.exit(1)
+
+
+class Runner:
+    def __init__(self, a):
+        self.a = a
+
+    def config(self, name, run_dir):
+        """Copies a config into run_dir with the dataset directory substituted."""
+        with open(os.path.join(self.a.config_dir, name)) as f:
+            text = f.read()
+        text = text.replace("/usr/share/mrpt/datasets", self.a.datasets)
+        dst = os.path.join(run_dir, name)
+        with open(dst, "w") as f:
+            f.write(text)
+        return dst
+
+    def run_dir(self, name):
+        d = os.path.join(self.a.work_dir, name)
+        shutil.rmtree(d, ignore_errors=True)
+        os.makedirs(d)
+        return d
+
+    def app(self, args, cwd, preload=True, timeout=280):
+        env = dict(os.environ)
+        if preload:
+            env["LD_PRELOAD"] = self.a.plugin
+        env.pop("DISPLAY", None)
+        t0 = time.time()
+        p = subprocess.run(args, cwd=cwd, env=env, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
+                           stderr=subprocess.STDOUT, timeout=timeout)
+        out = p.stdout.decode(errors="replace")
+        with open(os.path.join(cwd, os.path.basename(args[0]) + ".log"), "a") as f:
+            f.write(out)
+        print("$ %s%s  -> exit %d in %.1f s" % ("LD_PRELOAD=... " if preload else "", " ".join(args), p.returncode,
+                                               time.time() - t0))
+        return p.returncode, out
+
+    def mapcheck(self, path, min_occupied):
+        p = subprocess.run([self.a.mapcheck, path, "--min-occupied", str(min_occupied)], stdout=subprocess.PIPE,
+                           stderr=subprocess.STDOUT)
+        out = p.stdout.decode()
+        print("mapcheck %s:\n%s" % (os.path.basename(path), out.strip()))
+        if p.returncode != 0:
+            fail("map %s does not load back or is unsound" % path)
+        return dict(l.split(" ", 1) for l in out.strip().splitlines())
+
+    def one_file(self, pattern):
+        files = glob.glob(pattern)
+        if len(files) != 1:
+            fail("expected one file matching %s, found %s" % (pattern, files))
+        return files[0]
+
+
+def case_icp_slam_extra_map(r):
+    d = r.run_dir("icp_slam_extra_map")
+    cfg = r.config("icp-slam_rtog.ini", d)
+    rc, out = r.app(["icp-slam", cfg, os.path.join(r.a.datasets, SENA)], d)
+    if rc != 0:
+        fail("icp-slam exited %d:\n%s" % (rc, out[-3000:]))
+    inserted = out.count("Updating map")
+    print("scans inserted:", inserted)
+    if inserted < 20:
+        fail("icp-slam inserted only %d scans" % inserted)
+    m = r.one_file(os.path.join(d, "LOG_ICP-SLAM_RTOG", "_finalmaps_*rtog__CRTreeOccupancyGridMap_*.rtog"))
+    r.mapcheck(m, 1000)
+    for ext in (".3Dscene", "_slice.png"):
+        if not os.path.exists(m[:-5] + ext):
+            fail("missing " + m[:-5] + ext)
+
+
+def case_icp_slam_gridmatch(r):
+    d = r.run_dir("icp_slam_gridmatch")
+    cfg = r.config("icp-slam_rtog_gridmatch.ini", d)
+    rc, out = r.app(["icp-slam", cfg, os.path.join(r.a.datasets, SENA)], d)
+    if rc != 0:
+        fail("icp-slam exited %d:\n%s" % (rc, out[-3000:]))
+    inserted = out.count("Updating map")
+    low = out.count("low quality")
+    print("scans inserted: %d, ICP results rejected as low quality: %d" % (inserted, low))
+    if inserted < 20:
+        fail("icp-slam matched against the grid inserted only %d scans" % inserted)
+    base = os.path.join(d, "LOG_ICP-SLAM_RTOG_GRIDMATCH", "_finalmaps_.txt_rtog__CRTreeBackedGridMap2D_00")
+    r.mapcheck(base + ".rtog", 1000)
+    if not os.path.exists(base + ".png"):
+        fail("the COccupancyGridMap2D image was not written")
+
+
+def case_observations2map(r):
+    d = r.run_dir("observations2map")
+    cfg = r.config("observations2map_rtog.ini", d)
+    os.makedirs(os.path.join(d, "out"))
+    rc, out = r.app(["observations2map", cfg, os.path.join(r.a.datasets, "malaga-cs-fac-building.simplemap.gz"),
+                     "out/malaga"], d)
+    if rc != 0 or "exception" in out.lower():
+        fail("observations2map exited %d:\n%s" % (rc, out[-3000:]))
+    m = r.one_file(os.path.join(d, "out", "malaga_rtog__CRTreeOccupancyGridMap_00.rtog"))
+    r.mapcheck(m, 1000)
+
+
+PDF_RE = re.compile(r"PDF estimation: \(([-\d.]+),([-\d.]+),([-\d.]+)deg\)")
+
+
+def pf_track(r, cfg_name, tag, i, preload):
+    d = r.run_dir("pf_%s_%d" % (tag, i))
+    cfg = r.config(cfg_name, d)
+    rc, out = r.app(["pf-localization", cfg], d, preload=preload)
+    if rc != 0:
+        fail("pf-localization (%s) exited %d:\n%s" % (cfg_name, rc, out[-3000:]))
+    track = [(float(a), float(b)) for a, b, _ in PDF_RE.findall(out)]
+    if len(track) < 20:
+        fail("pf-localization (%s) printed only %d estimates" % (cfg_name, len(track)))
+    return track
+
+
+def compare_tracks(ref, ours, label, late=8, tol=0.25, each_tol=0.5):
+    n = min(min(len(t) for t in ref), min(len(t) for t in ours))
+    worst = 0.0
+    for k in range(n - late, n):
+        gx = statistics.median(t[k][0] for t in ref)
+        gy = statistics.median(t[k][1] for t in ref)
+        ox = statistics.median(t[k][0] for t in ours)
+        oy = statistics.median(t[k][1] for t in ours)
+        dist = math.hypot(ox - gx, oy - gy)
+        worst = max(worst, dist)
+        each = max(math.hypot(t[k][0] - gx, t[k][1] - gy) for t in ours)
+        grid_spread = max(math.hypot(t[k][0] - gx, t[k][1] - gy) for t in ref)
+        print("step %2d grid (%.3f, %.3f) %s (%.3f, %.3f): |d| = %.3f m (worst single %s run %.3f, grid runs %.3f)"
+              % (k, gx, gy, label, ox, oy, dist, label, each, grid_spread))
+        if dist > tol:
+            fail("%s median deviates %.3f m from the grid run at step %d" % (label, dist, k))
+        if each > each_tol:
+            fail("a %s run deviates %.3f m from the grid at step %d (did not converge)" % (label, each, k))
+    print("%s: worst late-step deviation of the median from the grid's: %.3f m (tolerance %.2f)" % (label, worst, tol))
+
+
+def case_pf_localization(r):
+    runs = 3
+    ref = [pf_track(r, "pf-localization_grid_reference.ini", "grid", i, False) for i in range(runs)]
+    ours = [pf_track(r, "pf-localization_rtog.ini", "rtog", i, True) for i in range(runs)]
+    compare_tracks(ref, ours, "rtog")
+
+
+def case_pf_localization_grid2d(r):
+    runs = 2
+    ref = [pf_track(r, "pf-localization_grid_reference.ini", "grid_g2d", i, False) for i in range(runs)]
+    ours = [pf_track(r, "pf-localization_rtog_grid2d.ini", "rtog_grid2d", i, True) for i in range(runs)]
+    compare_tracks(ref, ours, "rtreeGridMap2D")
+
+
+def case_rbpf_slam(r):
+    d = r.run_dir("rbpf_slam")
+    cfg = r.config("rbpf-slam_rtog.ini", d)
+    rc, out = r.app(["rbpf-slam", cfg, os.path.join(r.a.datasets, SENA)], d)
+    if rc != 0:
+        fail("rbpf-slam exited %d:\n%s" % (rc, out[-3000:]))
+    m = r.one_file(os.path.join(d, "LOG_RBPF_RTOG", "finalMap_rtog__CRTreeOccupancyGridMap_*.rtog"))
+    r.mapcheck(m, 1000)
+
+
+class Xvfb:
+    """A private X server whose framebuffer Xvfb keeps as an XWD file in `fbdir`."""
+
+    def __init__(self, fbdir):
+        self.fbdir = fbdir
+        self.p = subprocess.Popen(["Xvfb", "-displayfd", "1", "-screen", "0", "1280x1024x24", "-fbdir", fbdir,
+                                   "-nolisten", "tcp"], stdout=subprocess.PIPE, stderr=subprocess.DEVNULL)
+        self.display = ":" + self.p.stdout.readline().decode().strip()
+        print("Xvfb on display", self.display)
+
+    def screenshot(self, png):
+        out = subprocess.run([sys.executable, os.path.join(os.path.dirname(os.path.abspath(__file__)), "xwd2png.py"),
+                              os.path.join(self.fbdir, "Xvfb_screen0"), png], stdout=subprocess.PIPE, check=True)
+        colours = int(out.stdout.decode().strip())
+        print("screenshot %s: %d distinct colours" % (png, colours))
+        return colours
+
+    def close(self):
+        self.p.terminate()
+        self.p.wait(timeout=10)
+
+
+def gui_app(r, d, args, preload, png, settle=12):
+    """Starts a GUI app on a private Xvfb, checks it is still running after `settle` s, saves a
+    screenshot and returns (process maps text, colours)."""
+    x = Xvfb(d)
+    env = dict(os.environ, DISPLAY=x.display, HOME=d)
+    if preload:
+        env["LD_PRELOAD"] = r.a.plugin
+    log = open(os.path.join(d, os.path.basename(args[0]) + ".log"), "w")
+    p = subprocess.Popen(args, cwd=d, env=env, stdin=subprocess.DEVNULL, stdout=log, stderr=subprocess.STDOUT)
+    try:
+        time.sleep(settle)
+        if p.poll() is not None:
+            fail("%s exited early with %d (see %s)" % (args[0], p.returncode, log.name))
+        # No window manager on Xvfb: make the window fill the screen, let it redraw.
+        subprocess.run([sys.executable, os.path.join(os.path.dirname(os.path.abspath(__file__)), "xresize.py"),
+                        "1280", "1024"], env=env, check=False)
+        time.sleep(4)
+        if p.poll() is not None:
+            fail("%s exited after resizing with %d (see %s)" % (args[0], p.returncode, log.name))
+        with open("/proc/%d/maps" % p.pid) as f:
+            maps = f.read()
+        colours = x.screenshot(png)
+    finally:
+        p.terminate()
+        try:
+            p.wait(timeout=10)
+        except subprocess.TimeoutExpired:
+            p.kill()
+        x.close()
+    return maps, colours
+
+
+def case_rawlogviewer(r):
+    d = r.run_dir("rawlogviewer")
+    png = os.path.join(d, "RawLogViewer.png")
+    maps, colours = gui_app(r, d, ["RawLogViewer", "-l", r.a.plugin, os.path.join(r.a.datasets,
+                                                                                 "test_velodyne_VLP16.rawlog")],
+                            False, png)
+    if "librtog_mrpt" not in maps:
+        fail("RawLogViewer -l did not load librtog_mrpt.so")
+    if colours < 20:
+        fail("the RawLogViewer screenshot looks blank")
+    print("RawLogViewer running with librtog_mrpt.so loaded; screenshot", png)
+
+
+def case_sceneviewer3d(r):
+    d = r.run_dir("sceneviewer3d")
+    # Our .3Dscene of a 3D map: the VLP-16 scan at 0.2 m, occupied cuboids coloured by height.
+    prefix = os.path.join(d, "velodyne")
+    p = subprocess.run([r.a.mapcheck, "--build", os.path.join(r.a.datasets, "test_velodyne_VLP16.rawlog"), prefix,
+                        "0.2"], stdout=subprocess.PIPE, stderr=subprocess.STDOUT)
+    print(p.stdout.decode().strip())
+    if p.returncode != 0 or not os.path.exists(prefix + ".3Dscene"):
+        fail("could not write the .3Dscene")
+    png = os.path.join(d, "SceneViewer3D.png")
+    _, colours = gui_app(r, d, ["SceneViewer3D", prefix + ".3Dscene"], False, png)
+    if colours < 20:
+        fail("the SceneViewer3D screenshot looks blank")
+    print("SceneViewer3D shows our .3Dscene; screenshot", png)
+
+
+def case_rbpf_slam_grid2d(r):
+    d = r.run_dir("rbpf_slam_grid2d")
+    cfg = r.config("rbpf-slam_rtog_grid2d.ini", d)
+    rc, out = r.app(["rbpf-slam", cfg, os.path.join(r.a.datasets, SENA)], d)
+    if rc != 0:
+        fail("rbpf-slam exited %d:\n%s" % (rc, out[-3000:]))
+    base = os.path.join(d, "LOG_RBPF_RTOG_GRID2D", "finalMap_rtog__CRTreeBackedGridMap2D_00")
+    r.mapcheck(base + ".rtog", 1000)
+    if not os.path.exists(base + ".png"):
+        fail("the COccupancyGridMap2D image was not written")
+
+
+def main():
+    p = argparse.ArgumentParser()
+    p.add_argument("--plugin", required=True)
+    p.add_argument("--mapcheck", required=True)
+    p.add_argument("--config-dir", required=True)
+    p.add_argument("--datasets", required=True)
+    p.add_argument("--work-dir", required=True)
+    p.add_argument("case")
+    a = p.parse_args()
+    fn = globals().get("case_" + a.case)
+    if not fn:
+        fail("unknown case " + a.case)
+    os.makedirs(a.work_dir, exist_ok=True)
+    fn(Runner(a))
+    print("PASS")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,178 @@
+// .ini -> CMultiMetricMap creates our maps with the given options; bad values fail clearly.
+#include <gtest/gtest.h>
+
+#include <mrpt/config/CConfigFileMemory.h>
+#include <mrpt/maps/CMultiMetricMap.h>
+#include <mrpt/maps/COccupancyGridMap2D.h>
+#include <mrpt/obs/CObservation2DRangeScan.h>
+
+#include "rtog/mrpt/CRTreeBackedGridMap2D.h"
+#include "rtog/mrpt/CRTreeOccupancyGridMap.h"
+
+using rtog::CRTreeOccupancyGridMap;
+
+namespace {
+
+mrpt::maps::CMultiMetricMap fromIni(const std::string& ini) {
+  mrpt::config::CConfigFileMemory cfg(ini);
+  mrpt::maps::TSetOfMetricMapInitializers inits;
+  inits.loadFromConfigFile(cfg, "MappingApplication");
+  mrpt::maps::CMultiMetricMap mm;
+  mm.setListOfMaps(inits);
+  return mm;
+}
+
+const char* kIni = R"(
+[MappingApplication]
+rtreeOccupancyGrid_count=1
+occupancyGrid_count=1
+
+[MappingApplication_rtreeOccupancyGrid_00_creationOpts]
+resolution=0.2
+
+[MappingApplication_rtreeOccupancyGrid_00_insertOpts]
+sensorModel=endpoint
+maxOccupancyUpdateCertainty=0.8
+maxFreenessUpdateCertainty=0.6
+clampingMin=0.2
+clampingMax=0.9
+maxDistanceInsertion=12.5
+decimation=3
+decimation_3d_range=4
+mergePolicy=equal
+
+[MappingApplication_rtreeOccupancyGrid_00_likelihoodOpts]
+likelihoodMethod=lmRayTracing
+LF_stdHit=0.2
+LF_decimation=7
+rayTracing_stdHit=0.5
+enableLikelihoodCache=false
+)";
+
+}  // namespace
+
+TEST(MapOptions, IniCreatesMapWithOptions) {
+  auto mm = fromIni(kIni);
+  ASSERT_EQ(mm.maps.size(), 2u);
+  auto m = mm.mapByClass<CRTreeOccupancyGridMap>();
+  ASSERT_TRUE(m);
+  EXPECT_DOUBLE_EQ(m->resolution(), 0.2);
+  EXPECT_EQ(m->insertionOptions.sensorModel, "endpoint");
+  EXPECT_FLOAT_EQ(m->insertionOptions.maxOccupancyUpdateCertainty, 0.8f);
+  EXPECT_FLOAT_EQ(m->insertionOptions.maxDistanceInsertion, 12.5f);
+  EXPECT_EQ(m->insertionOptions.decimation, 3);
+  EXPECT_EQ(m->insertionOptions.decimation_3d_range, 4);
+  EXPECT_EQ(m->insertionOptions.mergePolicy, "equal");
+  EXPECT_EQ(m->likelihoodOptions.likelihoodMethod, CRTreeOccupancyGridMap::lmRayTracing);
+  EXPECT_FLOAT_EQ(m->likelihoodOptions.LF_stdHit, 0.2f);
+  EXPECT_EQ(m->likelihoodOptions.LF_decimation, 7u);
+  EXPECT_FLOAT_EQ(m->likelihoodOptions.rayTracing_stdHit, 0.5f);
+  EXPECT_FALSE(m->likelihoodOptions.enableLikelihoodCache);
+  // The options reach the core map.
+  const auto& p = m->map().params();
+  EXPECT_NEAR(p.log_odds.prob_hit, 0.8, 1e-6);
+  EXPECT_NEAR(p.log_odds.prob_miss, 0.4, 1e-6);
+  EXPECT_NEAR(p.log_odds.clamp_min, 0.2, 1e-6);
+  EXPECT_NEAR(p.log_odds.clamp_max, 0.9, 1e-6);
+  EXPECT_EQ(p.merge, rtog::MergePolicy::Equal);
+  // The stock grid is still there and untouched.
+  EXPECT_TRUE(mm.mapByClass<mrpt::maps::COccupancyGridMap2D>());
+}
+
+TEST(MapOptions, DefaultsMatchStockGridWhereShared) {
+  CRTreeOccupancyGridMap m;
+  mrpt::maps::COccupancyGridMap2D g;
+  EXPECT_FLOAT_EQ(m.insertionOptions.maxOccupancyUpdateCertainty, g.insertionOptions.maxOccupancyUpdateCertainty);
+  EXPECT_FLOAT_EQ(m.insertionOptions.maxFreenessUpdateCertainty, g.insertionOptions.maxFreenessUpdateCertainty);
+  EXPECT_FLOAT_EQ(m.insertionOptions.maxDistanceInsertion, g.insertionOptions.maxDistanceInsertion);
+  EXPECT_EQ(m.insertionOptions.decimation, g.insertionOptions.decimation);
+  EXPECT_FLOAT_EQ(m.likelihoodOptions.LF_stdHit, g.likelihoodOptions.LF_stdHit);
+  EXPECT_FLOAT_EQ(m.likelihoodOptions.LF_zHit, g.likelihoodOptions.LF_zHit);
+  EXPECT_FLOAT_EQ(m.likelihoodOptions.LF_zRandom, g.likelihoodOptions.LF_zRandom);
+  EXPECT_FLOAT_EQ(m.likelihoodOptions.LF_maxRange, g.likelihoodOptions.LF_maxRange);
+  EXPECT_EQ(m.likelihoodOptions.LF_decimation, g.likelihoodOptions.LF_decimation);
+  EXPECT_FLOAT_EQ(m.likelihoodOptions.LF_maxCorrsDistance, g.likelihoodOptions.LF_maxCorrsDistance);
+  EXPECT_EQ(m.likelihoodOptions.rayTracing_decimation, g.likelihoodOptions.rayTracing_decimation);
+  EXPECT_FLOAT_EQ(m.likelihoodOptions.rayTracing_stdHit, g.likelihoodOptions.rayTracing_stdHit);
+  EXPECT_DOUBLE_EQ(m.resolution(), 0.10);
+}
+
+TEST(MapOptions, BadValuesThrowClearly) {
+  auto check = [&](const std::string& section, const std::string& kv, const std::string& word) {
+    const std::string ini = "[MappingApplication]\nrtreeOccupancyGrid_count=1\n[MappingApplication_rtreeOccupancyGrid_00_" +
+                            section + "]\n" + kv + "\n";
+    try {
+      fromIni(ini);
+      ADD_FAILURE() << "no exception for " << kv;
+    } catch (const std::exception& e) {
+      EXPECT_NE(std::string(e.what()).find(word), std::string::npos) << e.what();
+    }
+  };
+  check("creationOpts", "resolution=-0.1", "resolution");
+  check("creationOpts", "resolution=0", "resolution");
+  check("insertOpts", "sensorModel=laser", "sensor model");
+  check("insertOpts", "mergePolicy=sometimes", "merge policy");
+  check("insertOpts", "maxOccupancyUpdateCertainty=1.5", "maxOccupancyUpdateCertainty");
+  check("insertOpts", "decimation=0", "decimation");
+  check("insertOpts", "clampingMin=0.95", "clamp");
+  check("likelihoodOpts", "likelihoodMethod=lmMagic", "likelihoodMethod");
+  check("likelihoodOpts", "LF_stdHit=-1", "LF_stdHit");
+}
+
+TEST(MapOptions, BackedGridIsAnOccupancyGridMap2D) {
+  auto mm = fromIni(R"(
+[MappingApplication]
+rtreeGridMap2D_count=1
+[MappingApplication_rtreeGridMap2D_00_creationOpts]
+resolution=0.05
+[MappingApplication_rtreeGridMap2D_00_likelihoodOpts]
+LF_decimation=9
+)");
+  auto g = mm.mapByClass<mrpt::maps::COccupancyGridMap2D>();
+  ASSERT_TRUE(g);
+  auto b = std::dynamic_pointer_cast<rtog::CRTreeBackedGridMap2D>(g);
+  ASSERT_TRUE(b);
+  EXPECT_FLOAT_EQ(g->getResolution(), 0.05f);
+  EXPECT_DOUBLE_EQ(b->rtreeMap().resolution(), 0.05);
+  EXPECT_EQ(g->likelihoodOptions.LF_decimation, 9u);
+}
+
+TEST(MapOptions, SaveToConfigFileRoundTrip) {
+  CRTreeOccupancyGridMap::TInsertionOptions io;
+  io.sensorModel = "endpoint";
+  io.maxDistanceInsertion = 7.5f;
+  io.mergePolicy = "off";
+  io.discretize = true;
+  CRTreeOccupancyGridMap::TLikelihoodOptions lo;
+  lo.likelihoodMethod = CRTreeOccupancyGridMap::lmRayTracing;
+  lo.LF_maxCorrsDistance = 0.7f;
+  mrpt::config::CConfigFileMemory cfg;
+  io.saveToConfigFile(cfg, "ins");
+  lo.saveToConfigFile(cfg, "lik");
+  CRTreeOccupancyGridMap::TInsertionOptions io2;
+  CRTreeOccupancyGridMap::TLikelihoodOptions lo2;
+  io2.loadFromConfigFile(cfg, "ins");
+  lo2.loadFromConfigFile(cfg, "lik");
+  EXPECT_EQ(io2.sensorModel, "endpoint");
+  EXPECT_FLOAT_EQ(io2.maxDistanceInsertion, 7.5f);
+  EXPECT_EQ(io2.mergePolicy, "off");
+  EXPECT_TRUE(io2.discretize);
+  EXPECT_EQ(lo2.likelihoodMethod, CRTreeOccupancyGridMap::lmRayTracing);
+  EXPECT_FLOAT_EQ(lo2.LF_maxCorrsDistance, 0.7f);
+}
+
+TEST(MapOptions, ChangingProbabilitiesOfANonEmptyMapThrows) {
+  CRTreeOccupancyGridMap m(0.1);
+  mrpt::obs::CObservation2DRangeScan scan;
+  scan.resizeScan(3);
+  for (std::size_t i = 0; i < 3; ++i) {
+    scan.setScanRange(i, 2.0f);
+    scan.setScanRangeValidity(i, true);
+  }
+  EXPECT_TRUE(m.insertObservation(scan));
+  m.insertionOptions.maxOccupancyUpdateCertainty = 0.9f;
+  EXPECT_THROW(m.insertObservation(scan), std::logic_error);
+  m.clear();
+  EXPECT_TRUE(m.insertObservation(scan));
+  EXPECT_NEAR(m.map().params().log_odds.prob_hit, 0.9, 1e-6);
+}

@@ -1,0 +1,149 @@
+// Versioned CSerializable: round trips through memory, files, clone(), and CArchive corruption.
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <map>
+
+#include <mrpt/io/CMemoryStream.h>
+#include <mrpt/opengl/CSetOfObjects.h>
+#include <mrpt/opengl/CSetOfTriangles.h>
+#include <mrpt/maps/CMultiMetricMap.h>
+#include <mrpt/serialization/CArchive.h>
+
+#include "rtog/mrpt/CRTreeBackedGridMap2D.h"
+#include "rtog/mrpt/CRTreeOccupancyGridMap.h"
+#include "test_helpers.hpp"
+
+using rtog::CRTreeOccupancyGridMap;
+using namespace rtog_test;
+
+namespace {
+
+std::map<std::uint64_t, std::pair<rtog::Box, float>> leaves(const rtog::OccupancyMap& m) {
+  std::map<std::uint64_t, std::pair<rtog::Box, float>> out;
+  m.forEachLeaf([&](const rtog::Box& b, float v) { out[rtog::packKey(b.min)] = {b, v}; });
+  return out;
+}
+
+CRTreeOccupancyGridMap senaMap(std::size_t frames) {
+  CRTreeOccupancyGridMap m(0.05);
+  m.insertionOptions.maxOccupancyUpdateCertainty = 0.7f;
+  m.likelihoodOptions.LF_stdHit = 0.25f;
+  m.likelihoodOptions.likelihoodMethod = CRTreeOccupancyGridMap::lmRayTracing;
+  for (const auto& f : loadOdometryFrames(dataset(kSena), frames)) f.sf->insertObservationsInto(m, f.pose);
+  return m;
+}
+
+void expectSame(const CRTreeOccupancyGridMap& a, const CRTreeOccupancyGridMap& b) {
+  EXPECT_EQ(a.resolution(), b.resolution());
+  EXPECT_EQ(a.map().leafCount(), b.map().leafCount());
+  EXPECT_TRUE(leaves(a.map()) == leaves(b.map()));
+  EXPECT_EQ(a.insertionOptions.maxOccupancyUpdateCertainty, b.insertionOptions.maxOccupancyUpdateCertainty);
+  EXPECT_EQ(a.likelihoodOptions.LF_stdHit, b.likelihoodOptions.LF_stdHit);
+  EXPECT_EQ(a.likelihoodOptions.likelihoodMethod, b.likelihoodOptions.likelihoodMethod);
+  EXPECT_EQ(b.map().checkInvariants(), "");
+}
+
+}  // namespace
+
+TEST(MapSerialization, MemoryRoundTrip) {
+  const auto m = senaMap(40);
+  ASSERT_GT(m.map().leafCount(), 1000u);
+  mrpt::io::CMemoryStream buf;
+  auto ar = mrpt::serialization::archiveFrom(buf);
+  ar << m;
+  buf.Seek(0);
+  auto obj = ar.ReadObject();
+  auto back = std::dynamic_pointer_cast<CRTreeOccupancyGridMap>(obj);
+  ASSERT_TRUE(back);
+  expectSame(m, *back);
+}
+
+TEST(MapSerialization, FileRoundTripAndRepresentation) {
+  const auto m = senaMap(40);
+  const auto dir = std::filesystem::temp_directory_path() / "rtog_mrpt_test_io";
+  std::filesystem::create_directories(dir);
+  const std::string prefix = (dir / "sena").string();
+  m.saveMetricMapRepresentationToFile(prefix);
+  EXPECT_TRUE(std::filesystem::exists(prefix + ".rtog"));
+  EXPECT_TRUE(std::filesystem::exists(prefix + ".3Dscene"));
+  EXPECT_TRUE(std::filesystem::exists(prefix + "_slice.png"));
+  auto back = CRTreeOccupancyGridMap::loadFromFile(prefix + ".rtog");
+  expectSame(m, *back);
+  std::filesystem::remove_all(dir);
+}
+
+TEST(MapSerialization, CloneAndMultiMapCopyAreFastAndEqual) {
+  const auto m = senaMap(40);
+  const auto t0 = std::chrono::steady_clock::now();
+  auto c = std::dynamic_pointer_cast<CRTreeOccupancyGridMap>(mrpt::rtti::CObject::Ptr(m.clone()));
+  ASSERT_TRUE(c);
+  expectSame(m, *c);
+  // A copy through serialization, as rbpf-slam does per particle.
+  mrpt::maps::CMultiMetricMap mm;
+  mm.maps.push_back(std::make_shared<CRTreeOccupancyGridMap>(m));
+  mrpt::io::CMemoryStream buf;
+  auto ar = mrpt::serialization::archiveFrom(buf);
+  const auto t1 = std::chrono::steady_clock::now();
+  for (int i = 0; i < 10; ++i) {
+    buf.clear();
+    ar << mm;
+    buf.Seek(0);
+    mrpt::maps::CMultiMetricMap copy;
+    ar >> copy;
+    ASSERT_EQ(copy.maps.size(), 1u);
+    auto cm = copy.mapByClass<CRTreeOccupancyGridMap>();
+    ASSERT_TRUE(cm);
+    if (i == 0) expectSame(m, *cm);
+  }
+  const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t1).count() / 10;
+  std::printf("map with %zu leaves: one serialization copy %.2f ms (clone %.2f ms)\n", m.map().leafCount(), ms,
+              std::chrono::duration<double, std::milli>(t1 - t0).count());
+  EXPECT_LT(ms, 200.0);
+}
+
+TEST(MapSerialization, CorruptStreamThrows) {
+  const auto m = senaMap(5);
+  mrpt::io::CMemoryStream buf;
+  auto ar = mrpt::serialization::archiveFrom(buf);
+  ar << m;
+  const auto n = buf.getTotalBytesCount();
+  mrpt::io::CMemoryStream cut;
+  cut.assignMemoryNotOwn(buf.getRawBufferData(), n - 40);
+  auto ar2 = mrpt::serialization::archiveFrom(cut);
+  EXPECT_ANY_THROW(ar2.ReadObject());
+}
+
+TEST(MapSerialization, BackedGridRoundTrip) {
+  rtog::CRTreeBackedGridMap2D g(0.05);
+  for (const auto& f : loadOdometryFrames(dataset(kSena), 20)) f.sf->insertObservationsInto(g, f.pose);
+  mrpt::io::CMemoryStream buf;
+  auto ar = mrpt::serialization::archiveFrom(buf);
+  ar << g;
+  buf.Seek(0);
+  auto back = std::dynamic_pointer_cast<rtog::CRTreeBackedGridMap2D>(ar.ReadObject());
+  ASSERT_TRUE(back);
+  expectSame(g.rtreeMap(), back->rtreeMap());
+  EXPECT_EQ(g.getSizeX(), back->getSizeX());
+  EXPECT_EQ(g.getSizeY(), back->getSizeY());
+  EXPECT_TRUE(g.getRawMap() == back->getRawMap());
+}
+
+TEST(MapSerialization, VisualizationDrawsOccupiedCuboids) {
+  auto m = senaMap(10);
+  mrpt::opengl::CSetOfObjects obj;
+  m.getVisualizationInto(obj);
+  auto tris = obj.getByClass<mrpt::opengl::CSetOfTriangles>();
+  ASSERT_TRUE(tris);
+  EXPECT_EQ(tris->getTrianglesCount(), 12u * m.map().statistics().occupied_leaves);
+  m.renderingOptions.showFree = true;
+  mrpt::opengl::CSetOfObjects all;
+  m.getVisualizationInto(all);
+  EXPECT_EQ(all.getByClass<mrpt::opengl::CSetOfTriangles>()->getTrianglesCount(), 12u * m.map().leafCount());
+  m.genericMapParams.enableSaveAs3DObject = false;
+  mrpt::opengl::CSetOfObjects none;
+  m.getVisualizationInto(none);
+  EXPECT_TRUE(none.empty());
+}
