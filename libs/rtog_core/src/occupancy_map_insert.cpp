@@ -17,12 +17,16 @@ InsertStats OccupancyMap::insertPointCloud(const Eigen::Vector3d& origin, const 
   if (batches_.size() < threads) batches_.resize(threads);
   std::vector<InsertStats> part(threads);
   std::vector<std::exception_ptr> errors(threads);
-  // Contiguous slices, traced independently; their union does not depend on the split.
+  // Chunks dealt round-robin (neighbouring beams have similar lengths, so this balances the
+  // load), traced independently; their union does not depend on the split.
+  constexpr std::size_t kChunk = 2048;
   const auto trace = [&](std::size_t t) {
     try {
-      const std::size_t first = count * t / threads, last = count * (t + 1) / threads;
       batches_[t].clear();
-      computeUpdate(origin, points + first, last - first, ip, is_hit ? is_hit + first : nullptr, batches_[t], part[t]);
+      for (std::size_t first = t * kChunk; first < count; first += threads * kChunk) {
+        const std::size_t n = std::min(kChunk, count - first);
+        computeUpdate(origin, points + first, n, ip, is_hit ? is_hit + first : nullptr, batches_[t], part[t]);
+      }
     } catch (...) {
       errors[t] = std::current_exception();
     }
@@ -37,7 +41,7 @@ InsertStats OccupancyMap::insertPointCloud(const Eigen::Vector3d& origin, const 
   for (std::size_t t = 0; t < threads; ++t) stats += part[t];
   for (std::size_t t = 1; t < threads; ++t) batches_[0].merge(batches_[t]);
   batches_[0].finalize();
-  applyUpdate(batches_[0], stats);
+  applyUpdate(batches_[0], stats, static_cast<int>(threads));
   return stats;
 }
 
@@ -88,11 +92,36 @@ void OccupancyMap::computeUpdate(const Eigen::Vector3d& origin, const Eigen::Vec
   }
 }
 
-void OccupancyMap::applyUpdate(const UpdateBatch& batch, InsertStats& stats) {
+void OccupancyMap::applyUpdate(const UpdateBatch& batch, InsertStats& stats, int threads) {
+  if (threads < 1) throw std::invalid_argument("applyUpdate: threads must be >= 1");
   stats.cells_occupied += batch.occupiedCount();
   stats.cells_free += batch.freeCount();
+  // Bricks are independent: after their slots exist, contiguous runs of them are applied in
+  // parallel, each thread with its own scratch; the results do not depend on the split.
+  const auto& bricks = batch.bricks();
+  std::vector<std::uint32_t> slots(bricks.size());
+  for (std::size_t i = 0; i < bricks.size(); ++i) slots[i] = brickSlot(bricks[i]->brick);
+  const std::size_t n = std::min<std::size_t>(static_cast<std::size_t>(threads), 1 + bricks.size() / 64);
+  if (apply_ctx_.size() < n) apply_ctx_.resize(n);
+  const auto work = [&](std::size_t t) {
+    ApplyContext& ctx = apply_ctx_[t];
+    ctx.local.assign(kBrickCells, -1);
+    ctx.reshaped.clear();
+    ctx.leaf_delta = 0;
+    ctx.stats = InsertStats{};
+    for (std::size_t i = bricks.size() * t / n, e = bricks.size() * (t + 1) / n; i < e; ++i)
+      applyBrick(*bricks[i], slots[i], ctx);
+  };
+  std::vector<std::thread> workers;
+  for (std::size_t t = 1; t < n; ++t) workers.emplace_back(work, t);
+  work(0);
+  for (auto& w : workers) w.join();
   reshaped_bricks_.clear();
-  for (const UpdateBatch::BrickUpdates* upd : batch.bricks()) applyBrick(*upd, stats);
+  for (std::size_t t = 0; t < n; ++t) {
+    stats += apply_ctx_[t].stats;
+    leaf_count_ = static_cast<std::size_t>(static_cast<std::int64_t>(leaf_count_) + apply_ctx_[t].leaf_delta);
+    reshaped_bricks_.insert(reshaped_bricks_.end(), apply_ctx_[t].reshaped.begin(), apply_ctx_[t].reshaped.end());
+  }
   // Leaf nodes whose boxes changed go into the upper tree one by one, unless they are many
   // compared with the tree (a first scan, a new area): then one bulk load is cheaper.
   std::size_t touched_nodes = 0;
@@ -183,17 +212,18 @@ static const std::array<std::uint16_t, kBrickCells>& mortonRank() {
   return rank;
 }
 
-void OccupancyMap::applyBrick(const UpdateBatch::BrickUpdates& upd, InsertStats& stats) {
-  const std::uint32_t slot = brickSlot(upd.brick);
+void OccupancyMap::applyBrick(const UpdateBatch::BrickUpdates& upd, std::uint32_t slot, ApplyContext& ctx) {
   std::vector<LeafEntry>& leaves = bricks_[slot].leaves;
-  std::vector<std::int32_t>& local = local_;
+  std::vector<std::int32_t>& local = ctx.local;
+  InsertStats& stats = ctx.stats;
   for (std::size_t i = 0; i < leaves.size(); ++i)
     forEachLocal(leaves[i].lo, leaves[i].hi, [&](int idx) { local[idx] = static_cast<std::int32_t>(i); });
 
   const bool merging = params_.merge != MergePolicy::Off;
   const std::size_t leaves_before = leaves.size();
   bool reshaped = false;
-  std::vector<std::uint32_t> candidates;
+  std::vector<std::uint32_t>& candidates = ctx.candidates;
+  candidates.clear();
   for (int w = 0; w < kBrickWords; ++w) {
     std::uint64_t bits = upd.occupied[w] | upd.free[w];
     while (bits) {
@@ -241,7 +271,7 @@ void OccupancyMap::applyBrick(const UpdateBatch::BrickUpdates& upd, InsertStats&
   }
   stats.leaves_created += leaves.size() - leaves_before;
   if (merging && !candidates.empty()) {
-    const std::size_t merges = mergeInBrick(leaves, candidates);
+    const std::size_t merges = mergeInBrick(leaves, local, candidates);
     stats.leaves_merged += merges;
     reshaped |= merges > 0;
   }
@@ -257,16 +287,15 @@ void OccupancyMap::applyBrick(const UpdateBatch::BrickUpdates& upd, InsertStats&
       }
     }
     if (leaves.capacity() > 2 * leaves.size() + 16) leaves.shrink_to_fit();
-    reshaped_bricks_.push_back(slot);
+    ctx.reshaped.push_back(slot);
   }
-  leaf_count_ += leaves.size();
-  leaf_count_ -= leaves_before;
+  ctx.leaf_delta += static_cast<std::int64_t>(leaves.size()) - static_cast<std::int64_t>(leaves_before);
   // Leave the scratch table empty for the next brick; only painted cells need it.
   for (const LeafEntry& e : leaves) forEachLocal(e.lo, e.hi, [&](int idx) { local[idx] = -1; });
 }
 
-std::size_t OccupancyMap::mergeInBrick(std::vector<LeafEntry>& leaves, const std::vector<std::uint32_t>& candidates) {
-  std::vector<std::int32_t>& local = local_;
+std::size_t OccupancyMap::mergeInBrick(std::vector<LeafEntry>& leaves, std::vector<std::int32_t>& local,
+                                       const std::vector<std::uint32_t>& candidates) const {
   std::size_t merges = 0;
   for (const std::uint32_t i : candidates) {
     for (bool merged = true; merged;) {

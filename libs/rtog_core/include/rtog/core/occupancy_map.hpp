@@ -124,8 +124,9 @@ class OccupancyMap {
   void computeUpdate(const Eigen::Vector3d& origin, const Eigen::Vector3f* points, std::size_t count,
                      const InsertParams& ip, const std::uint8_t* is_hit, UpdateBatch& batch,
                      InsertStats& stats) const;
-  /// Step 2: applies a finalized batch to the tree in one sweep over its bricks.
-  void applyUpdate(const UpdateBatch& batch, InsertStats& stats);
+  /// Step 2: applies a finalized batch to the tree in one sweep over its bricks, split over
+  /// `threads` (the result does not depend on it).
+  void applyUpdate(const UpdateBatch& batch, InsertStats& stats, int threads = 1);
 
   // ---- queries ----------------------------------------------------------------------
   std::optional<float> logOdds(const Key& k) const;
@@ -209,8 +210,17 @@ class OccupancyMap {
   std::size_t leafNodeSize() const { return params_.rtree.max_entries; }
   Box leafNodeBox(const Brick& b, std::size_t node) const;
   bool mergeable(float v) const;
-  void applyBrick(const UpdateBatch::BrickUpdates& upd, InsertStats& stats);
-  std::size_t mergeInBrick(std::vector<LeafEntry>& leaves, const std::vector<std::uint32_t>& candidates);
+  /// Per-thread state of applyUpdate().
+  struct ApplyContext {
+    std::vector<std::int32_t> local;  // brick-local cell -> leaf index, -1 when none
+    std::vector<std::uint32_t> candidates;
+    std::vector<std::uint32_t> reshaped;  // bricks whose leaf nodes changed
+    std::int64_t leaf_delta = 0;
+    InsertStats stats;
+  };
+  void applyBrick(const UpdateBatch::BrickUpdates& upd, std::uint32_t slot, ApplyContext& ctx);
+  std::size_t mergeInBrick(std::vector<LeafEntry>& leaves, std::vector<std::int32_t>& local,
+                           const std::vector<std::uint32_t>& candidates) const;
   /// Rewrites a brick's leaves in Morton order of their first cell from the painted scratch
   /// table, dropping leaves merged away.
   void packLeaves(std::uint32_t slot);
@@ -238,6 +248,7 @@ class OccupancyMap {
   std::vector<std::int32_t> local_;  // scratch: brick-local cell -> leaf index, -1 when none
   std::vector<LeafEntry> pack_scratch_;
   std::vector<UpdateBatch> batches_;  // per-thread scratch, reused across insertions
+  std::vector<ApplyContext> apply_ctx_;
   std::vector<std::uint32_t> reshaped_bricks_;  // bricks whose leaf nodes changed in this batch
 };
 
