@@ -1,5 +1,11 @@
 #include "commands.hpp"
 
+#include <mrpt/io/CMemoryStream.h>
+#include <mrpt/io/zip.h>
+#include <mrpt/opengl/COpenGLScene.h>
+#include <mrpt/opengl/CSetOfObjects.h>
+#include <mrpt/serialization/CArchive.h>
+
 #include "rtog/mrpt/CRTreeOccupancyGridMap.h"
 
 #include <nlohmann/json.hpp>
@@ -146,8 +152,9 @@ std::string metres(double v) {
 }  // namespace
 
 int exportMap(const ExportOptions& opts, std::ostream& out) {
-  if (opts.ply_path.empty() && opts.bt_path.empty() && opts.png_path.empty())
-    throw std::invalid_argument("export: nothing to do; give --ply FILE, --bt FILE or --png FILE --slice-z Z");
+  if (opts.ply_path.empty() && opts.bt_path.empty() && opts.png_path.empty() && opts.scene_path.empty())
+    throw std::invalid_argument(
+        "export: nothing to do; give --ply FILE, --bt FILE, --scene FILE or --png FILE --slice-z Z");
   if (!opts.png_path.empty() && !opts.slice_z)
     throw std::invalid_argument("export: --png needs --slice-z Z (height of the slice in metres)");
   if (opts.png_path.empty() && opts.slice_z)
@@ -156,7 +163,7 @@ int exportMap(const ExportOptions& opts, std::ostream& out) {
     throw std::invalid_argument("export: --slice-z must be a finite height in metres");
   {
     std::set<std::string> seen{opts.map_path};
-    for (const std::string* p : {&opts.ply_path, &opts.bt_path, &opts.png_path})
+    for (const std::string* p : {&opts.ply_path, &opts.bt_path, &opts.png_path, &opts.scene_path})
       if (!p->empty() && !seen.insert(*p).second)
         throw std::invalid_argument("export: '" + *p + "' is named twice (or is the input map)");
   }
@@ -189,6 +196,33 @@ int exportMap(const ExportOptions& opts, std::ostream& out) {
     }
     messages.push_back("wrote " + opts.png_path + ": slice at z = " + metres(z) + " m, " + std::to_string(img.cols) +
                        " x " + std::to_string(img.rows) + " pixels (one per cell; occupied black, free white, unknown grey)");
+  }
+  if (!opts.scene_path.empty()) {
+    // The MRPT map type draws itself; the scene is a gzip-compressed CArchive, as
+    // SceneViewer3D reads it.
+    CRTreeOccupancyGridMap wrapper(map.resolution());
+    wrapper.map() = map;
+    wrapper.notifyMapChanged();
+    auto cuboids = mrpt::opengl::CSetOfObjects::Create();
+    wrapper.getVisualizationInto(*cuboids);
+    mrpt::opengl::COpenGLScene scene;
+    scene.insert(cuboids);
+    mrpt::io::CMemoryStream mem;
+    auto archive = mrpt::serialization::archiveFrom(mem);
+    archive << scene;
+    const auto* raw = static_cast<const std::uint8_t*>(mem.getRawBufferData());
+    const std::vector<std::uint8_t> plain(raw, raw + mem.getTotalBytesCount());
+    std::vector<std::uint8_t> gz;
+    if (!mrpt::io::zip::compress_gz_data_block(plain, gz)) throw std::runtime_error("'" + opts.scene_path + "': gzip failed");
+    files.push_back(std::make_unique<PendingFile>(opts.scene_path));
+    try {
+      files.back()->stream().write(reinterpret_cast<const char*>(gz.data()), static_cast<std::streamsize>(gz.size()));
+      files.back()->close();
+    } catch (const std::exception& e) {
+      throw fail(opts.scene_path, e);
+    }
+    messages.push_back("wrote " + opts.scene_path + ": " + std::to_string(map.statistics().occupied_leaves) +
+                       " occupied cuboids (open with SceneViewer3D)");
   }
   if (!opts.ply_path.empty()) {
     files.push_back(std::make_unique<PendingFile>(opts.ply_path));

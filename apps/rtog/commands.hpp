@@ -43,6 +43,7 @@ struct ExportOptions {
   std::string bt_path;           ///< OctoMap binary tree (.bt); empty: none
   std::string png_path;          ///< horizontal slice image; empty: none (needs slice_z)
   std::optional<double> slice_z; ///< height of the slice [m]
+  std::string scene_path;        ///< MRPT .3Dscene (SceneViewer3D) of the occupied cuboids; empty: none
 };
 
 /// Writes the requested exports of a saved map. All outputs are written to `FILE.partial`

@@ -43,6 +43,7 @@ int main(int argc, char** argv) {
   auto* ply = e->add_option("--ply", ex.ply_path, "Occupied cuboids as a triangle mesh (.ply)");
   e->add_flag("--ascii", ex.ply_ascii, "Write the PLY as ASCII (default: binary little-endian)")->needs(ply);
   e->add_option("--bt", ex.bt_path, "OctoMap binary tree (.bt; octovis, OcTree::readBinary)");
+  e->add_option("--scene", ex.scene_path, "MRPT 3D scene of the occupied cuboids (.3Dscene; SceneViewer3D)");
   auto* png = e->add_option("--png", ex.png_path, "Horizontal slice as an image (.png), with --slice-z");
   auto* sz = e->add_option("--slice-z", slice_z, "Height of the slice [m]");
   png->needs(sz);

@@ -1,6 +1,9 @@
 // The rtog tool as a user runs it: real data in, a map file out, errors reported cleanly.
 #include <gtest/gtest.h>
 
+#include <mrpt/opengl/COpenGLScene.h>
+#include <mrpt/opengl/CSetOfObjects.h>
+
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
@@ -139,6 +142,16 @@ TEST(Cli, ExportsEveryFormatInOneCall) {
   ASSERT_EQ(img.type(), CV_8UC1);
   ASSERT_EQ(img.size(), want_img.size());
   EXPECT_EQ(cv::norm(img, want_img, cv::NORM_INF), 0.0);
+
+  // The SceneViewer3D scene: MRPT loads it back and finds the drawn cuboids.
+  const std::string scene = dir + "m.3Dscene";
+  ASSERT_EQ(run("export " + builtMap() + " --scene " + scene, &out), 0) << out;
+  mrpt::opengl::COpenGLScene loaded;
+  ASSERT_TRUE(loaded.loadFromFile(scene));
+  std::size_t objects = 0;
+  for (const auto& o : *loaded.getViewport())
+    if (const auto set = std::dynamic_pointer_cast<mrpt::opengl::CSetOfObjects>(o)) objects += set->size();
+  EXPECT_GT(objects, 0u);
 
   ASSERT_EQ(run("export " + builtMap() + " --ply " + ascii + " --ascii", &out), 0) << out;
   EXPECT_EQ(readAll(ascii).rfind("ply\nformat ascii 1.0\n", 0), 0u);
