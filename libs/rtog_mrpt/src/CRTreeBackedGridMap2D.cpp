@@ -20,18 +20,23 @@ CRTreeBackedGridMap2D::TMapDefinition::TMapDefinition() = default;
 
 void CRTreeBackedGridMap2D::TMapDefinition::loadFromConfigFile_map_specific(
     const mrpt::config::CConfigFileBase& source, const std::string& prefix) {
-  const std::string sec = prefix + "_creationOpts";
-  resolution = source.read_double(sec, "resolution", resolution);
-  if (!(std::isfinite(resolution) && resolution >= 1e-3 && resolution <= 1e2))
-    throw std::invalid_argument("rtog::CRTreeBackedGridMap2D: invalid option [" + sec +
-                                "] resolution: must lie in [1e-3, 1e2] m, got " + std::to_string(resolution));
-  gridView_minZ = source.read_float(sec, "gridView_minZ", gridView_minZ);
-  gridView_maxZ = source.read_float(sec, "gridView_maxZ", gridView_maxZ);
-  if (!(gridView_minZ <= gridView_maxZ))
-    throw std::invalid_argument("rtog::CRTreeBackedGridMap2D: invalid option [" + sec +
-                                "] gridView_minZ/gridView_maxZ: need minZ <= maxZ");
-  insertionOpts.loadFromConfigFile(source, prefix + "_insertOpts");
-  likelihoodOpts.loadFromConfigFile(source, prefix + "_likelihoodOpts");
+  loadError.clear();
+  try {
+    const std::string sec = prefix + "_creationOpts";
+    resolution = source.read_double(sec, "resolution", resolution);
+    if (!(std::isfinite(resolution) && resolution >= 1e-3 && resolution <= 1e2))
+      throw std::invalid_argument("rtog::CRTreeBackedGridMap2D: invalid option [" + sec +
+                                  "] resolution: must lie in [1e-3, 1e2] m, got " + std::to_string(resolution));
+    gridView_minZ = source.read_float(sec, "gridView_minZ", gridView_minZ);
+    gridView_maxZ = source.read_float(sec, "gridView_maxZ", gridView_maxZ);
+    if (!(gridView_minZ <= gridView_maxZ))
+      throw std::invalid_argument("rtog::CRTreeBackedGridMap2D: invalid option [" + sec +
+                                  "] gridView_minZ/gridView_maxZ: need minZ <= maxZ");
+    insertionOpts.loadFromConfigFile(source, prefix + "_insertOpts");
+    likelihoodOpts.loadFromConfigFile(source, prefix + "_likelihoodOpts");
+  } catch (const std::exception& e) {
+    loadError = e.what();  // raised in internal_CreateFromMapDefinition
+  }
 }
 
 void CRTreeBackedGridMap2D::TMapDefinition::dumpToTextStream_map_specific(std::ostream& out) const {
@@ -44,6 +49,7 @@ void CRTreeBackedGridMap2D::TMapDefinition::dumpToTextStream_map_specific(std::o
 mrpt::maps::CMetricMap* CRTreeBackedGridMap2D::internal_CreateFromMapDefinition(
     const mrpt::maps::TMetricMapInitializer& def) {
   const auto& d = dynamic_cast<const CRTreeBackedGridMap2D::TMapDefinition&>(def);
+  if (!d.loadError.empty()) throw std::invalid_argument(d.loadError);
   auto* m = new CRTreeBackedGridMap2D(d.resolution);
   m->rtree_ = CRTreeOccupancyGridMap(d.resolution, d.insertionOpts);
   m->likelihoodOptions = d.likelihoodOpts;

@@ -188,12 +188,17 @@ CRTreeOccupancyGridMap::TMapDefinition::TMapDefinition() = default;
 
 void CRTreeOccupancyGridMap::TMapDefinition::loadFromConfigFile_map_specific(
     const mrpt::config::CConfigFileBase& source, const std::string& sectionNamePrefix) {
-  const std::string sec = sectionNamePrefix + "_creationOpts";
-  resolution = source.read_double(sec, "resolution", resolution);
-  if (!(std::isfinite(resolution) && resolution >= 1e-4 && resolution <= 1e3))
-    badOption(sec, "resolution", "must lie in [1e-4, 1e3] m, got " + std::to_string(resolution));
-  insertionOpts.loadFromConfigFile(source, sectionNamePrefix + "_insertOpts");
-  likelihoodOpts.loadFromConfigFile(source, sectionNamePrefix + "_likelihoodOpts");
+  loadError.clear();
+  try {
+    const std::string sec = sectionNamePrefix + "_creationOpts";
+    resolution = source.read_double(sec, "resolution", resolution);
+    if (!(std::isfinite(resolution) && resolution >= 1e-4 && resolution <= 1e3))
+      badOption(sec, "resolution", "must lie in [1e-4, 1e3] m, got " + std::to_string(resolution));
+    insertionOpts.loadFromConfigFile(source, sectionNamePrefix + "_insertOpts");
+    likelihoodOpts.loadFromConfigFile(source, sectionNamePrefix + "_likelihoodOpts");
+  } catch (const std::exception& e) {
+    loadError = e.what();
+  }
 }
 
 void CRTreeOccupancyGridMap::TMapDefinition::dumpToTextStream_map_specific(std::ostream& out) const {
@@ -205,6 +210,7 @@ void CRTreeOccupancyGridMap::TMapDefinition::dumpToTextStream_map_specific(std::
 mrpt::maps::CMetricMap* CRTreeOccupancyGridMap::internal_CreateFromMapDefinition(
     const mrpt::maps::TMetricMapInitializer& def) {
   const auto& d = dynamic_cast<const CRTreeOccupancyGridMap::TMapDefinition&>(def);
+  if (!d.loadError.empty()) throw std::invalid_argument(d.loadError);
   auto* m = new CRTreeOccupancyGridMap(d.resolution, d.insertionOpts);
   m->likelihoodOptions = d.likelihoodOpts;
   m->genericMapParams = d.genericMapParams;

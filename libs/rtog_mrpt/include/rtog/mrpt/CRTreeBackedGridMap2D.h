@@ -43,6 +43,7 @@ class CRTreeBackedGridMap2D : public mrpt::maps::COccupancyGridMap2D {
   rtog::CRTreeOccupancyGridMap::TInsertionOptions insertionOpts;
   /// The stock grid's likelihood options: the likelihood is computed on the 2D view.
   mrpt::maps::COccupancyGridMap2D::TLikelihoodOptions likelihoodOpts;
+  std::string loadError;  ///< see CRTreeOccupancyGridMap::TMapDefinition::loadError
   MAP_DEFINITION_END(CRTreeBackedGridMap2D)
 
  protected:

@@ -170,6 +170,9 @@ class CRTreeOccupancyGridMap : public mrpt::maps::CMetricMap {
   double resolution{0.10};
   rtog::CRTreeOccupancyGridMap::TInsertionOptions insertionOpts;
   rtog::CRTreeOccupancyGridMap::TLikelihoodOptions likelihoodOpts;
+  /// A bad .ini value found while loading, raised when the map is created: MRPT leaks the
+  /// definition if loading itself throws.
+  std::string loadError;
   MAP_DEFINITION_END(CRTreeOccupancyGridMap)
 
  private:
