@@ -185,6 +185,11 @@ void writeMarkdown(const std::vector<Result>& results, const std::string& path, 
     barChart(bars, "insertion time [s], " + ds + ", " + std::to_string(res).substr(0, 4) + " m", img_dir + "/" + img);
     md << "\n![insertion time](img/" << img << ")\n";
   }
+  md << "\n## Accuracy against ground truth\n\n"
+     << "Speed and memory say nothing about how good a map is: `rtog-accuracy` builds rtog, OctoMap and\n"
+     << "MRPT's dense grids from simulated LiDAR and 2D scans of a seeded synthetic world whose occupancy is\n"
+     << "known, and scores precision/recall and ROC AUC. Figures and how to reproduce them: `doc/accuracy.md`.\n\n"
+     << "![ROC curves against the synthetic ground truth](img/roc_synthetic.png)\n";
   std::ofstream out(path);
   out << md.str();
   if (!out) throw std::runtime_error("cannot write " + path);
