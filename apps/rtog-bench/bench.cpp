@@ -15,10 +15,7 @@
 #include <mrpt/maps/COctoMap.h>
 #include <mrpt/maps/COccupancyGridMap2D.h>
 #include <mrpt/maps/CSimplePointsMap.h>
-#include <mrpt/obs/CActionCollection.h>
-#include <mrpt/obs/CActionRobotMovement2D.h>
 #include <mrpt/obs/CObservation2DRangeScan.h>
-#include <mrpt/obs/CSensoryFrame.h>
 #include <mrpt/obs/CObservation.h>
 #include <mrpt/obs/CRawlog.h>
 #include <octomap/OcTree.h>
@@ -27,6 +24,7 @@
 #include "rtog/core/occupancy_map.hpp"
 #include "rtog/image/tum_dataset.hpp"
 #include "rtog/mrpt/CRTreeOccupancyGridMap.h"
+#include "rtog/mrpt/rawlog_poses.h"
 
 namespace rtog::bench {
 namespace {
@@ -298,15 +296,10 @@ void run2D(const std::string& rawlog, const Options& opts, std::vector<Result>& 
   mrpt::obs::CRawlog rl;
   if (!rl.loadFromRawLogFile(rawlog) || rl.size() == 0) throw std::runtime_error("cannot read rawlog " + rawlog);
   std::vector<std::pair<mrpt::poses::CPose3D, mrpt::obs::CObservation2DRangeScan::Ptr>> scans;
-  mrpt::poses::CPose2D odo;
-  for (std::size_t i = 0; i < rl.size(); ++i) {
-    if (rl.getType(i) == mrpt::obs::CRawlog::etActionCollection) {
-      if (const auto mv = rl.getAsAction(i)->getBestMovementEstimation()) odo = odo + mv->poseChange->getMeanVal();
-    } else if (rl.getType(i) == mrpt::obs::CRawlog::etSensoryFrame) {
-      if (auto scan = rl.getAsObservations(i)->getObservationByClass<mrpt::obs::CObservation2DRangeScan>())
-        scans.emplace_back(mrpt::poses::CPose3D(odo), scan);
-    }
-  }
+  forEachOdometryObservation(rl, [&](const mrpt::obs::CObservation::Ptr& obs, const mrpt::poses::CPose3D& robot,
+                                     std::size_t) {
+    if (auto scan = std::dynamic_pointer_cast<mrpt::obs::CObservation2DRangeScan>(obs)) scans.emplace_back(robot, scan);
+  });
   const std::string name = "SENA 2D laser (" + std::to_string(scans.size()) + " scans)";
   std::size_t beams = 0;
   for (const auto& s : scans) beams += s.second->getScanSize();

@@ -7,20 +7,19 @@
 #include <iomanip>
 #include <ostream>
 #include <stdexcept>
+#include <string>
 
 #include <mrpt/config/CConfigFile.h>
 #include <mrpt/maps/CMultiMetricMap.h>
 #include <mrpt/maps/CSimpleMap.h>
 #include <mrpt/maps/TMetricMapInitializer.h>
-#include <mrpt/obs/CActionCollection.h>
-#include <mrpt/obs/CActionRobotMovement2D.h>
-#include <mrpt/obs/CObservationOdometry.h>
 #include <mrpt/obs/CRawlog.h>
 #include <mrpt/obs/CSensoryFrame.h>
 
 #include "commands.hpp"
 #include "rtog/image/tum_dataset.hpp"
 #include "rtog/mrpt/CRTreeOccupancyGridMap.h"
+#include "rtog/mrpt/rawlog_poses.h"
 
 namespace rtog::cli {
 namespace {
@@ -28,16 +27,20 @@ namespace {
 /// One redrawn line on a terminal, a plain line per 10 % otherwise.
 class Progress {
  public:
-  Progress(std::ostream& out, std::size_t total, bool bar) : out_(out), total_(total), bar_(bar) {}
+  Progress(std::ostream& out, std::size_t total, bool bar, std::string unit = "scans")
+      : out_(out), total_(total), bar_(bar), unit_(std::move(unit)) {}
   void update(std::size_t done, std::size_t leaves) {
+    if (done == done_) return;
+    done_ = done;
     const int pct = total_ ? int(100 * done / total_) : 100;
     if (bar_) {
       const int filled = pct * 30 / 100;
       out_ << "\r[" << std::string(std::size_t(filled), '#') << std::string(std::size_t(30 - filled), ' ') << "] "
-           << std::setw(3) << pct << "% " << done << "/" << total_ << " scans, " << leaves << " leaves" << std::flush;
+           << std::setw(3) << pct << "% " << done << "/" << total_ << " " << unit_ << ", " << leaves << " leaves"
+           << std::flush;
       if (done == total_) out_ << "\n";
     } else if (pct / 10 != last_ / 10 || done == total_) {
-      out_ << "progress " << pct << "% (" << done << "/" << total_ << " scans, " << leaves << " leaves)\n";
+      out_ << "progress " << pct << "% (" << done << "/" << total_ << " " << unit_ << ", " << leaves << " leaves)\n";
     }
     last_ = pct;
   }
@@ -46,6 +49,8 @@ class Progress {
   std::ostream& out_;
   std::size_t total_;
   bool bar_;
+  std::string unit_;
+  std::size_t done_ = std::size_t(-1);
   int last_ = -1;
 };
 
@@ -146,38 +151,17 @@ int build(const BuildOptions& o, std::ostream& out) {
   } else {
     mrpt::obs::CRawlog log;
     loadQuietly("rawlog", o.rawlog_path, [&] { return log.loadFromRawLogFile(o.rawlog_path) && log.size() > 0; });
-    Progress progress(out, log.size(), o.progress_bar);
-    mrpt::poses::CPose2D odometry;  // dead reckoning: a rawlog carries no better pose
-    const auto insert = [&](const mrpt::obs::CObservation& obs) {
+    Progress progress(out, log.size(), o.progress_bar, "rawlog entries");
+    forEachOdometryObservation(log, [&](const mrpt::obs::CObservation::Ptr& obs, const mrpt::poses::CPose3D& robot,
+                                        std::size_t entry) {
       const std::size_t before = map->totalInsertStats.raysTotal();
       bool used = false;
-      timed([&] { used = map->insertObservation(obs, mrpt::poses::CPose3D(odometry)); });
+      timed([&] { used = map->insertObservation(*obs, robot); });
       points += map->totalInsertStats.raysTotal() - before;
       scans += used;
-    };
-    for (std::size_t i = 0; i < log.size(); ++i) {
-      switch (log.getType(i)) {
-        case mrpt::obs::CRawlog::etActionCollection:
-          if (const auto mv = log.getAsAction(i)->getBestMovementEstimation())
-            odometry = odometry + mv->poseChange->getMeanVal();
-          break;
-        case mrpt::obs::CRawlog::etSensoryFrame:
-          for (const auto& obs : *log.getAsObservations(i)) insert(*obs);
-          break;
-        case mrpt::obs::CRawlog::etObservation: {
-          const auto obs = log.getAsObservation(i);
-          if (const auto odo = std::dynamic_pointer_cast<mrpt::obs::CObservationOdometry>(obs)) {
-            odometry = odo->odometry;
-          } else {
-            insert(*obs);
-          }
-          break;
-        }
-        default:
-          break;
-      }
-      progress.update(i + 1, map->map().leafCount());
-    }
+      progress.update(entry + 1, map->map().leafCount());
+    });
+    progress.update(log.size(), map->map().leafCount());
   }
 
   const InsertStats& st = map->totalInsertStats;

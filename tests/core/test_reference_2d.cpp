@@ -2,12 +2,11 @@
 // equals the reference grid cell for cell, with and without merging.
 #include <gtest/gtest.h>
 
-#include <mrpt/obs/CActionCollection.h>
-#include <mrpt/obs/CActionRobotMovement2D.h>
 #include <mrpt/obs/CObservation2DRangeScan.h>
 #include <mrpt/obs/CRawlog.h>
-#include <mrpt/obs/CSensoryFrame.h>
 #include <mrpt/poses/CPose3D.h>
+
+#include "rtog/mrpt/rawlog_poses.h"
 
 #include "test_support.hpp"
 
@@ -25,17 +24,11 @@ std::vector<PlanarScan> loadSenaScans(std::size_t max_scans) {
   const std::string path = std::string(RTOG_MRPT_DATASETS) + "/2006-01ENE-21-SENA_Telecom Faculty_one_loop_only.rawlog";
   if (!log.loadFromRawLogFile(path)) throw std::runtime_error("cannot read " + path);
   std::vector<PlanarScan> scans;
-  mrpt::poses::CPose2D odo;
-  for (std::size_t i = 0; i < log.size() && scans.size() < max_scans; ++i) {
-    if (log.getType(i) == mrpt::obs::CRawlog::etActionCollection) {
-      if (const auto mv = log.getAsAction(i)->getBestMovementEstimation()) odo = odo + mv->poseChange->getMeanVal();
-      continue;
-    }
-    if (log.getType(i) != mrpt::obs::CRawlog::etSensoryFrame) continue;
-    const auto sf = log.getAsObservations(i);
-    const auto scan = sf->getObservationByClass<mrpt::obs::CObservation2DRangeScan>();
-    if (!scan) continue;
-    const mrpt::poses::CPose3D sensor = mrpt::poses::CPose3D(odo) + scan->sensorPose;
+  rtog::forEachOdometryObservation(log, [&](const mrpt::obs::CObservation::Ptr& obs, const mrpt::poses::CPose3D& robot,
+                                           std::size_t) {
+    const auto scan = std::dynamic_pointer_cast<mrpt::obs::CObservation2DRangeScan>(obs);
+    if (!scan || scans.size() >= max_scans) return;
+    const mrpt::poses::CPose3D sensor = robot + scan->sensorPose;
     PlanarScan ps;
     ps.origin = Eigen::Vector3d(sensor.x(), sensor.y(), sensor.z());
     const std::size_t n = scan->getScanSize();
@@ -49,7 +42,7 @@ std::vector<PlanarScan> loadSenaScans(std::size_t max_scans) {
       ps.points.emplace_back(float(gx), float(gy), float(gz));
     }
     scans.push_back(std::move(ps));
-  }
+  });
   return scans;
 }
 
