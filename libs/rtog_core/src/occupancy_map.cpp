@@ -147,13 +147,10 @@ CellState OccupancyMap::stateAt(const Eigen::Vector3d& p) const {
 BoxSummary OccupancyMap::summarize(const Box& b) const {
   BoxSummary s;
   std::int64_t known = 0;
-  upper_.queryBox(b, [&](Handle h, const Box&) {
-    forEachInLeafNode(h, [&](const Box& lb, float v) {
-      if (!lb.intersects(b)) return;
-      const std::int64_t n = lb.intersection(b).volume();
-      known += n;
-      (model_.classify(v) == CellState::Occupied ? s.occupied : s.free) += n;
-    });
+  forEachLeafIn(b, [&](const Box& lb, float v) {
+    const std::int64_t n = lb.intersection(b).volume();
+    known += n;
+    (model_.classify(v) == CellState::Occupied ? s.occupied : s.free) += n;
   });
   s.unknown = b.volume() - known;
   return s;

@@ -104,8 +104,7 @@ void CRTreeBackedGridMap2D::refreshRegion(double x0, double y0, double x1, doubl
   const Box region{Key{k0.x, k0.y, z0.z}, Key{k1.x, k1.y, z1.z}};
   const std::int64_t nx = region.extent(0), ny = region.extent(1);
   std::vector<float> best(static_cast<std::size_t>(nx * ny), std::numeric_limits<float>::quiet_NaN());
-  m.forEachLeaf([&](const Box& b, float v) {
-    if (!b.intersects(region)) return;
+  m.forEachLeafIn(region, [&](const Box& b, float v) {
     const Box c = b.intersection(region);
     for (std::int32_t y = c.min.y; y <= c.max.y; ++y)
       for (std::int32_t x = c.min.x; x <= c.max.x; ++x) {

@@ -162,6 +162,17 @@ class OccupancyMap {
     }
   }
 
+  /// Calls fn(box, log_odds) for every leaf that intersects `region`, through the R-tree: the
+  /// cost follows the region, not the map.
+  template <class Fn>
+  void forEachLeafIn(const Box& region, Fn&& fn) const {
+    upper_.queryBox(region, [&](Handle h, const Box&) {
+      forEachInLeafNode(h, [&](const Box& b, float v) {
+        if (b.intersects(region)) fn(b, v);
+      });
+    });
+  }
+
   std::size_t leafCount() const { return leaf_count_; }
   /// Cells covered by leaves (a merged cuboid counts all its cells).
   std::int64_t cellCount() const;

@@ -44,10 +44,6 @@ class UpdateBatch {
   };
 
   void clear();
-  void markFree(const Key& k) {
-    const int i = localIndex(k);
-    brickFor(k).free[static_cast<std::size_t>(i >> 6)] |= std::uint64_t{1} << (i & 63);
-  }
   /// Marks the cells of traverseRay(from, to, from_key, to_key) free.
   void markRayFree(const Eigen::Vector3d& from, const Eigen::Vector3d& to, const Key& from_key, const Key& to_key);
   /// Returns false if the cell was already marked occupied in this batch.
