@@ -43,10 +43,11 @@ class Runner:
         os.makedirs(d)
         return d
 
-    def app(self, args, cwd, preload=True, timeout=280):
+    def app(self, args, cwd, preload=True, timeout=280, seed=1):
+        """Runs an unmodified MRPT app; the seed shim pins MRPT's clock-seeded generator."""
         env = dict(os.environ)
-        if preload:
-            env["LD_PRELOAD"] = self.a.plugin
+        env["LD_PRELOAD"] = " ".join([self.a.seed_shim] + ([self.a.plugin] if preload else []))
+        env["RTOG_TEST_SEED"] = str(seed)
         env.pop("DISPLAY", None)
         t0 = time.time()
         p = subprocess.run(args, cwd=cwd, env=env, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
@@ -54,8 +55,8 @@ class Runner:
         out = p.stdout.decode(errors="replace")
         with open(os.path.join(cwd, os.path.basename(args[0]) + ".log"), "a") as f:
             f.write(out)
-        print("$ %s%s  -> exit %d in %.1f s" % ("LD_PRELOAD=... " if preload else "", " ".join(args), p.returncode,
-                                               time.time() - t0))
+        print("$ %sRTOG_TEST_SEED=%d %s  -> exit %d in %.1f s" % ("LD_PRELOAD=... " if preload else "", seed,
+                                                                " ".join(args), p.returncode, time.time() - t0))
         return p.returncode, out
 
     def mapcheck(self, path, min_occupied):
@@ -123,10 +124,10 @@ def case_observations2map(r):
 PDF_RE = re.compile(r"PDF estimation: \(([-\d.]+),([-\d.]+),([-\d.]+)deg\)")
 
 
-def pf_track(r, cfg_name, tag, i, preload):
-    d = r.run_dir("pf_%s_%d" % (tag, i))
+def pf_track(r, cfg_name, tag, seed, preload):
+    d = r.run_dir("pf_%s_%d" % (tag, seed))
     cfg = r.config(cfg_name, d)
-    rc, out = r.app(["pf-localization", cfg], d, preload=preload)
+    rc, out = r.app(["pf-localization", cfg], d, preload=preload, seed=seed)
     if rc != 0:
         fail("pf-localization (%s) exited %d:\n%s" % (cfg_name, rc, out[-3000:]))
     track = [(float(a), float(b)) for a, b, _ in PDF_RE.findall(out)]
@@ -135,42 +136,55 @@ def pf_track(r, cfg_name, tag, i, preload):
     return track
 
 
+# Global localization from a uniform prior sometimes locks onto the symmetric corridor about 9 m
+# west, with the stock grid as well as with ours (25 of 30 seeds converge for each). So both filters
+# run on the same fixed seeds, and ours must converge on at least as many of them, less one.
+PF_SEEDS = range(1, 13)
+
+
 def compare_tracks(ref, ours, label, late=8, tol=0.25, each_tol=0.5):
-    """Medians over several runs of each filter: an occasional run that does not converge (the
-    stock grid's own runs do that too) moves neither median; a majority of ours must converge."""
+    """ref, ours: one track per seed. The reference is the median over the converged majority of
+    the grid's runs; a run has converged when all of its late steps lie within each_tol of it."""
     n = min(min(len(t) for t in ref), min(len(t) for t in ours))
+    steps = range(n - late, n)
+    centre = {k: (statistics.median(t[k][0] for t in ref), statistics.median(t[k][1] for t in ref)) for k in steps}
+
+    def worst_dev(t):
+        return max(math.hypot(t[k][0] - centre[k][0], t[k][1] - centre[k][1]) for k in steps)
+
+    ref_ok = [worst_dev(t) <= each_tol for t in ref]
+    ours_ok = [worst_dev(t) <= each_tol for t in ours]
+    for seed, a, b in zip(PF_SEEDS, ref_ok, ours_ok):
+        if a != b:
+            print("seed %d: grid %s, %s %s" % (seed, "converged" if a else "lost", label, "converged" if b else "lost"))
+    print("converged runs: grid %d/%d, %s %d/%d" % (sum(ref_ok), len(ref), label, sum(ours_ok), len(ours)))
+    if 2 * sum(ref_ok) <= len(ref):
+        fail("the stock grid's runs did not converge in a majority: the reference track is undefined")
+    if sum(ours_ok) < sum(ref_ok) - 1:
+        fail("%s converged on %d seeds, the stock grid on %d" % (label, sum(ours_ok), sum(ref_ok)))
+    good = [t for t, ok in zip(ours, ours_ok) if ok]
     worst = 0.0
-    for k in range(n - late, n):
-        gx = statistics.median(t[k][0] for t in ref)
-        gy = statistics.median(t[k][1] for t in ref)
-        ox = statistics.median(t[k][0] for t in ours)
-        oy = statistics.median(t[k][1] for t in ours)
-        dist = math.hypot(ox - gx, oy - gy)
+    for k in steps:
+        ox = statistics.median(t[k][0] for t in good)
+        oy = statistics.median(t[k][1] for t in good)
+        dist = math.hypot(ox - centre[k][0], oy - centre[k][1])
         worst = max(worst, dist)
-        ours_dev = [math.hypot(t[k][0] - gx, t[k][1] - gy) for t in ours]
-        grid_dev = [math.hypot(t[k][0] - gx, t[k][1] - gy) for t in ref]
-        converged = sum(d <= each_tol for d in ours_dev)
-        print("step %2d grid (%.3f, %.3f) %s (%.3f, %.3f): |d| = %.3f m (%s runs converged %d/%d, worst %.3f; "
-              "grid runs worst %.3f)" % (k, gx, gy, label, ox, oy, dist, label, converged, len(ours), max(ours_dev),
-                                         max(grid_dev)))
+        print("step %2d grid (%.3f, %.3f) %s (%.3f, %.3f): |d| = %.3f m" % (k, centre[k][0], centre[k][1], label, ox,
+                                                                         oy, dist))
         if dist > tol:
-            fail("%s median deviates %.3f m from the grid run at step %d" % (label, dist, k))
-        if 2 * converged <= len(ours):
-            fail("only %d of %d %s runs converged at step %d" % (converged, len(ours), label, k))
+            fail("%s median deviates %.3f m from the grid's at step %d" % (label, dist, k))
     print("%s: worst late-step deviation of the median from the grid's: %.3f m (tolerance %.2f)" % (label, worst, tol))
 
 
 def case_pf_localization(r):
-    runs = 7
-    ref = [pf_track(r, "pf-localization_grid_reference.ini", "grid", i, False) for i in range(runs)]
-    ours = [pf_track(r, "pf-localization_rtog.ini", "rtog", i, True) for i in range(runs)]
+    ref = [pf_track(r, "pf-localization_grid_reference.ini", "grid", s, False) for s in PF_SEEDS]
+    ours = [pf_track(r, "pf-localization_rtog.ini", "rtog", s, True) for s in PF_SEEDS]
     compare_tracks(ref, ours, "rtog")
 
 
 def case_pf_localization_grid2d(r):
-    runs = 7
-    ref = [pf_track(r, "pf-localization_grid_reference.ini", "grid_g2d", i, False) for i in range(runs)]
-    ours = [pf_track(r, "pf-localization_rtog_grid2d.ini", "rtog_grid2d", i, True) for i in range(runs)]
+    ref = [pf_track(r, "pf-localization_grid_reference.ini", "grid_g2d", s, False) for s in PF_SEEDS]
+    ours = [pf_track(r, "pf-localization_rtog_grid2d.ini", "rtog_grid2d", s, True) for s in PF_SEEDS]
     compare_tracks(ref, ours, "rtreeGridMap2D")
 
 
@@ -282,6 +296,7 @@ def case_rbpf_slam_grid2d(r):
 def main():
     p = argparse.ArgumentParser()
     p.add_argument("--plugin", required=True)
+    p.add_argument("--seed-shim", required=True)
     p.add_argument("--mapcheck", required=True)
     p.add_argument("--config-dir", required=True)
     p.add_argument("--datasets", required=True)
