@@ -245,6 +245,14 @@ std::vector<std::unique_ptr<Method>> methodsFor(const Dataset& d, double res, co
   m.push_back(std::make_unique<MrptOctoMapMethod>(res));
   m.push_back(std::make_unique<DenseGridMethod>(res));
   (void)d;
+  if (!o.methods.empty())
+    m.erase(std::remove_if(m.begin(), m.end(),
+                           [&](const auto& method) {
+                             return std::none_of(o.methods.begin(), o.methods.end(), [&](const std::string& s) {
+                               return method->name().find(s) != std::string::npos;
+                             });
+                           }),
+            m.end());
   return m;
 }
 

@@ -44,6 +44,7 @@ struct Options {
   std::vector<double> resolutions{0.05, 0.1};
   std::size_t query_count = 200000;         ///< random point queries per map (Default: 200000)
   double max_range = -1;                    ///< beams cut here (<= 0: none) (Default: -1)
+  std::vector<std::string> methods;         ///< run only methods whose name contains one of these (Default: all)
 };
 
 Dataset loadTum(const std::string& dir);

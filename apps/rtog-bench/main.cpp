@@ -15,6 +15,7 @@ int main(int argc, char** argv) {
   app.add_option("--tum", tum, "TUM depth sequence directory")->capture_default_str();
   app.add_option("--mrpt-datasets", datasets_dir, "Debian mrpt-common datasets directory")->capture_default_str();
   app.add_option("--only", only, "Run only these datasets: tum, vlp16, sena");
+  app.add_option("--methods", opts.methods, "Run only methods whose name contains one of these (profiling)");
   app.add_option("--repeats", opts.repeats, "Builds per method (median reported)")->capture_default_str()->check(CLI::PositiveNumber);
   app.add_option("--resolutions", opts.resolutions, "Cell sizes [m]")->capture_default_str();
   app.add_option("--json", json, "JSON output")->capture_default_str();

@@ -212,20 +212,104 @@ static const std::array<std::uint16_t, kBrickCells>& mortonRank() {
   return rank;
 }
 
+namespace {
+
+using BrickMask = std::array<std::uint64_t, kBrickWords>;
+
+// Covers the set bits of `mask` with disjoint boxes, greedily: an x-run, grown along y, then
+// along z. A fresh 16^3 brick seen free becomes a handful of boxes instead of 4096 cells that
+// would be merged one by one.
+template <class Fn>
+void forEachMaskBox(const BrickMask& mask, Fn&& emit) {
+  // Row (y, z) holds the 16 x-bits of word (y + 16 z) / 4 at bit 16 * (y % 4).
+  BrickMask m = mask;
+  const auto row = [&](int y, int z) {
+    const int r = y + kBrickSize * z;
+    return static_cast<std::uint32_t>((m[static_cast<std::size_t>(r >> 2)] >> ((r & 3) * kBrickSize)) & 0xFFFFu);
+  };
+  const auto clear = [&](int y, int z, std::uint32_t run) {
+    const int r = y + kBrickSize * z;
+    m[static_cast<std::size_t>(r >> 2)] &= ~(std::uint64_t{run} << ((r & 3) * kBrickSize));
+  };
+  for (int w = 0; w < kBrickWords; ++w)
+    while (m[static_cast<std::size_t>(w)] != 0) {
+      const int b = __builtin_ctzll(m[static_cast<std::size_t>(w)]);
+      const int r = w * 4 + (b >> kBrickBits), y = r & (kBrickSize - 1), z = r >> kBrickBits;
+      const int x0 = b & (kBrickSize - 1);
+      const std::uint32_t bits = row(y, z) >> x0;
+      const int len = __builtin_ctz(~bits);  // bits above the row are zero, so len <= 16 - x0
+      const std::uint32_t run = ((std::uint32_t{1} << len) - 1u) << x0;
+      int y1 = y;
+      while (y1 + 1 < kBrickSize && (row(y1 + 1, z) & run) == run) ++y1;
+      int z1 = z;
+      for (bool grow = true; grow && z1 + 1 < kBrickSize;) {
+        for (int yy = y; yy <= y1 && grow; ++yy) grow = (row(yy, z1 + 1) & run) == run;
+        if (grow) ++z1;
+      }
+      for (int zz = z; zz <= z1; ++zz)
+        for (int yy = y; yy <= y1; ++yy) clear(yy, zz, run);
+      const std::uint8_t lo[3] = {static_cast<std::uint8_t>(x0), static_cast<std::uint8_t>(y), static_cast<std::uint8_t>(z)};
+      const std::uint8_t hi[3] = {static_cast<std::uint8_t>(x0 + len - 1), static_cast<std::uint8_t>(y1),
+                                  static_cast<std::uint8_t>(z1)};
+      emit(lo, hi);
+    }
+}
+
+// Writes `leaf` into the scratch table over its box and sets the box's bits in `painted`.
+void paintLeaf(const std::uint8_t lo[3], const std::uint8_t hi[3], std::int32_t leaf, std::vector<std::int32_t>& local,
+               BrickMask& painted) {
+  const std::uint64_t run = ((std::uint64_t{1} << (hi[0] - lo[0] + 1)) - 1u) << lo[0];
+  for (int z = lo[2]; z <= hi[2]; ++z)
+    for (int y = lo[1]; y <= hi[1]; ++y) {
+      const int base = localIdx(0, y, z);
+      for (int x = lo[0]; x <= hi[0]; ++x) local[static_cast<std::size_t>(base + x)] = leaf;
+      painted[static_cast<std::size_t>(base >> 6)] |= run << (base & 63);
+    }
+}
+
+}  // namespace
+
 void OccupancyMap::applyBrick(const UpdateBatch::BrickUpdates& upd, std::uint32_t slot, ApplyContext& ctx) {
   std::vector<LeafEntry>& leaves = bricks_[slot].leaves;
   std::vector<std::int32_t>& local = ctx.local;
   InsertStats& stats = ctx.stats;
-  for (std::size_t i = 0; i < leaves.size(); ++i)
-    forEachLocal(leaves[i].lo, leaves[i].hi, [&](int idx) { local[idx] = static_cast<std::int32_t>(i); });
+  BrickMask known{};
+  for (std::size_t i = 0; i < leaves.size(); ++i) paintLeaf(leaves[i].lo, leaves[i].hi, static_cast<std::int32_t>(i), local, known);
 
   const bool merging = params_.merge != MergePolicy::Off;
   const std::size_t leaves_before = leaves.size();
   bool reshaped = false;
   std::vector<std::uint32_t>& candidates = ctx.candidates;
   candidates.clear();
+  // Cells seen for the first time: all of a class get the same value, so they go in as boxes.
+  const auto addFresh = [&](const BrickMask& mask, float delta) {
+    const float v = model_.first(delta);
+    const bool boxes = merging && mergeable(v);
+    const auto add = [&](const std::uint8_t lo[3], const std::uint8_t hi[3]) {
+      leaves.push_back(LeafEntry{{lo[0], lo[1], lo[2]}, {hi[0], hi[1], hi[2]}, v});
+      const auto li = static_cast<std::int32_t>(leaves.size() - 1);
+      paintLeaf(lo, hi, li, local, known);
+      if (boxes) candidates.push_back(static_cast<std::uint32_t>(li));
+    };
+    if (boxes) {
+      forEachMaskBox(mask, add);
+      return;
+    }
+    for (int w = 0; w < kBrickWords; ++w)
+      for (std::uint64_t bits = mask[static_cast<std::size_t>(w)]; bits; bits &= bits - 1) {
+        const Key lk = localKey(w * 64 + __builtin_ctzll(bits));
+        const std::uint8_t c[3] = {static_cast<std::uint8_t>(lk.x), static_cast<std::uint8_t>(lk.y),
+                                   static_cast<std::uint8_t>(lk.z)};
+        add(c, c);
+      }
+  };
+  BrickMask fresh_occ, fresh_free;
+  for (std::size_t w = 0; w < static_cast<std::size_t>(kBrickWords); ++w) {
+    fresh_occ[w] = upd.occupied[w] & ~known[w];
+    fresh_free[w] = upd.free[w] & ~upd.occupied[w] & ~known[w];
+  }
   for (int w = 0; w < kBrickWords; ++w) {
-    std::uint64_t bits = upd.occupied[w] | upd.free[w];
+    std::uint64_t bits = (upd.occupied[w] | upd.free[w]) & known[w];
     while (bits) {
       const int b = __builtin_ctzll(bits);
       bits &= bits - 1;
@@ -233,15 +317,6 @@ void OccupancyMap::applyBrick(const UpdateBatch::BrickUpdates& upd, std::uint32_
       const float delta = (upd.occupied[w] >> b) & 1u ? model_.hitDelta() : model_.missDelta();
       const Key lk = localKey(idx);
       const std::int32_t li = local[idx];
-      if (li < 0) {
-        const float v = model_.first(delta);
-        const auto x = static_cast<std::uint8_t>(lk.x), y = static_cast<std::uint8_t>(lk.y),
-                   z = static_cast<std::uint8_t>(lk.z);
-        leaves.push_back(LeafEntry{{x, y, z}, {x, y, z}, v});
-        local[idx] = static_cast<std::int32_t>(leaves.size() - 1);
-        if (merging && mergeable(v)) candidates.push_back(static_cast<std::uint32_t>(leaves.size() - 1));
-        continue;
-      }
       LeafEntry& e = leaves[static_cast<std::size_t>(li)];
       const float old = e.value;
       const float v = model_.update(old, delta);
@@ -269,6 +344,8 @@ void OccupancyMap::applyBrick(const UpdateBatch::BrickUpdates& upd, std::uint32_
       reshaped = true;
     }
   }
+  addFresh(fresh_occ, model_.hitDelta());
+  addFresh(fresh_free, model_.missDelta());
   stats.leaves_created += leaves.size() - leaves_before;
   if (merging && !candidates.empty()) {
     const std::size_t merges = mergeInBrick(leaves, local, candidates);

@@ -6,21 +6,23 @@
 namespace rtog {
 
 void UpdateBatch::clear() {
-  bricks_.clear();
+  count_ = 0;
+  occupied_count_ = free_count_ = 0;
   index_.clear();
   sorted_.clear();
   cached_ = nullptr;
 }
 
 std::uint32_t UpdateBatch::brickSlot(const Key& b) {
-  const auto next = static_cast<std::uint32_t>(bricks_.size());
+  const auto next = static_cast<std::uint32_t>(count_);
   const std::uint32_t slot = index_.findOrInsert(packKey(b), next);
   if (slot == next) {
-    cached_ = nullptr;  // the vector may move
-    bricks_.emplace_back();
-    bricks_.back().brick = b;
-    bricks_.back().occupied.fill(0);
-    bricks_.back().free.fill(0);
+    if (count_ == chunks_.size() * kChunkBricks) chunks_.push_back(std::make_unique<Chunk>());
+    ++count_;
+    BrickUpdates& u = brickAt(slot);
+    u.brick = b;
+    u.occupied.fill(0);
+    u.free.fill(0);
   }
   return slot;
 }
@@ -53,8 +55,9 @@ void UpdateBatch::markRayFree(const Eigen::Vector3d& from, const Eigen::Vector3d
 }
 
 void UpdateBatch::merge(const UpdateBatch& other) {
-  for (const BrickUpdates& o : other.bricks_) {
-    BrickUpdates& b = bricks_[brickSlot(o.brick)];
+  for (std::size_t i = 0; i < other.count_; ++i) {
+    const BrickUpdates& o = (*other.chunks_[i / kChunkBricks])[i % kChunkBricks];
+    BrickUpdates& b = brickAt(brickSlot(o.brick));
     for (std::size_t w = 0; w < kBrickWords; ++w) {
       b.occupied[w] |= o.occupied[w];
       b.free[w] |= o.free[w];
@@ -63,16 +66,9 @@ void UpdateBatch::merge(const UpdateBatch& other) {
   cached_ = nullptr;
 }
 
-void UpdateBatch::finalize() {
-  sorted_.clear();
-  for (auto& b : bricks_) {
-    for (std::size_t w = 0; w < kBrickWords; ++w) b.free[w] &= ~b.occupied[w];
-    sorted_.push_back(&b);
-  }
-  std::sort(sorted_.begin(), sorted_.end(), [](const BrickUpdates* a, const BrickUpdates* b) { return a->brick < b->brick; });
-}
+namespace {
 
-static std::size_t popcount(const std::array<std::uint64_t, kBrickWords>& words) {
+std::size_t popcount(const std::array<std::uint64_t, kBrickWords>& words) {
   // SWAR count: the baseline x86-64 target has no POPCNT instruction.
   std::size_t n = 0;
   for (std::uint64_t w : words) {
@@ -84,16 +80,18 @@ static std::size_t popcount(const std::array<std::uint64_t, kBrickWords>& words)
   return n;
 }
 
-std::size_t UpdateBatch::occupiedCount() const {
-  std::size_t n = 0;
-  for (const auto& b : bricks_) n += popcount(b.occupied);
-  return n;
-}
+}  // namespace
 
-std::size_t UpdateBatch::freeCount() const {
-  std::size_t n = 0;
-  for (const auto& b : bricks_) n += popcount(b.free);
-  return n;
+void UpdateBatch::finalize() {
+  sorted_.clear();
+  occupied_count_ = free_count_ = 0;
+  forEachBrick([&](BrickUpdates& b) {
+    for (std::size_t w = 0; w < kBrickWords; ++w) b.free[w] &= ~b.occupied[w];
+    occupied_count_ += popcount(b.occupied);
+    free_count_ += popcount(b.free);
+    sorted_.push_back(&b);
+  });
+  std::sort(sorted_.begin(), sorted_.end(), [](const BrickUpdates* a, const BrickUpdates* b) { return a->brick < b->brick; });
 }
 
 }  // namespace rtog

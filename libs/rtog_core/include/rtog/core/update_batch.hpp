@@ -4,6 +4,7 @@
 
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "rtog/core/detail/flat_hash_map.hpp"
@@ -43,6 +44,16 @@ class UpdateBatch {
     std::array<std::uint64_t, kBrickWords> free;
   };
 
+  UpdateBatch() = default;
+  // Scratch kept between scans: a copied map starts with an empty batch.
+  UpdateBatch(const UpdateBatch&) {}
+  UpdateBatch& operator=(const UpdateBatch& other) {
+    if (this != &other) clear();
+    return *this;
+  }
+  UpdateBatch(UpdateBatch&&) = default;
+  UpdateBatch& operator=(UpdateBatch&&) = default;
+
   void clear();
   /// Marks the cells of traverseRay(from, to, from_key, to_key) free.
   void markRayFree(const Eigen::Vector3d& from, const Eigen::Vector3d& to, const Key& from_key, const Key& to_key);
@@ -64,21 +75,34 @@ class UpdateBatch {
 
   /// The touched bricks in (z, y, x) order, after finalize().
   const std::vector<const BrickUpdates*>& bricks() const { return sorted_; }
-  std::size_t occupiedCount() const;
-  std::size_t freeCount() const;
+  /// Cells marked occupied / free (occupied not counted again), after finalize().
+  std::size_t occupiedCount() const { return occupied_count_; }
+  std::size_t freeCount() const { return free_count_; }
   std::size_t memoryBytes() const {
-    return bricks_.capacity() * sizeof(BrickUpdates) + index_.memoryBytes() + sorted_.capacity() * sizeof(void*);
+    return chunks_.size() * sizeof(Chunk) + chunks_.capacity() * sizeof(void*) + index_.memoryBytes() +
+           sorted_.capacity() * sizeof(void*);
   }
 
  private:
   BrickUpdates& brickFor(const Key& k) {
     const Key b = brickOf(k);
-    if (cached_ == nullptr || b != cached_->brick) cached_ = &bricks_[brickSlot(b)];
+    if (cached_ == nullptr || b != cached_->brick) cached_ = &brickAt(brickSlot(b));
     return *cached_;
   }
   std::uint32_t brickSlot(const Key& b);
+  BrickUpdates& brickAt(std::uint32_t slot) { return (*chunks_[slot / kChunkBricks])[slot % kChunkBricks]; }
+  template <class Fn>
+  void forEachBrick(Fn&& fn) {
+    for (std::size_t i = 0; i < count_; ++i) fn(brickAt(static_cast<std::uint32_t>(i)));
+  }
 
-  std::vector<BrickUpdates> bricks_;
+  // Bricks live in fixed chunks kept from batch to batch: no copying as a batch grows, stable
+  // addresses, and a new scan does not fault its memory in again.
+  static constexpr std::size_t kChunkBricks = 256;
+  using Chunk = std::array<BrickUpdates, kChunkBricks>;
+  std::vector<std::unique_ptr<Chunk>> chunks_;
+  std::size_t count_ = 0;
+  std::size_t occupied_count_ = 0, free_count_ = 0;
   detail::FlatHashMap64 index_;
   BrickUpdates* cached_ = nullptr;
   std::vector<const BrickUpdates*> sorted_;
