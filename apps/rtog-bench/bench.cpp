@@ -15,6 +15,7 @@
 #include <mrpt/maps/COctoMap.h>
 #include <mrpt/maps/COccupancyGridMap2D.h>
 #include <mrpt/maps/CSimplePointsMap.h>
+#include <mrpt/obs/CObservationRotatingScan.h>
 #include <mrpt/obs/CObservation2DRangeScan.h>
 #include <mrpt/obs/CObservation.h>
 #include <mrpt/obs/CRawlog.h>
@@ -280,20 +281,29 @@ Dataset loadRawlog3D(const std::string& path, const std::string& name) {
   if (!log.loadFromRawLogFile(path)) throw std::runtime_error("cannot read rawlog " + path);
   Dataset d;
   d.name = name;
+  const CRTreeOccupancyGridMap rotating_scan_reader;
   for (std::size_t i = 0; i < log.size(); ++i) {
     if (log.getType(i) != mrpt::obs::CRawlog::etObservation) continue;
     const auto obs = log.getAsObservation(i);
-    // MRPT's own conversion to points in the robot frame (the sensor pose applied).
-    mrpt::maps::CSimplePointsMap pm;
-    pm.insertObservation(*obs);
-    mrpt::poses::CPose3D sensor;
-    obs->getSensorPose(sensor);
     Scan s;
-    s.origin = Eigen::Vector3d(sensor.x(), sensor.y(), sensor.z());
-    const auto& xs = pm.getPointsBufferRef_x();
-    const auto& ys = pm.getPointsBufferRef_y();
-    const auto& zs = pm.getPointsBufferRef_z();
-    for (std::size_t k = 0; k < xs.size(); ++k) s.points.emplace_back(xs[k], ys[k], zs[k]);
+    if (std::dynamic_pointer_cast<mrpt::obs::CObservationRotatingScan>(obs)) {
+      // No conversion to points in MRPT 2.5: the plugin's own (ring elevations from its options).
+      ObservationBeams beams;
+      rotating_scan_reader.extractBeams(*obs, mrpt::poses::CPose3D(), beams, true);
+      s.origin = beams.origin;
+      s.points = std::move(beams.points);
+    } else {
+      // MRPT's own conversion to points in the robot frame (the sensor pose applied).
+      mrpt::maps::CSimplePointsMap pm;
+      pm.insertObservation(*obs);
+      mrpt::poses::CPose3D sensor;
+      obs->getSensorPose(sensor);
+      s.origin = Eigen::Vector3d(sensor.x(), sensor.y(), sensor.z());
+      const auto& xs = pm.getPointsBufferRef_x();
+      const auto& ys = pm.getPointsBufferRef_y();
+      const auto& zs = pm.getPointsBufferRef_z();
+      for (std::size_t k = 0; k < xs.size(); ++k) s.points.emplace_back(xs[k], ys[k], zs[k]);
+    }
     if (!s.points.empty()) d.scans.push_back(std::move(s));
   }
   if (d.scans.empty()) throw std::runtime_error(path + ": no 3D scans");

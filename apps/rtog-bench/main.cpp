@@ -14,7 +14,7 @@ int main(int argc, char** argv) {
   std::string tum = RTOG_DEFAULT_TUM_DIR, json = "benchmarks.json", markdown = "benchmarks.md", img_dir = ".";
   app.add_option("--tum", tum, "TUM depth sequence directory")->capture_default_str();
   app.add_option("--mrpt-datasets", datasets_dir, "Debian mrpt-common datasets directory")->capture_default_str();
-  app.add_option("--only", only, "Run only these datasets: tum, vlp16, sena");
+  app.add_option("--only", only, "Run only these datasets: tum, vlp16, rotscan, sena");
   app.add_option("--methods", opts.methods, "Run only methods whose name contains one of these (profiling)");
   app.add_option("--repeats", opts.repeats, "Builds per method (median reported)")->capture_default_str()->check(CLI::PositiveNumber);
   app.add_option("--resolutions", opts.resolutions, "Cell sizes [m]")->capture_default_str();
@@ -29,6 +29,8 @@ int main(int argc, char** argv) {
     if (wanted("tum")) sets.push_back(rtog::bench::loadTum(tum));
     if (wanted("vlp16"))
       sets.push_back(rtog::bench::loadRawlog3D(datasets_dir + "/test_velodyne_VLP16.rawlog", "Velodyne VLP-16 (test_velodyne_VLP16)"));
+    if (wanted("rotscan"))
+      sets.push_back(rtog::bench::loadRawlog3D(datasets_dir + "/rot_scan_velodyne.rawlog", "Velodyne rotating scan (rot_scan_velodyne)"));
     if (wanted("sena"))
       rtog::bench::run2D(datasets_dir + "/2006-01ENE-21-SENA_Telecom Faculty_one_loop_only.rawlog", opts, results, std::cout);
     for (const auto& data : sets) {

@@ -23,10 +23,13 @@ InsertStats OccupancyMap::insertPointCloud(const Eigen::Vector3d& origin, const 
   const auto trace = [&](std::size_t t) {
     try {
       batches_[t].clear();
+      InsertStats own;  // counted locally: neighbouring entries of `part` share a cache line
       for (std::size_t first = t * kChunk; first < count; first += threads * kChunk) {
         const std::size_t n = std::min(kChunk, count - first);
-        computeUpdate(origin, points + first, n, ip, is_hit ? is_hit + first : nullptr, batches_[t], part[t]);
+        computeUpdate(origin, points + first, n, ip, is_hit ? is_hit + first : nullptr, batches_[t], own);
       }
+      batches_[t].finalize();
+      part[t] = own;
     } catch (...) {
       errors[t] = std::current_exception();
     }
@@ -39,9 +42,9 @@ InsertStats OccupancyMap::insertPointCloud(const Eigen::Vector3d& origin, const 
     if (e) std::rethrow_exception(e);
   InsertStats stats;
   for (std::size_t t = 0; t < threads; ++t) stats += part[t];
-  for (std::size_t t = 1; t < threads; ++t) batches_[0].merge(batches_[t]);
-  batches_[0].finalize();
-  applyUpdate(batches_[0], stats, static_cast<int>(threads));
+  std::vector<const UpdateBatch*> batches;
+  for (std::size_t t = 0; t < threads; ++t) batches.push_back(&batches_[t]);
+  applyUpdate(batches, stats, static_cast<int>(threads));
   return stats;
 }
 
@@ -93,15 +96,38 @@ void OccupancyMap::computeUpdate(const Eigen::Vector3d& origin, const Eigen::Vec
 }
 
 void OccupancyMap::applyUpdate(const UpdateBatch& batch, InsertStats& stats, int threads) {
+  applyUpdate(std::vector<const UpdateBatch*>{&batch}, stats, threads);
+}
+
+void OccupancyMap::applyUpdate(const std::vector<const UpdateBatch*>& batches, InsertStats& stats, int threads) {
   if (threads < 1) throw std::invalid_argument("applyUpdate: threads must be >= 1");
-  stats.cells_occupied += batch.occupiedCount();
-  stats.cells_free += batch.freeCount();
-  // Bricks are independent: after their slots exist, contiguous runs of them are applied in
-  // parallel, each thread with its own scratch; the results do not depend on the split.
-  const auto& bricks = batch.bricks();
-  std::vector<std::uint32_t> slots(bricks.size());
-  for (std::size_t i = 0; i < bricks.size(); ++i) slots[i] = brickSlot(bricks[i]->brick);
-  const std::size_t n = std::min<std::size_t>(static_cast<std::size_t>(threads), 1 + bricks.size() / 64);
+  // Union of the batches by brick: a merge of their sorted brick lists. Group g's updates are
+  // sources[first[g] .. first[g + 1]).
+  std::vector<const UpdateBatch::BrickUpdates*> sources;
+  std::vector<std::uint32_t> first;
+  {
+    std::vector<std::size_t> pos(batches.size(), 0);
+    for (;;) {
+      const UpdateBatch::BrickUpdates* next = nullptr;
+      for (std::size_t b = 0; b < batches.size(); ++b)
+        if (pos[b] < batches[b]->bricks().size()) {
+          const auto* u = batches[b]->bricks()[pos[b]];
+          if (next == nullptr || u->brick < next->brick) next = u;
+        }
+      if (next == nullptr) break;
+      first.push_back(static_cast<std::uint32_t>(sources.size()));
+      for (std::size_t b = 0; b < batches.size(); ++b)
+        if (pos[b] < batches[b]->bricks().size() && batches[b]->bricks()[pos[b]]->brick == next->brick)
+          sources.push_back(batches[b]->bricks()[pos[b]++]);
+    }
+    first.push_back(static_cast<std::uint32_t>(sources.size()));
+  }
+  const std::size_t groups = first.size() - 1;
+  std::vector<std::uint32_t> slots(groups);
+  for (std::size_t g = 0; g < groups; ++g) slots[g] = brickSlot(sources[first[g]]->brick);
+  // Bricks are independent: contiguous runs of them are applied in parallel, each thread with
+  // its own scratch; the results do not depend on the split.
+  const std::size_t n = std::min<std::size_t>(static_cast<std::size_t>(threads), 1 + groups / 64);
   if (apply_ctx_.size() < n) apply_ctx_.resize(n);
   const auto work = [&](std::size_t t) {
     ApplyContext& ctx = apply_ctx_[t];
@@ -109,8 +135,23 @@ void OccupancyMap::applyUpdate(const UpdateBatch& batch, InsertStats& stats, int
     ctx.reshaped.clear();
     ctx.leaf_delta = 0;
     ctx.stats = InsertStats{};
-    for (std::size_t i = bricks.size() * t / n, e = bricks.size() * (t + 1) / n; i < e; ++i)
-      applyBrick(*bricks[i], slots[i], ctx);
+    for (std::size_t g = groups * t / n, e = groups * (t + 1) / n; g < e; ++g) {
+      const UpdateBatch::BrickUpdates* upd = sources[first[g]];
+      if (first[g + 1] - first[g] > 1) {
+        UpdateBatch::BrickUpdates& m = ctx.merged;
+        m = *upd;
+        for (std::uint32_t s = first[g] + 1; s < first[g + 1]; ++s)
+          for (std::size_t w = 0; w < static_cast<std::size_t>(kBrickWords); ++w) {
+            m.occupied[w] |= sources[s]->occupied[w];
+            m.free[w] |= sources[s]->free[w];
+          }
+        for (std::size_t w = 0; w < static_cast<std::size_t>(kBrickWords); ++w) m.free[w] &= ~m.occupied[w];
+        upd = &m;
+      }
+      ctx.stats.cells_occupied += maskPopcount(upd->occupied);
+      ctx.stats.cells_free += maskPopcount(upd->free);
+      applyBrick(*upd, slots[g], ctx);
+    }
   };
   std::vector<std::thread> workers;
   for (std::size_t t = 1; t < n; ++t) workers.emplace_back(work, t);

@@ -54,41 +54,13 @@ void UpdateBatch::markRayFree(const Eigen::Vector3d& from, const Eigen::Vector3d
   walkRay(from, to, from_key, to_key, cursor);
 }
 
-void UpdateBatch::merge(const UpdateBatch& other) {
-  for (std::size_t i = 0; i < other.count_; ++i) {
-    const BrickUpdates& o = (*other.chunks_[i / kChunkBricks])[i % kChunkBricks];
-    BrickUpdates& b = brickAt(brickSlot(o.brick));
-    for (std::size_t w = 0; w < kBrickWords; ++w) {
-      b.occupied[w] |= o.occupied[w];
-      b.free[w] |= o.free[w];
-    }
-  }
-  cached_ = nullptr;
-}
-
-namespace {
-
-std::size_t popcount(const std::array<std::uint64_t, kBrickWords>& words) {
-  // SWAR count: the baseline x86-64 target has no POPCNT instruction.
-  std::size_t n = 0;
-  for (std::uint64_t w : words) {
-    w = w - ((w >> 1) & 0x5555555555555555ull);
-    w = (w & 0x3333333333333333ull) + ((w >> 2) & 0x3333333333333333ull);
-    w = (w + (w >> 4)) & 0x0f0f0f0f0f0f0f0full;
-    n += static_cast<std::size_t>((w * 0x0101010101010101ull) >> 56);
-  }
-  return n;
-}
-
-}  // namespace
-
 void UpdateBatch::finalize() {
   sorted_.clear();
   occupied_count_ = free_count_ = 0;
   forEachBrick([&](BrickUpdates& b) {
     for (std::size_t w = 0; w < kBrickWords; ++w) b.free[w] &= ~b.occupied[w];
-    occupied_count_ += popcount(b.occupied);
-    free_count_ += popcount(b.free);
+    occupied_count_ += maskPopcount(b.occupied);
+    free_count_ += maskPopcount(b.free);
     sorted_.push_back(&b);
   });
   std::sort(sorted_.begin(), sorted_.end(), [](const BrickUpdates* a, const BrickUpdates* b) { return a->brick < b->brick; });

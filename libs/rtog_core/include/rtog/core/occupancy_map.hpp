@@ -127,6 +127,9 @@ class OccupancyMap {
   /// Step 2: applies a finalized batch to the tree in one sweep over its bricks, split over
   /// `threads` (the result does not depend on it).
   void applyUpdate(const UpdateBatch& batch, InsertStats& stats, int threads = 1);
+  /// Step 2 for several finalized batches at once: applies their union (occupied winning over
+  /// free across batches too), so that per-thread batches need no serial merge.
+  void applyUpdate(const std::vector<const UpdateBatch*>& batches, InsertStats& stats, int threads = 1);
 
   // ---- queries ----------------------------------------------------------------------
   std::optional<float> logOdds(const Key& k) const;
@@ -226,6 +229,7 @@ class OccupancyMap {
     std::vector<std::int32_t> local;  // brick-local cell -> leaf index, -1 when none
     std::vector<std::uint32_t> candidates;
     std::vector<std::uint32_t> reshaped;  // bricks whose leaf nodes changed
+    UpdateBatch::BrickUpdates merged;     // union of one brick's updates from several batches
     std::int64_t leaf_delta = 0;
     InsertStats stats;
   };

@@ -36,7 +36,20 @@ inline Key localKey(int index) {
   return Key{index & m, (index >> kBrickBits) & m, (index >> (2 * kBrickBits)) & m};
 }
 
-class UpdateBatch {
+inline std::size_t maskPopcount(const std::array<std::uint64_t, kBrickWords>& words) {
+  // SWAR count: the baseline x86-64 target has no POPCNT instruction.
+  std::size_t n = 0;
+  for (std::uint64_t w : words) {
+    w = w - ((w >> 1) & 0x5555555555555555ull);
+    w = (w & 0x3333333333333333ull) + ((w >> 2) & 0x3333333333333333ull);
+    w = (w + (w >> 4)) & 0x0f0f0f0f0f0f0f0full;
+    n += static_cast<std::size_t>((w * 0x0101010101010101ull) >> 56);
+  }
+  return n;
+}
+
+// Cache-line aligned: per-thread batches sit side by side and are written on every brick change.
+class alignas(64) UpdateBatch {
  public:
   struct BrickUpdates {
     Key brick;                                        ///< brick coordinates (key >> kBrickBits)
@@ -66,8 +79,6 @@ class UpdateBatch {
     w |= bit;
     return fresh;
   }
-  /// Adds another (unfinalized) batch's marks: the union, whatever the order.
-  void merge(const UpdateBatch& other);
 
   /// Drops free marks of cells also marked occupied and orders bricks by (z, y, x) so that
   /// applying the batch is deterministic. Ends marking; clear() starts a new batch.
