@@ -323,6 +323,7 @@ void run2D(const std::string& rawlog, const Options& opts, std::vector<Result>& 
   for (const auto& s : scans) beams += s.second->getScanSize();
   log << name << ": " << beams << " beams\n";
   const float max_range = 15.0f;  // COccupancyGridMap2D's default maxDistanceInsertion, for both
+  constexpr int kLfDecimation = 5;  // COccupancyGridMap2D's default, set on both maps
   for (const double res : opts.resolutions) {
     const auto measure = [&](const std::string& method, auto make, auto bytes) {
       Result r;
@@ -357,7 +358,9 @@ void run2D(const std::string& rawlog, const Options& opts, std::vector<Result>& 
           CRTreeOccupancyGridMap::TInsertionOptions io;
           io.maxDistanceInsertion = max_range;
           io.mergePolicy = "equal";
-          return std::make_shared<CRTreeOccupancyGridMap>(res, io);
+          auto m = std::make_shared<CRTreeOccupancyGridMap>(res, io);
+          m->likelihoodOptions.LF_decimation = kLfDecimation;
+          return m;
         },
         [](const mrpt::maps::CMetricMap& m) {
           return dynamic_cast<const CRTreeOccupancyGridMap&>(m).map().memoryBytes();
@@ -367,6 +370,7 @@ void run2D(const std::string& rawlog, const Options& opts, std::vector<Result>& 
         [&] {
           auto g = std::make_shared<mrpt::maps::COccupancyGridMap2D>(-10.0f, 10.0f, -10.0f, 10.0f, float(res));
           g->insertionOptions.maxDistanceInsertion = max_range;
+          g->likelihoodOptions.LF_decimation = kLfDecimation;
           return g;
         },
         [](const mrpt::maps::CMetricMap& m) {

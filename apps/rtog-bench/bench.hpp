@@ -53,7 +53,7 @@ Dataset loadRawlog3D(const std::string& path, const std::string& name);
 
 /// A 2D laser log: MRPT's SENA rawlog (odometry poses), rtog against COccupancyGridMap2D,
 /// both through CMetricMap::insertObservation and computeObservationLikelihood (LF Thrun,
-/// each map's default decimation). Appends to `out`.
+/// the same decimation, 5). Appends to `out`.
 void run2D(const std::string& rawlog, const Options& opts, std::vector<Result>& out, std::ostream& log);
 
 /// Runs every method on `data`; appends to `out`. Progress lines go to `log`.
