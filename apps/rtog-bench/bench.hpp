@@ -40,7 +40,8 @@ struct Result {
 };
 
 struct Options {
-  int repeats = 5;                          ///< (Default: 5)
+  int repeats = 5;                          ///< builds per method at least (Default: 5)
+  double min_seconds = 1.0;                 ///< and more until this much was timed (Default: 1.0)
   std::vector<double> resolutions{0.05, 0.1};
   std::size_t query_count = 200000;         ///< random point queries per map (Default: 200000)
   double max_range = -1;                    ///< beams cut here (<= 0: none) (Default: -1)

@@ -1,5 +1,6 @@
 // Insertion: beams -> per-scan update batch -> one sweep over the touched bricks.
 #include <algorithm>
+#include <atomic>
 #include <exception>
 #include <thread>
 #include <array>
@@ -125,17 +126,25 @@ void OccupancyMap::applyUpdate(const std::vector<const UpdateBatch*>& batches, I
   const std::size_t groups = first.size() - 1;
   std::vector<std::uint32_t> slots(groups);
   for (std::size_t g = 0; g < groups; ++g) slots[g] = brickSlot(sources[first[g]]->brick);
-  // Bricks are independent: contiguous runs of them are applied in parallel, each thread with
-  // its own scratch; the results do not depend on the split.
+  // Bricks are independent: threads take runs of them as they go (bricks near the sensor cost
+  // far more than distant ones), each with its own scratch. The results do not depend on who
+  // applied which brick: statistics are sums and the reshaped bricks are sorted afterwards.
   const std::size_t n = std::min<std::size_t>(static_cast<std::size_t>(threads), 1 + groups / 64);
   if (apply_ctx_.size() < n) apply_ctx_.resize(n);
+  constexpr std::size_t kGrain = 16;
+  std::atomic<std::size_t> next_group{0};
   const auto work = [&](std::size_t t) {
     ApplyContext& ctx = apply_ctx_[t];
     ctx.local.assign(kBrickCells, -1);
     ctx.reshaped.clear();
     ctx.leaf_delta = 0;
     ctx.stats = InsertStats{};
-    for (std::size_t g = groups * t / n, e = groups * (t + 1) / n; g < e; ++g) {
+    for (std::size_t g = 0, e = 0;; ++g) {
+      if (g == e) {
+        g = next_group.fetch_add(kGrain, std::memory_order_relaxed);
+        if (g >= groups) break;
+        e = std::min(groups, g + kGrain);
+      }
       const UpdateBatch::BrickUpdates* upd = sources[first[g]];
       if (first[g + 1] - first[g] > 1) {
         UpdateBatch::BrickUpdates& m = ctx.merged;
@@ -163,6 +172,7 @@ void OccupancyMap::applyUpdate(const std::vector<const UpdateBatch*>& batches, I
     leaf_count_ = static_cast<std::size_t>(static_cast<std::int64_t>(leaf_count_) + apply_ctx_[t].leaf_delta);
     reshaped_bricks_.insert(reshaped_bricks_.end(), apply_ctx_[t].reshaped.begin(), apply_ctx_[t].reshaped.end());
   }
+  std::sort(reshaped_bricks_.begin(), reshaped_bricks_.end());
   // Leaf nodes whose boxes changed go into the upper tree one by one, unless they are many
   // compared with the tree (a first scan, a new area): then one bulk load is cheaper.
   std::size_t touched_nodes = 0;

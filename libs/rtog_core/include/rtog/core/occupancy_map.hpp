@@ -225,7 +225,7 @@ class OccupancyMap {
   Box leafNodeBox(const Brick& b, std::size_t node) const;
   bool mergeable(float v) const;
   /// Per-thread state of applyUpdate().
-  struct ApplyContext {
+  struct alignas(64) ApplyContext {
     std::vector<std::int32_t> local;  // brick-local cell -> leaf index, -1 when none
     std::vector<std::uint32_t> candidates;
     std::vector<std::uint32_t> reshaped;  // bricks whose leaf nodes changed
