@@ -169,7 +169,9 @@ INSTANTIATE_TEST_SUITE_P(Capacities, RTreeRandomized,
                          ::testing::Values(std::make_tuple(4u, 2u, 1u), std::make_tuple(8u, 3u, 2u),
                                            std::make_tuple(16u, 6u, 3u), std::make_tuple(32u, 8u, 4u)));
 
-TEST(RTree, BulkLoadBuildsAValidPackedTree) {
+class RTreeBulkLoad : public ::testing::TestWithParam<RTree<int>::Packing> {};
+
+TEST_P(RTreeBulkLoad, BuildsAValidPackedTree) {
   for (const std::size_t n : {0u, 1u, 5u, 17u, 100u, 5000u}) {
     std::mt19937 rng(static_cast<unsigned>(n));
     std::vector<std::pair<Box, int>> items;
@@ -181,7 +183,7 @@ TEST(RTree, BulkLoadBuildsAValidPackedTree) {
     }
     std::shuffle(items.begin(), items.end(), rng);
     RTree<int> tree;
-    tree.bulkLoad(items);
+    tree.bulkLoad(items, GetParam());
     ASSERT_EQ(tree.size(), n);
     ASSERT_EQ(tree.checkInvariants(true), "");
     Model model;
@@ -200,6 +202,9 @@ TEST(RTree, BulkLoadBuildsAValidPackedTree) {
     expectQueriesMatch(tree, model, rng);
   }
 }
+
+INSTANTIATE_TEST_SUITE_P(Packings, RTreeBulkLoad,
+                         ::testing::Values(RTree<int>::Packing::SortTileRecursive, RTree<int>::Packing::Morton));
 
 TEST(RTree, InvariantCheckerDetectsOverlap) {
   RTree<int> tree;

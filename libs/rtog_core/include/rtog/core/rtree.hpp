@@ -145,9 +145,14 @@ class RTree {
     insertEntry(b, h, 0);
   }
 
-  /// Replaces the contents by a packed tree (Sort-Tile-Recursive). Handles are 0..n-1 in
-  /// the order of `items`.
-  void bulkLoad(std::vector<std::pair<Box, Payload>> items) {
+  /// How bulkLoad() groups entries into nodes.
+  enum class Packing {
+    SortTileRecursive,  ///< three nested sorts per level: the better tree
+    Morton,             ///< one sort by the Morton code of box centres, then runs of M: cheaper
+  };
+
+  /// Replaces the contents by a packed tree. Handles are 0..n-1 in the order of `items`.
+  void bulkLoad(std::vector<std::pair<Box, Payload>> items, Packing packing = Packing::SortTileRecursive) {
     clear();
     if (items.empty()) return;
     std::vector<Entry> level;
@@ -162,8 +167,11 @@ class RTree {
     size_ = items.size();
     freeNode(root_);
     std::uint16_t lvl = 0;
+    if (packing == Packing::Morton) mortonSort(level);
     for (;;) {
-      std::vector<std::vector<Entry>> groups = strPack(std::move(level));
+      // Morton order survives packing: each level's nodes are already in order.
+      std::vector<std::vector<Entry>> groups =
+          packing == Packing::Morton ? runPack(std::move(level)) : strPack(std::move(level));
       level.clear();
       for (auto& g : groups) {
         const std::uint32_t n = allocNode(lvl);
@@ -617,6 +625,42 @@ class RTree {
   }
 
   /// Sort-Tile-Recursive grouping of entries into nodes of at most M entries.
+  static void mortonSort(std::vector<Entry>& es) {
+    const auto spread = [](std::uint64_t v) {  // 21 bits -> every third bit of 63
+      v &= 0x1FFFFF;
+      v = (v | v << 32) & 0x1F00000000FFFFull;
+      v = (v | v << 16) & 0x1F0000FF0000FFull;
+      v = (v | v << 8) & 0x100F00F00F00F00Full;
+      v = (v | v << 4) & 0x10C30C30C30C30C3ull;
+      v = (v | v << 2) & 0x1249249249249249ull;
+      return v;
+    };
+    std::vector<std::pair<std::uint64_t, std::uint32_t>> order(es.size());
+    for (std::size_t i = 0; i < es.size(); ++i) {
+      std::uint64_t code = 0;
+      for (int a = 0; a < 3; ++a) {
+        // Centre on the lattice, shifted to unsigned: (min + max) / 2 - kKeyMin.
+        const std::int64_t c = (std::int64_t{es[i].box.min[a]} + es[i].box.max[a]) / 2 - kKeyMin;
+        code |= spread(static_cast<std::uint64_t>(c)) << a;
+      }
+      order[i] = {code, static_cast<std::uint32_t>(i)};
+    }
+    std::sort(order.begin(), order.end());
+    std::vector<Entry> sorted;
+    sorted.reserve(es.size());
+    for (const auto& o : order) sorted.push_back(es[o.second]);
+    es.swap(sorted);
+  }
+
+  // Consecutive runs of M entries, fill fixed as in strPack().
+  std::vector<std::vector<Entry>> runPack(std::vector<Entry> es) const {
+    const std::size_t M = params_.max_entries;
+    std::vector<std::vector<Entry>> out;
+    for (std::size_t k = 0; k < es.size(); k += M) out.emplace_back(es.begin() + k, es.begin() + std::min(es.size(), k + M));
+    fixFill(out);
+    return out;
+  }
+
   std::vector<std::vector<Entry>> strPack(std::vector<Entry> es) const {
     const std::size_t M = params_.max_entries;
     const std::size_t nodes = (es.size() + M - 1) / M;
@@ -638,7 +682,13 @@ class RTree {
           out.emplace_back(es.begin() + k, es.begin() + std::min(je, k + M));
       }
     }
-    // Keep every node at or above the minimum fill by borrowing from its predecessor.
+    fixFill(out);
+    return out;
+  }
+
+  // Keeps every node at or above the minimum fill by borrowing from its predecessor.
+  void fixFill(std::vector<std::vector<Entry>>& out) const {
+    const std::size_t M = params_.max_entries;
     for (std::size_t g = 1; g < out.size(); ++g) {
       while (out[g].size() < params_.min_entries && out[g - 1].size() > params_.min_entries) {
         out[g].insert(out[g].begin(), out[g - 1].back());
@@ -657,7 +707,6 @@ class RTree {
         out.push_back(std::move(second));
       }
     }
-    return out;
   }
 
   RTreeParams params_;
