@@ -19,14 +19,17 @@ InsertStats OccupancyMap::insertPointCloud(const Eigen::Vector3d& origin, const 
   std::vector<InsertStats> part(threads);
   std::vector<std::exception_ptr> errors(threads);
   // Chunks dealt round-robin (neighbouring beams have similar lengths, so this balances the
-  // load), traced independently; their union does not depend on the split.
-  constexpr std::size_t kChunk = 2048;
+  // load), traced independently; their union does not depend on the split. With discretized
+  // end points a thread traces each end cell once, but neighbouring beams share end cells
+  // across a chunk border: then the chunks are few and large (two per thread).
+  const std::size_t chunk = ip.discretize ? std::max<std::size_t>(2048, (count + 2 * threads - 1) / (2 * threads))
+                                          : std::size_t{2048};
   const auto trace = [&](std::size_t t) {
     try {
       batches_[t].clear();
       InsertStats own;  // counted locally: neighbouring entries of `part` share a cache line
-      for (std::size_t first = t * kChunk; first < count; first += threads * kChunk) {
-        const std::size_t n = std::min(kChunk, count - first);
+      for (std::size_t first = t * chunk; first < count; first += threads * chunk) {
+        const std::size_t n = std::min(chunk, count - first);
         computeUpdate(origin, points + first, n, ip, is_hit ? is_hit + first : nullptr, batches_[t], own);
       }
       batches_[t].finalize();
