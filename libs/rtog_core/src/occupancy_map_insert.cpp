@@ -160,9 +160,18 @@ void OccupancyMap::applyUpdate(const std::vector<const UpdateBatch*>& batches, I
         for (std::size_t w = 0; w < static_cast<std::size_t>(kBrickWords); ++w) m.free[w] &= ~m.occupied[w];
         upd = &m;
       }
-      ctx.stats.cells_occupied += maskPopcount(upd->occupied);
-      ctx.stats.cells_free += maskPopcount(upd->free);
-      applyBrick(*upd, slots[g], ctx);
+      const std::size_t occupied = maskPopcount(upd->occupied), free = maskPopcount(upd->free);
+      ctx.stats.cells_occupied += occupied;
+      ctx.stats.cells_free += free;
+      // Past this many updates one pass over the brick beats splitting and re-merging per cell
+      // (measured on the TUM frames). Only equal-value merging churns so: clamped cuboids
+      // absorb most updates unchanged.
+      constexpr std::size_t kRebuildUpdates = 128;
+      if (params_.merge == MergePolicy::Equal && occupied + free >= kRebuildUpdates &&
+          !bricks_[slots[g]].leaves.empty())
+        rebuildBrick(*upd, slots[g], ctx);
+      else
+        applyBrick(*upd, slots[g], ctx);
     }
   };
   std::vector<std::thread> workers;
@@ -425,6 +434,112 @@ void OccupancyMap::applyBrick(const UpdateBatch::BrickUpdates& upd, std::uint32_
   ctx.leaf_delta += static_cast<std::int64_t>(leaves.size()) - static_cast<std::int64_t>(leaves_before);
   // Leave the scratch table empty for the next brick; only painted cells need it.
   for (const LeafEntry& e : leaves) forEachLocal(e.lo, e.hi, [&](int idx) { local[idx] = -1; });
+}
+
+void OccupancyMap::rebuildBrick(const UpdateBatch::BrickUpdates& upd, std::uint32_t slot, ApplyContext& ctx) {
+  std::vector<LeafEntry>& leaves = bricks_[slot].leaves;
+  std::vector<float>& value = ctx.values;
+  value.resize(kBrickCells);
+  InsertStats& stats = ctx.stats;
+  BrickMask known{}, changed{};
+  for (const LeafEntry& e : leaves) {
+    for (int z = e.lo[2]; z <= e.hi[2]; ++z)
+      for (int y = e.lo[1]; y <= e.hi[1]; ++y)
+        for (int x = e.lo[0]; x <= e.hi[0]; ++x) value[static_cast<std::size_t>(localIdx(x, y, z))] = e.value;
+  }
+  for (const LeafEntry& e : leaves) {
+    const std::uint64_t run = ((std::uint64_t{1} << (e.hi[0] - e.lo[0] + 1)) - 1u) << e.lo[0];
+    for (int z = e.lo[2]; z <= e.hi[2]; ++z)
+      for (int y = e.lo[1]; y <= e.hi[1]; ++y) {
+        const int base = localIdx(0, y, z);
+        known[static_cast<std::size_t>(base >> 6)] |= run << (base & 63);
+      }
+  }
+  for (int w = 0; w < kBrickWords; ++w) {
+    const auto wi = static_cast<std::size_t>(w);
+    for (std::uint64_t bits = upd.occupied[wi] | upd.free[wi]; bits; bits &= bits - 1) {
+      const int b = __builtin_ctzll(bits);
+      const auto idx = static_cast<std::size_t>(w * 64 + b);
+      const std::uint64_t bit = std::uint64_t{1} << b;
+      const float delta = (upd.occupied[wi] & bit) ? model_.hitDelta() : model_.missDelta();
+      if (known[wi] & bit) {
+        const float v = model_.update(value[idx], delta);
+        if (v == value[idx]) {
+          ++stats.cells_unchanged;
+          continue;
+        }
+        value[idx] = v;
+      } else {
+        value[idx] = model_.first(delta);
+        known[wi] |= bit;
+      }
+      changed[wi] |= bit;
+    }
+  }
+  // Old cuboids that now disagree inside are the splits of this pass.
+  for (const LeafEntry& e : leaves) {
+    if (e.lo[0] == e.hi[0] && e.lo[1] == e.hi[1] && e.lo[2] == e.hi[2]) continue;
+    const std::uint64_t run = ((std::uint64_t{1} << (e.hi[0] - e.lo[0] + 1)) - 1u) << e.lo[0];
+    bool hit = false;
+    for (int z = e.lo[2]; z <= e.hi[2] && !hit; ++z)
+      for (int y = e.lo[1]; y <= e.hi[1] && !hit; ++y) {
+        const int base = localIdx(0, y, z);
+        hit = (changed[static_cast<std::size_t>(base >> 6)] >> (base & 63)) & run;
+      }
+    stats.leaves_split += hit;
+  }
+  // Cover the known cells again: from each uncovered cell in turn, an x-run of equal
+  // values grown along y, then z. Values are compared bit for bit, so the cover is lossless.
+  std::vector<LeafEntry>& out = ctx.rebuilt;
+  out.clear();
+  BrickMask rest = known;
+  const auto uncovered = [&](int idx) {
+    return (rest[static_cast<std::size_t>(idx >> 6)] >> (idx & 63)) & 1u;
+  };
+  for (int w = 0; w < kBrickWords; ++w)
+    while (rest[static_cast<std::size_t>(w)] != 0) {
+      const int start = w * 64 + __builtin_ctzll(rest[static_cast<std::size_t>(w)]);
+      const float v = value[static_cast<std::size_t>(start)];
+      const int x0 = start & (kBrickSize - 1), y0 = (start >> kBrickBits) & (kBrickSize - 1),
+                z0 = start >> (2 * kBrickBits);
+      int x1 = x0, y1 = y0, z1 = z0;
+      if (mergeable(v)) {
+        const auto same = [&](int x, int y, int z) {
+          const int i = localIdx(x, y, z);
+          return uncovered(i) && value[static_cast<std::size_t>(i)] == v;
+        };
+        while (x1 + 1 < kBrickSize && same(x1 + 1, y0, z0)) ++x1;
+        const auto rowSame = [&](int y, int z) {
+          for (int x = x0; x <= x1; ++x)
+            if (!same(x, y, z)) return false;
+          return true;
+        };
+        while (y1 + 1 < kBrickSize && rowSame(y1 + 1, z0)) ++y1;
+        for (bool grow = true; grow && z1 + 1 < kBrickSize;) {
+          for (int y = y0; y <= y1 && grow; ++y) grow = rowSame(y, z1 + 1);
+          if (grow) ++z1;
+        }
+      }
+      const std::uint64_t run = ((std::uint64_t{1} << (x1 - x0 + 1)) - 1u) << x0;
+      for (int z = z0; z <= z1; ++z)
+        for (int y = y0; y <= y1; ++y) {
+          const int base = localIdx(0, y, z);
+          rest[static_cast<std::size_t>(base >> 6)] &= ~(run << (base & 63));
+        }
+      const auto u8 = [](int c) { return static_cast<std::uint8_t>(c); };
+      out.push_back(LeafEntry{{u8(x0), u8(y0), u8(z0)}, {u8(x1), u8(y1), u8(z1)}, v});
+    }
+  // Morton order of first cells keeps the leaf nodes cut from the array compact.
+  const auto& rank = mortonRank();
+  std::sort(out.begin(), out.end(), [&](const LeafEntry& a, const LeafEntry& b) {
+    return rank[static_cast<std::size_t>(localIdx(a.lo[0], a.lo[1], a.lo[2]))] <
+           rank[static_cast<std::size_t>(localIdx(b.lo[0], b.lo[1], b.lo[2]))];
+  });
+  stats.leaves_created += out.size();
+  stats.leaves_merged += leaves.size();
+  ctx.leaf_delta += static_cast<std::int64_t>(out.size()) - static_cast<std::int64_t>(leaves.size());
+  leaves.assign(out.begin(), out.end());
+  ctx.reshaped.push_back(slot);
 }
 
 std::size_t OccupancyMap::mergeInBrick(std::vector<LeafEntry>& leaves, std::vector<std::int32_t>& local,
