@@ -1,5 +1,7 @@
 // rtog::CRTreeOccupancyGridMap: observation likelihood (likelihood field and ray tracing).
 #include <cmath>
+#include <cstring>
+#include <mutex>
 
 #include <mrpt/obs/CObservation2DRangeScan.h>
 #include <mrpt/obs/CObservation3DRangeScan.h>
@@ -31,7 +33,7 @@ double CRTreeOccupancyGridMap::beamsLikelihood(const ObservationBeams& b) const 
   return likelihoodOptions.likelihoodMethod == lmRayTracing ? rayTracing(b) : likelihoodField(b);
 }
 
-float CRTreeOccupancyGridMap::distanceToOccupied(const Eigen::Vector3d& p) const {
+float CRTreeOccupancyGridMap::distanceToOccupiedLocked(const Eigen::Vector3d& p) const {
   const float cap = likelihoodOptions.LF_maxCorrsDistance;
   Key k;
   if (!map_.lattice().tryKey(p, k)) return cap;
@@ -41,15 +43,16 @@ float CRTreeOccupancyGridMap::distanceToOccupied(const Eigen::Vector3d& p) const
   }
   // Cached per lattice cell: the distance from the cell centre.
   const std::uint64_t pk = packKey(k);
-  {
-    std::lock_guard<std::mutex> lk(caches_.mutex);
-    auto it = caches_.lf.find(pk);
-    if (it != caches_.lf.end()) return it->second;
+  std::uint32_t bits = caches_.lf.find(pk);
+  float d;
+  if (bits != detail::FlatHashMap64::kAbsent) {
+    std::memcpy(&d, &bits, sizeof d);
+    return d;
   }
   const auto h = map_.nearestOccupied(map_.lattice().cellCenter(k), cap);
-  const float d = h.found ? static_cast<float>(std::min<double>(h.distance, cap)) : cap;
-  std::lock_guard<std::mutex> lk(caches_.mutex);
-  caches_.lf.emplace(pk, d);
+  d = h.found ? static_cast<float>(std::min<double>(h.distance, cap)) : cap;
+  std::memcpy(&bits, &d, sizeof d);  // a distance is never NaN, so never kAbsent's bits
+  caches_.lf.findOrInsert(pk, bits);
   return d;
 }
 
@@ -58,9 +61,11 @@ double CRTreeOccupancyGridMap::likelihoodField(const ObservationBeams& b) const 
   const double inv2var = 1.0 / (2.0 * double(o.LF_stdHit) * o.LF_stdHit);
   const double zRandomTerm = double(o.LF_zRandom) / o.LF_maxRange;
   double sum = 0.0;
+  // One lock per scan, not per point: a particle filter calls this for every particle.
+  std::lock_guard<std::mutex> lk(caches_.mutex);
   for (std::size_t i = 0; i < b.points.size(); ++i) {
     if (!b.is_hit[i] || b.ranges[i] > o.LF_maxRange) continue;
-    const double d = distanceToOccupied(b.points[i].cast<double>());
+    const double d = distanceToOccupiedLocked(b.points[i].cast<double>());
     if (o.LF_useSquareDist)
       sum -= d * d * inv2var;
     else

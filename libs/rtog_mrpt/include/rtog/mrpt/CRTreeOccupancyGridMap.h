@@ -16,6 +16,7 @@
 #include <mrpt/maps/CSimplePointsMap.h>
 #include <mrpt/poses/CPose3D.h>
 
+#include "rtog/core/detail/flat_hash_map.hpp"
 #include "rtog/core/occupancy_map.hpp"
 
 namespace rtog {
@@ -188,7 +189,9 @@ class CRTreeOccupancyGridMap : public mrpt::maps::CMetricMap {
   void syncParams();
   double likelihoodField(const ObservationBeams& b) const;
   double rayTracing(const ObservationBeams& b) const;
-  float distanceToOccupied(const Eigen::Vector3d& p) const;
+  /// Distance from p to the nearest occupied cuboid, capped at LF_maxCorrsDistance; with the
+  /// cache on, per lattice cell. The caller holds caches_.mutex.
+  float distanceToOccupiedLocked(const Eigen::Vector3d& p) const;
   /// Sensor-frame points of `obs` (decoded by `decode` once per observation and decimation).
   template <class Decode>
   void localPointsCached(const mrpt::obs::CObservation& obs, std::size_t decimation, Decode&& decode,
@@ -197,7 +200,7 @@ class CRTreeOccupancyGridMap : public mrpt::maps::CMetricMap {
   /// Derived data; copies start empty (a copy rebuilds them on demand).
   struct Caches {
     std::mutex mutex;
-    std::unordered_map<std::uint64_t, float> lf;  ///< packed key -> distance to occupied
+    detail::FlatHashMap64 lf;  ///< packed key -> distance to occupied (float bits)
     bool points_dirty{true};
     mrpt::maps::CSimplePointsMap occupied_points;
     /// Sensor-frame points of the last decoded observation (Velodyne raw packets, depth image),
