@@ -204,7 +204,10 @@ TEST_P(RTreeBulkLoad, BuildsAValidPackedTree) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Packings, RTreeBulkLoad,
-                         ::testing::Values(RTree<int>::Packing::SortTileRecursive, RTree<int>::Packing::Morton));
+                         ::testing::Values(RTree<int>::Packing::SortTileRecursive, RTree<int>::Packing::Morton),
+                         [](const ::testing::TestParamInfo<RTree<int>::Packing>& info) {
+                           return std::string(info.param == RTree<int>::Packing::Morton ? "Morton" : "STR");
+                         });
 
 TEST(RTree, InvariantCheckerDetectsOverlap) {
   RTree<int> tree;
