@@ -404,20 +404,35 @@ void runDataset(const Dataset& data, const Options& opts, std::vector<Result>& o
     for (auto& q : queries)
       for (int a = 0; a < 3; ++a) q[a] = std::uniform_real_distribution<double>(lo[a], hi[a])(rng);
 
+    // Builds go in rounds, every method once per round, so that a slow spell of the machine
+    // hits all methods alike and their ratios hold; fast methods go on for more rounds until
+    // min_seconds of their builds have been timed.
+    std::vector<std::vector<double>> build_times(methods.size());
+    std::vector<double> rss_growth(methods.size(), 0.0);
+    for (int round = 0;; ++round) {
+      bool built = false;
+      for (std::size_t k = 0; k < methods.size(); ++k) {
+        std::vector<double>& t = build_times[k];
+        if (round >= opts.repeats && (sum(t) >= opts.min_seconds || round >= kMaxRepeats)) continue;
+        malloc_trim(0);
+        const double rss0 = residentBytes();
+        t.push_back(methods[k]->build(data));
+        if (round == 0) rss_growth[k] = residentBytes() - rss0;
+        built = true;
+      }
+      if (!built) break;
+    }
+
     const octomap::OcTree* plain_octomap = nullptr;
     std::vector<std::size_t> rtog_rows;
-    for (auto& m : methods) {
+    for (std::size_t k = 0; k < methods.size(); ++k) {
+      const auto& m = methods[k];
       Result r;
       r.dataset = data.name;
       r.method = m->name();
       r.resolution = res;
-      std::vector<double> times;
-      for (int i = 0; i < opts.repeats || (sum(times) < opts.min_seconds && i < kMaxRepeats); ++i) {
-        malloc_trim(0);
-        const double rss0 = residentBytes();
-        times.push_back(m->build(data));
-        if (i == 0) r.rss_growth_bytes = residentBytes() - rss0;
-      }
+      const std::vector<double>& times = build_times[k];
+      r.rss_growth_bytes = rss_growth[k];
       r.insert_seconds = median(times);
       r.extra["repeats"] = double(times.size());
       r.points_per_second = double(data.points()) / r.insert_seconds;

@@ -109,7 +109,8 @@ void writeMarkdown(const std::vector<Result>& results, const std::string& path, 
   const nlohmann::json m = machine();
   md << "# Benchmarks\n\nMeasured by `rtog-bench` (Release build), every method in one process on the same scans,\n"
      << "resolution and sensor model (OctoMap's defaults). Insertion time is the median of at least 5 builds,\n"
-     << "repeated until 1 s of building was timed (at most 60 builds; the count is in the JSON).\n\n"
+     << "repeated until 1 s of building was timed (at most 60 builds; the count is in the JSON). 3D methods\n"
+     << "build in rounds, each once per round, so that the machine's slow spells hit them alike.\n\n"
      << "Machine: " << m["cpu"].get<std::string>() << ", " << m["cores"].get<std::string>() << " cores, "
      << m["memory"].get<std::string>() << " RAM; " << m["compiler"].get<std::string>() << "; OctoMap "
      << m["octomap"].get<std::string>() << ", MRPT " << m["mrpt"].get<std::string>() << "; "
