@@ -160,18 +160,7 @@ void OccupancyMap::applyUpdate(const std::vector<const UpdateBatch*>& batches, I
         for (std::size_t w = 0; w < static_cast<std::size_t>(kBrickWords); ++w) m.free[w] &= ~m.occupied[w];
         upd = &m;
       }
-      const std::size_t occupied = maskPopcount(upd->occupied), free = maskPopcount(upd->free);
-      ctx.stats.cells_occupied += occupied;
-      ctx.stats.cells_free += free;
-      // Past this many updates one pass over the brick beats splitting and re-merging per cell
-      // (measured on the TUM frames). Only equal-value merging churns so: clamped cuboids
-      // absorb most updates unchanged.
-      constexpr std::size_t kRebuildUpdates = 128;
-      if (params_.merge == MergePolicy::Equal && occupied + free >= kRebuildUpdates &&
-          !bricks_[slots[g]].leaves.empty())
-        rebuildBrick(*upd, slots[g], ctx);
-      else
-        applyBrick(*upd, slots[g], ctx);
+      applyBrick(*upd, slots[g], ctx);
     }
   };
   std::vector<std::thread> workers;
@@ -204,7 +193,8 @@ void OccupancyMap::rebuildUpperTree() {
     Brick& br = bricks_[slot];
     br.nodes.clear();
     const std::size_t n = (br.leaves.size() + leafNodeSize() - 1) / leafNodeSize();
-    for (std::size_t k = 0; k < n; ++k) nodes.push_back({leafNodeBox(br, k), LeafNodeRef{slot, static_cast<std::uint32_t>(k)}});
+    for (std::size_t k = 0; k < n; ++k)
+      nodes.push_back({leafNodeBox(br, k), LeafNodeRef{slot, static_cast<std::uint32_t>(k)}});
   }
   // Morton packing: one sort instead of STR's three nested ones; a first scan of a long-range
   // LiDAR brings ~10^5 leaf nodes and this runs on one thread.
@@ -281,13 +271,17 @@ namespace {
 
 using BrickMask = std::array<std::uint64_t, kBrickWords>;
 
-// Covers the set bits of `mask` with disjoint boxes, greedily: an x-run, grown along y, then
-// along z. A fresh 16^3 brick seen free becomes a handful of boxes instead of 4096 cells that
-// would be merged one by one.
-template <class Fn>
-void forEachMaskBox(const BrickMask& mask, Fn&& emit) {
+// Bits lo..hi of a 16-cell x-row.
+inline std::uint32_t xRun(int lo, int hi) { return ((std::uint32_t{1} << (hi - lo + 1)) - 1u) << lo; }
+
+// Covers the set bits of `mask` with disjoint boxes, greedily: from the lowest uncovered cell
+// `start`, an x-run grown along y, then along z, over cells for which joins(start, cell) holds
+// (every cell, when the mask is one class of fresh cells; an equal value, when a brick is
+// rebuilt). emit(lo, hi, start) receives each box. A fresh 16^3 brick seen free becomes a
+// handful of boxes instead of 4096 cells merged one by one.
+template <class Joins, class Emit>
+void coverGreedily(BrickMask m, Joins&& joins, Emit&& emit) {
   // Row (y, z) holds the 16 x-bits of word (y + 16 z) / 4 at bit 16 * (y % 4).
-  BrickMask m = mask;
   const auto row = [&](int y, int z) {
     const int r = y + kBrickSize * z;
     return static_cast<std::uint32_t>((m[static_cast<std::size_t>(r >> 2)] >> ((r & 3) * kBrickSize)) & 0xFFFFu);
@@ -299,31 +293,39 @@ void forEachMaskBox(const BrickMask& mask, Fn&& emit) {
   for (int w = 0; w < kBrickWords; ++w)
     while (m[static_cast<std::size_t>(w)] != 0) {
       const int b = __builtin_ctzll(m[static_cast<std::size_t>(w)]);
-      const int r = w * 4 + (b >> kBrickBits), y = r & (kBrickSize - 1), z = r >> kBrickBits;
+      const int start = w * 64 + b;
+      const int r = start >> kBrickBits, y = r & (kBrickSize - 1), z = r >> kBrickBits;
       const int x0 = b & (kBrickSize - 1);
-      const std::uint32_t bits = row(y, z) >> x0;
-      const int len = __builtin_ctz(~bits);  // bits above the row are zero, so len <= 16 - x0
-      const std::uint32_t run = ((std::uint32_t{1} << len) - 1u) << x0;
+      const int len = __builtin_ctz(~(row(y, z) >> x0));  // bits above the row are zero: len <= 16 - x0
+      int x1 = x0;
+      while (x1 + 1 < x0 + len && joins(start, start + (x1 + 1 - x0))) ++x1;
+      const std::uint32_t run = xRun(x0, x1);
+      const auto rowJoins = [&](int yy, int zz) {
+        if ((row(yy, zz) & run) != run) return false;
+        const int base = localIdx(0, yy, zz);
+        for (int x = x0; x <= x1; ++x)
+          if (!joins(start, base + x)) return false;
+        return true;
+      };
       int y1 = y;
-      while (y1 + 1 < kBrickSize && (row(y1 + 1, z) & run) == run) ++y1;
+      while (y1 + 1 < kBrickSize && rowJoins(y1 + 1, z)) ++y1;
       int z1 = z;
       for (bool grow = true; grow && z1 + 1 < kBrickSize;) {
-        for (int yy = y; yy <= y1 && grow; ++yy) grow = (row(yy, z1 + 1) & run) == run;
+        for (int yy = y; yy <= y1 && grow; ++yy) grow = rowJoins(yy, z1 + 1);
         if (grow) ++z1;
       }
       for (int zz = z; zz <= z1; ++zz)
         for (int yy = y; yy <= y1; ++yy) clear(yy, zz, run);
-      const std::uint8_t lo[3] = {static_cast<std::uint8_t>(x0), static_cast<std::uint8_t>(y), static_cast<std::uint8_t>(z)};
-      const std::uint8_t hi[3] = {static_cast<std::uint8_t>(x0 + len - 1), static_cast<std::uint8_t>(y1),
-                                  static_cast<std::uint8_t>(z1)};
-      emit(lo, hi);
+      const auto u8 = [](int c) { return static_cast<std::uint8_t>(c); };
+      const std::uint8_t lo[3] = {u8(x0), u8(y), u8(z)}, hi[3] = {u8(x1), u8(y1), u8(z1)};
+      emit(lo, hi, start);
     }
 }
 
 // Writes `leaf` into the scratch table over its box and sets the box's bits in `painted`.
 void paintLeaf(const std::uint8_t lo[3], const std::uint8_t hi[3], std::int32_t leaf, std::vector<std::int32_t>& local,
                BrickMask& painted) {
-  const std::uint64_t run = ((std::uint64_t{1} << (hi[0] - lo[0] + 1)) - 1u) << lo[0];
+  const std::uint64_t run = xRun(lo[0], hi[0]);
   for (int z = lo[2]; z <= hi[2]; ++z)
     for (int y = lo[1]; y <= hi[1]; ++y) {
       const int base = localIdx(0, y, z);
@@ -338,8 +340,20 @@ void OccupancyMap::applyBrick(const UpdateBatch::BrickUpdates& upd, std::uint32_
   std::vector<LeafEntry>& leaves = bricks_[slot].leaves;
   std::vector<std::int32_t>& local = ctx.local;
   InsertStats& stats = ctx.stats;
+  const std::size_t updates_occupied = maskPopcount(upd.occupied), updates_free = maskPopcount(upd.free);
+  stats.cells_occupied += updates_occupied;
+  stats.cells_free += updates_free;
+  // Past this many updates one pass over the brick beats splitting and re-merging per cell
+  // (measured on the TUM frames). Only equal-value merging churns so: clamped cuboids absorb
+  // most updates unchanged.
+  constexpr std::size_t kRebuildUpdates = 128;
+  if (params_.merge == MergePolicy::Equal && updates_occupied + updates_free >= kRebuildUpdates && !leaves.empty()) {
+    rebuildBrick(upd, slot, ctx);
+    return;
+  }
   BrickMask known{};
-  for (std::size_t i = 0; i < leaves.size(); ++i) paintLeaf(leaves[i].lo, leaves[i].hi, static_cast<std::int32_t>(i), local, known);
+  for (std::size_t i = 0; i < leaves.size(); ++i)
+    paintLeaf(leaves[i].lo, leaves[i].hi, static_cast<std::int32_t>(i), local, known);
 
   const bool merging = params_.merge != MergePolicy::Off;
   const std::size_t leaves_before = leaves.size();
@@ -350,14 +364,14 @@ void OccupancyMap::applyBrick(const UpdateBatch::BrickUpdates& upd, std::uint32_
   const auto addFresh = [&](const BrickMask& mask, float delta) {
     const float v = model_.first(delta);
     const bool boxes = merging && mergeable(v);
-    const auto add = [&](const std::uint8_t lo[3], const std::uint8_t hi[3]) {
+    const auto add = [&](const std::uint8_t lo[3], const std::uint8_t hi[3], int /*start*/ = 0) {
       leaves.push_back(LeafEntry{{lo[0], lo[1], lo[2]}, {hi[0], hi[1], hi[2]}, v});
       const auto li = static_cast<std::int32_t>(leaves.size() - 1);
       paintLeaf(lo, hi, li, local, known);
       if (boxes) candidates.push_back(static_cast<std::uint32_t>(li));
     };
     if (boxes) {
-      forEachMaskBox(mask, add);
+      coverGreedily(mask, [](int, int) { return true; }, add);
       return;
     }
     for (int w = 0; w < kBrickWords; ++w)
@@ -443,15 +457,11 @@ void OccupancyMap::rebuildBrick(const UpdateBatch::BrickUpdates& upd, std::uint3
   InsertStats& stats = ctx.stats;
   BrickMask known{}, changed{};
   for (const LeafEntry& e : leaves) {
-    for (int z = e.lo[2]; z <= e.hi[2]; ++z)
-      for (int y = e.lo[1]; y <= e.hi[1]; ++y)
-        for (int x = e.lo[0]; x <= e.hi[0]; ++x) value[static_cast<std::size_t>(localIdx(x, y, z))] = e.value;
-  }
-  for (const LeafEntry& e : leaves) {
-    const std::uint64_t run = ((std::uint64_t{1} << (e.hi[0] - e.lo[0] + 1)) - 1u) << e.lo[0];
+    const std::uint64_t run = xRun(e.lo[0], e.hi[0]);
     for (int z = e.lo[2]; z <= e.hi[2]; ++z)
       for (int y = e.lo[1]; y <= e.hi[1]; ++y) {
         const int base = localIdx(0, y, z);
+        for (int x = e.lo[0]; x <= e.hi[0]; ++x) value[static_cast<std::size_t>(base + x)] = e.value;
         known[static_cast<std::size_t>(base >> 6)] |= run << (base & 63);
       }
   }
@@ -479,7 +489,7 @@ void OccupancyMap::rebuildBrick(const UpdateBatch::BrickUpdates& upd, std::uint3
   // Old cuboids that now disagree inside are the splits of this pass.
   for (const LeafEntry& e : leaves) {
     if (e.lo[0] == e.hi[0] && e.lo[1] == e.hi[1] && e.lo[2] == e.hi[2]) continue;
-    const std::uint64_t run = ((std::uint64_t{1} << (e.hi[0] - e.lo[0] + 1)) - 1u) << e.lo[0];
+    const std::uint64_t run = xRun(e.lo[0], e.hi[0]);
     bool hit = false;
     for (int z = e.lo[2]; z <= e.hi[2] && !hit; ++z)
       for (int y = e.lo[1]; y <= e.hi[1] && !hit; ++y) {
@@ -488,47 +498,18 @@ void OccupancyMap::rebuildBrick(const UpdateBatch::BrickUpdates& upd, std::uint3
       }
     stats.leaves_split += hit;
   }
-  // Cover the known cells again: from each uncovered cell in turn, an x-run of equal
-  // values grown along y, then z. Values are compared bit for bit, so the cover is lossless.
+  // Cover the known cells again with boxes of bit-identical (so lossless), mergeable values.
   std::vector<LeafEntry>& out = ctx.rebuilt;
   out.clear();
-  BrickMask rest = known;
-  const auto uncovered = [&](int idx) {
-    return (rest[static_cast<std::size_t>(idx >> 6)] >> (idx & 63)) & 1u;
-  };
-  for (int w = 0; w < kBrickWords; ++w)
-    while (rest[static_cast<std::size_t>(w)] != 0) {
-      const int start = w * 64 + __builtin_ctzll(rest[static_cast<std::size_t>(w)]);
-      const float v = value[static_cast<std::size_t>(start)];
-      const int x0 = start & (kBrickSize - 1), y0 = (start >> kBrickBits) & (kBrickSize - 1),
-                z0 = start >> (2 * kBrickBits);
-      int x1 = x0, y1 = y0, z1 = z0;
-      if (mergeable(v)) {
-        const auto same = [&](int x, int y, int z) {
-          const int i = localIdx(x, y, z);
-          return uncovered(i) && value[static_cast<std::size_t>(i)] == v;
-        };
-        while (x1 + 1 < kBrickSize && same(x1 + 1, y0, z0)) ++x1;
-        const auto rowSame = [&](int y, int z) {
-          for (int x = x0; x <= x1; ++x)
-            if (!same(x, y, z)) return false;
-          return true;
-        };
-        while (y1 + 1 < kBrickSize && rowSame(y1 + 1, z0)) ++y1;
-        for (bool grow = true; grow && z1 + 1 < kBrickSize;) {
-          for (int y = y0; y <= y1 && grow; ++y) grow = rowSame(y, z1 + 1);
-          if (grow) ++z1;
-        }
-      }
-      const std::uint64_t run = ((std::uint64_t{1} << (x1 - x0 + 1)) - 1u) << x0;
-      for (int z = z0; z <= z1; ++z)
-        for (int y = y0; y <= y1; ++y) {
-          const int base = localIdx(0, y, z);
-          rest[static_cast<std::size_t>(base >> 6)] &= ~(run << (base & 63));
-        }
-      const auto u8 = [](int c) { return static_cast<std::uint8_t>(c); };
-      out.push_back(LeafEntry{{u8(x0), u8(y0), u8(z0)}, {u8(x1), u8(y1), u8(z1)}, v});
-    }
+  coverGreedily(
+      known,
+      [&](int start, int cell) {
+        const float v = value[static_cast<std::size_t>(start)];
+        return value[static_cast<std::size_t>(cell)] == v && mergeable(v);
+      },
+      [&](const std::uint8_t lo[3], const std::uint8_t hi[3], int start) {
+        out.push_back(LeafEntry{{lo[0], lo[1], lo[2]}, {hi[0], hi[1], hi[2]}, value[static_cast<std::size_t>(start)]});
+      });
   // Morton order of first cells keeps the leaf nodes cut from the array compact.
   const auto& rank = mortonRank();
   std::sort(out.begin(), out.end(), [&](const LeafEntry& a, const LeafEntry& b) {

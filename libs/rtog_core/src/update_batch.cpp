@@ -7,7 +7,6 @@ namespace rtog {
 
 void UpdateBatch::clear() {
   count_ = 0;
-  occupied_count_ = free_count_ = 0;
   index_.clear();
   sorted_.clear();
   cached_ = nullptr;
@@ -56,11 +55,8 @@ void UpdateBatch::markRayFree(const Eigen::Vector3d& from, const Eigen::Vector3d
 
 void UpdateBatch::finalize() {
   sorted_.clear();
-  occupied_count_ = free_count_ = 0;
   forEachBrick([&](BrickUpdates& b) {
     for (std::size_t w = 0; w < kBrickWords; ++w) b.free[w] &= ~b.occupied[w];
-    occupied_count_ += maskPopcount(b.occupied);
-    free_count_ += maskPopcount(b.free);
     sorted_.push_back(&b);
   });
   std::sort(sorted_.begin(), sorted_.end(), [](const BrickUpdates* a, const BrickUpdates* b) { return a->brick < b->brick; });

@@ -238,9 +238,9 @@ class OccupancyMap {
     InsertStats stats;
   };
   void applyBrick(const UpdateBatch::BrickUpdates& upd, std::uint32_t slot, ApplyContext& ctx);
-  /// applyBrick() for a brick with many updates: values into a dense table, updated there, and
-  /// the brick covered anew with boxes of equal (mergeable) value. Costs O(4096) instead of a
-  /// split and merges per updated cell.
+  /// applyBrick()'s way for a brick with many updates: values into a dense table, updated
+  /// there, and the brick covered anew with boxes of equal (mergeable) value. Costs O(4096)
+  /// instead of a split and merges per updated cell.
   void rebuildBrick(const UpdateBatch::BrickUpdates& upd, std::uint32_t slot, ApplyContext& ctx);
   std::size_t mergeInBrick(std::vector<LeafEntry>& leaves, std::vector<std::int32_t>& local,
                            const std::vector<std::uint32_t>& candidates) const;

@@ -86,9 +86,6 @@ class alignas(64) UpdateBatch {
 
   /// The touched bricks in (z, y, x) order, after finalize().
   const std::vector<const BrickUpdates*>& bricks() const { return sorted_; }
-  /// Cells marked occupied / free (occupied not counted again), after finalize().
-  std::size_t occupiedCount() const { return occupied_count_; }
-  std::size_t freeCount() const { return free_count_; }
   std::size_t memoryBytes() const {
     return chunks_.size() * sizeof(Chunk) + chunks_.capacity() * sizeof(void*) + index_.memoryBytes() +
            sorted_.capacity() * sizeof(void*);
@@ -113,7 +110,6 @@ class alignas(64) UpdateBatch {
   using Chunk = std::array<BrickUpdates, kChunkBricks>;
   std::vector<std::unique_ptr<Chunk>> chunks_;
   std::size_t count_ = 0;
-  std::size_t occupied_count_ = 0, free_count_ = 0;
   detail::FlatHashMap64 index_;
   BrickUpdates* cached_ = nullptr;
   std::vector<const BrickUpdates*> sorted_;
