@@ -3,6 +3,7 @@
 #include <malloc.h>
 
 #include <algorithm>
+#include <numeric>
 #include <chrono>
 #include <cstdio>
 #include <fstream>
@@ -32,15 +33,16 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-// Fast builds are repeated until min_seconds have been measured, so that their medians are
-// not at the mercy of one scheduler hiccup; this bounds the repeats.
+// At least opts.repeats builds; fast ones go on until min_seconds have been timed, so that
+// their medians are not at the mercy of one scheduler hiccup (at most kMaxRepeats builds).
 constexpr int kMaxRepeats = 60;
 
-double sum(const std::vector<double>& v) {
-  double s = 0;
-  for (const double x : v) s += x;
-  return s;
+bool wantsAnotherBuild(const Options& opts, const std::vector<double>& times) {
+  const auto n = static_cast<int>(times.size());
+  return n < opts.repeats ||
+         (n < kMaxRepeats && std::accumulate(times.begin(), times.end(), 0.0) < opts.min_seconds);
 }
+
 
 double seconds(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double>(b - a).count(); }
 
@@ -342,7 +344,7 @@ void run2D(const std::string& rawlog, const Options& opts, std::vector<Result>& 
       r.resolution = res;
       std::vector<double> times;
       std::shared_ptr<mrpt::maps::CMetricMap> map;
-      for (int i = 0; i < opts.repeats || (sum(times) < opts.min_seconds && i < kMaxRepeats); ++i) {
+      while (wantsAnotherBuild(opts, times)) {
         map = make();
         const auto t0 = Clock::now();
         for (const auto& [pose, scan] : scans) map->insertObservation(*scan, pose);
@@ -413,7 +415,7 @@ void runDataset(const Dataset& data, const Options& opts, std::vector<Result>& o
       bool built = false;
       for (std::size_t k = 0; k < methods.size(); ++k) {
         std::vector<double>& t = build_times[k];
-        if (round >= opts.repeats && (sum(t) >= opts.min_seconds || round >= kMaxRepeats)) continue;
+        if (!wantsAnotherBuild(opts, t)) continue;
         malloc_trim(0);
         const double rss0 = residentBytes();
         t.push_back(methods[k]->build(data));

@@ -59,6 +59,18 @@ class Runner:
                                                                 " ".join(args), p.returncode, time.time() - t0))
         return p.returncode, out
 
+    def run_config(self, run_name, cfg_name, app, args=(), preload=True, seed=1, subdirs=()):
+        """Fresh run directory, config copied in, `app cfg args...` run there; fails on a non-zero
+        exit. Returns (run directory, output)."""
+        d = self.run_dir(run_name)
+        cfg = self.config(cfg_name, d)
+        for sub in subdirs:
+            os.makedirs(os.path.join(d, sub))
+        rc, out = self.app([app, cfg] + list(args), d, preload=preload, seed=seed)
+        if rc != 0:
+            fail("%s (%s) exited %d:\n%s" % (app, cfg_name, rc, out[-3000:]))
+        return d, out
+
     def mapcheck(self, path, min_occupied):
         p = subprocess.run([self.a.mapcheck, path, "--min-occupied", str(min_occupied)], stdout=subprocess.PIPE,
                            stderr=subprocess.STDOUT)
@@ -76,11 +88,7 @@ class Runner:
 
 
 def case_icp_slam_extra_map(r):
-    d = r.run_dir("icp_slam_extra_map")
-    cfg = r.config("icp-slam_rtog.ini", d)
-    rc, out = r.app(["icp-slam", cfg, os.path.join(r.a.datasets, SENA)], d)
-    if rc != 0:
-        fail("icp-slam exited %d:\n%s" % (rc, out[-3000:]))
+    d, out = r.run_config("icp_slam_extra_map", "icp-slam_rtog.ini", "icp-slam", [os.path.join(r.a.datasets, SENA)])
     inserted = out.count("Updating map")
     print("scans inserted:", inserted)
     if inserted < 20:
@@ -93,11 +101,8 @@ def case_icp_slam_extra_map(r):
 
 
 def case_icp_slam_gridmatch(r):
-    d = r.run_dir("icp_slam_gridmatch")
-    cfg = r.config("icp-slam_rtog_gridmatch.ini", d)
-    rc, out = r.app(["icp-slam", cfg, os.path.join(r.a.datasets, SENA)], d)
-    if rc != 0:
-        fail("icp-slam exited %d:\n%s" % (rc, out[-3000:]))
+    d, out = r.run_config("icp_slam_gridmatch", "icp-slam_rtog_gridmatch.ini", "icp-slam",
+                          [os.path.join(r.a.datasets, SENA)])
     inserted = out.count("Updating map")
     low = out.count("low quality")
     print("scans inserted: %d, ICP results rejected as low quality: %d" % (inserted, low))
@@ -110,13 +115,11 @@ def case_icp_slam_gridmatch(r):
 
 
 def case_observations2map(r):
-    d = r.run_dir("observations2map")
-    cfg = r.config("observations2map_rtog.ini", d)
-    os.makedirs(os.path.join(d, "out"))
-    rc, out = r.app(["observations2map", cfg, os.path.join(r.a.datasets, "malaga-cs-fac-building.simplemap.gz"),
-                     "out/malaga"], d)
-    if rc != 0 or "exception" in out.lower():
-        fail("observations2map exited %d:\n%s" % (rc, out[-3000:]))
+    d, out = r.run_config("observations2map", "observations2map_rtog.ini", "observations2map",
+                          [os.path.join(r.a.datasets, "malaga-cs-fac-building.simplemap.gz"), "out/malaga"],
+                          subdirs=["out"])
+    if "exception" in out.lower():
+        fail("observations2map reported an exception:\n%s" % out[-3000:])
     m = r.one_file(os.path.join(d, "out", "malaga_rtog__CRTreeOccupancyGridMap_00.rtog"))
     r.mapcheck(m, 1000)
 
@@ -125,11 +128,7 @@ PDF_RE = re.compile(r"PDF estimation: \(([-\d.]+),([-\d.]+),([-\d.]+)deg\)")
 
 
 def pf_track(r, cfg_name, tag, seed, preload):
-    d = r.run_dir("pf_%s_%d" % (tag, seed))
-    cfg = r.config(cfg_name, d)
-    rc, out = r.app(["pf-localization", cfg], d, preload=preload, seed=seed)
-    if rc != 0:
-        fail("pf-localization (%s) exited %d:\n%s" % (cfg_name, rc, out[-3000:]))
+    _, out = r.run_config("pf_%s_%d" % (tag, seed), cfg_name, "pf-localization", preload=preload, seed=seed)
     track = [(float(a), float(b)) for a, b, _ in PDF_RE.findall(out)]
     if len(track) < 20:
         fail("pf-localization (%s) printed only %d estimates" % (cfg_name, len(track)))
@@ -189,11 +188,7 @@ def case_pf_localization_grid2d(r):
 
 
 def case_rbpf_slam(r):
-    d = r.run_dir("rbpf_slam")
-    cfg = r.config("rbpf-slam_rtog.ini", d)
-    rc, out = r.app(["rbpf-slam", cfg, os.path.join(r.a.datasets, SENA)], d)
-    if rc != 0:
-        fail("rbpf-slam exited %d:\n%s" % (rc, out[-3000:]))
+    d, _ = r.run_config("rbpf_slam", "rbpf-slam_rtog.ini", "rbpf-slam", [os.path.join(r.a.datasets, SENA)])
     m = r.one_file(os.path.join(d, "LOG_RBPF_RTOG", "finalMap_rtog__CRTreeOccupancyGridMap_*.rtog"))
     r.mapcheck(m, 1000)
 
@@ -282,11 +277,8 @@ def case_sceneviewer3d(r):
 
 
 def case_rbpf_slam_grid2d(r):
-    d = r.run_dir("rbpf_slam_grid2d")
-    cfg = r.config("rbpf-slam_rtog_grid2d.ini", d)
-    rc, out = r.app(["rbpf-slam", cfg, os.path.join(r.a.datasets, SENA)], d)
-    if rc != 0:
-        fail("rbpf-slam exited %d:\n%s" % (rc, out[-3000:]))
+    d, _ = r.run_config("rbpf_slam_grid2d", "rbpf-slam_rtog_grid2d.ini", "rbpf-slam",
+                          [os.path.join(r.a.datasets, SENA)])
     base = os.path.join(d, "LOG_RBPF_RTOG_GRID2D", "finalMap_rtog__CRTreeBackedGridMap2D_00")
     r.mapcheck(base + ".rtog", 1000)
     if not os.path.exists(base + ".png"):
