@@ -89,17 +89,26 @@ bool CRTreeOccupancyGridMap::extractBeams(const mrpt::obs::CObservation& obs, co
   if (const auto* scan = dynamic_cast<const CObservation2DRangeScan*>(&obs)) {
     const CPose3D sensor = robotPose + scan->sensorPose;
     setOrigin(sensor, out);
-    const std::size_t n = scan->getScanSize();
-    out.points.reserve(n / dec + 1);
-    for (std::size_t i = 0; i < n; i += dec) {
-      const float r = scan->getScanRange(i);
-      if (!scan->getScanRangeValidity(i) || !std::isfinite(r) || !(r > 0.0f)) {
-        ++out.invalid;
-        continue;
-      }
-      const double a = scan->getScanAngle(i);
-      addLocalPoint(sensor, r * std::cos(a), r * std::sin(a), 0.0, out);
-    }
+    // Sensor-frame points once per scan: a particle filter evaluates the same scan at every
+    // particle's pose.
+    std::vector<Eigen::Vector3f> local;
+    localPointsCached(
+        obs, dec,
+        [&](std::vector<Eigen::Vector3f>& pts, std::size_t& invalid) {
+          const std::size_t n = scan->getScanSize();
+          pts.reserve(n / dec + 1);
+          for (std::size_t i = 0; i < n; i += dec) {
+            const float r = scan->getScanRange(i);
+            if (!scan->getScanRangeValidity(i) || !std::isfinite(r) || !(r > 0.0f)) {
+              ++invalid;
+              continue;
+            }
+            const double a = scan->getScanAngle(i);
+            pts.emplace_back(static_cast<float>(r * std::cos(a)), static_cast<float>(r * std::sin(a)), 0.0f);
+          }
+        },
+        local, out.invalid);
+    addLocalPoints(sensor, local, out);
     return true;
   }
   if (const auto* pc = dynamic_cast<const CObservationPointCloud*>(&obs)) {
