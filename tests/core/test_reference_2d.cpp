@@ -1,6 +1,10 @@
 // A real 2D laser sequence (MRPT's SENA rawlog, odometry poses) inserted as a planar slab
-// equals the reference grid cell for cell, with and without merging.
+// equals the reference grid cell for cell, with and without merging, through the planar cache
+// and without it, read between scans or not, mixed with volumetric scans, copied and threaded.
 #include <gtest/gtest.h>
+
+#include <sstream>
+#include <thread>
 
 #include <mrpt/obs/CObservation2DRangeScan.h>
 #include <mrpt/obs/CRawlog.h>
@@ -61,7 +65,9 @@ TEST(Reference2D, SenaLaserSequenceEqualsReferenceGrid) {
       map.insertPointCloud(s.origin, s.points, ip);
       ref.insert(s.origin, s.points, ip);
     }
+    EXPECT_TRUE(map.hasPendingCover()) << "the scans should have taken the planar cache";
     ASSERT_EQ(map.checkInvariants(), "");
+    EXPECT_FALSE(map.hasPendingCover());
     test::expectMatchesReference(map, ref, /*exact=*/true);
     std::cout << "[ 2D ] merge " << toString(policy) << ": " << map.leafCount() << " leaves, " << map.cellCount()
               << " cells\n";
@@ -69,6 +75,186 @@ TEST(Reference2D, SenaLaserSequenceEqualsReferenceGrid) {
       EXPECT_LT(static_cast<std::int64_t>(map.leafCount()), map.cellCount());
     }
   }
+}
+
+std::string serialized(const OccupancyMap& map) {
+  std::ostringstream os;
+  map.write(os);
+  return os.str();
+}
+
+MapParams params2D(MergePolicy policy) {
+  MapParams p;
+  p.resolution = 0.05;
+  p.merge = policy;
+  return p;
+}
+
+// The cache changes when cells become leaves, never which cells or values: the same scans through
+// the general path give the same cells, and every per-scan figure but the leaf counts.
+TEST(Reference2D, PlanarCacheEqualsTheGeneralPath) {
+  const auto scans = loadSenaScans(60);
+  InsertParams cached, general;
+  cached.max_range = general.max_range = 30.0;
+  general.planar_cache = false;
+  for (const MergePolicy policy : {MergePolicy::Off, MergePolicy::Equal}) {
+    OccupancyMap a(params2D(policy)), b(params2D(policy));
+    test::ReferenceGrid ref(params2D(policy));
+    for (const auto& s : scans) {
+      InsertStats sa = a.insertPointCloud(s.origin, s.points, cached);
+      const InsertStats sb = b.insertPointCloud(s.origin, s.points, general);
+      ref.insert(s.origin, s.points, cached);
+      EXPECT_FALSE(b.hasPendingCover());
+      sa.leaves_created = sb.leaves_created;
+      sa.leaves_merged = sb.leaves_merged;
+      sa.leaves_split = sb.leaves_split;
+      ASSERT_EQ(sa, sb);
+    }
+    const InsertStats cover = a.flush();
+    EXPECT_GT(cover.leaves_created, 0u);
+    EXPECT_EQ(a.checkInvariants(), "");
+    EXPECT_EQ(a.cellCount(), b.cellCount());
+    test::expectMatchesReference(a, ref, true);
+    test::expectMatchesReference(b, ref, true);
+  }
+}
+
+// Each read covers the scans so far: queries between scans see every scan.
+TEST(Reference2D, ReadsBetweenScansSeeEveryScan) {
+  const auto scans = loadSenaScans(25);
+  InsertParams ip;
+  ip.max_range = 30.0;
+  OccupancyMap map(params2D(MergePolicy::Clamped));
+  test::ReferenceGrid ref(params2D(MergePolicy::Clamped));
+  for (const auto& s : scans) {
+    map.insertPointCloud(s.origin, s.points, ip);
+    ref.insert(s.origin, s.points, ip);
+    ASSERT_TRUE(map.hasPendingCover());
+    // A point query first: it alone must bring the scan in.
+    const Key end = map.lattice().key(s.points.front().cast<double>());
+    ASSERT_TRUE(map.logOdds(end).has_value());
+    EXPECT_EQ(*map.logOdds(end), ref.cells().at(end));
+    EXPECT_FALSE(map.hasPendingCover());
+    ASSERT_EQ(map.checkInvariants(), "");
+  }
+  test::expectMatchesReference(map, ref, true);
+}
+
+// Volumetric scans leave cuboids spanning several z-layers; planar scans in one of those layers
+// must cut them exactly, and volumetric scans after planar ones must see the cached cells.
+TEST(Reference2D, PlanarAndVolumetricScansMix) {
+  const auto scans = loadSenaScans(30);
+  InsertParams ip;
+  ip.max_range = 30.0;
+  for (const MergePolicy policy : {MergePolicy::Clamped, MergePolicy::Equal}) {
+    OccupancyMap map(params2D(policy));
+    test::ReferenceGrid ref(params2D(policy));
+    for (std::size_t i = 0; i < scans.size(); ++i) {
+      const auto& s = scans[i];
+      if (i % 10 == 0) {
+        // A wall of points at eleven heights around the laser's: free columns merged across z.
+        std::vector<Eigen::Vector3f> wall;
+        for (int h = -5; h <= 5; ++h)
+          for (const auto& q : s.points) wall.emplace_back(q.x(), q.y(), q.z() + 0.05f * float(h));
+        map.insertPointCloud(s.origin, wall, ip);
+        ref.insert(s.origin, wall, ip);
+        EXPECT_FALSE(map.hasPendingCover());
+      } else {
+        // Planar scans, in the laser's layer and one layer up.
+        Eigen::Vector3d origin = s.origin;
+        std::vector<Eigen::Vector3f> points = s.points;
+        if (i % 3 == 0) {
+          origin.z() += 0.05;
+          for (auto& q : points) q.z() += 0.05f;
+        }
+        map.insertPointCloud(origin, points, ip);
+        ref.insert(origin, points, ip);
+      }
+      if (i % 5 == 4) {
+        ASSERT_EQ(map.checkInvariants(), "");
+        test::expectMatchesReference(map, ref, true);
+      }
+    }
+    ASSERT_EQ(map.checkInvariants(), "");
+    test::expectMatchesReference(map, ref, true);
+  }
+}
+
+TEST(Reference2D, CopiesMovesAndFilesOfAPendingMapHoldEveryScan) {
+  const auto scans = loadSenaScans(20);
+  InsertParams ip;
+  ip.max_range = 30.0;
+  OccupancyMap map(params2D(MergePolicy::Equal));
+  test::ReferenceGrid ref(params2D(MergePolicy::Equal));
+  const auto insertAll = [&](OccupancyMap& m) {
+    for (const auto& s : scans) m.insertPointCloud(s.origin, s.points, ip);
+  };
+  insertAll(map);
+  for (const auto& s : scans) ref.insert(s.origin, s.points, ip);
+
+  ASSERT_TRUE(map.hasPendingCover());
+  const OccupancyMap copy(map);  // a const copy must never need covering later
+  EXPECT_FALSE(copy.hasPendingCover());
+  test::expectMatchesReference(copy, ref, true);
+
+  OccupancyMap pending(params2D(MergePolicy::Equal));
+  insertAll(pending);
+  ASSERT_TRUE(pending.hasPendingCover());
+  OccupancyMap moved(std::move(pending));
+  EXPECT_FALSE(moved.hasPendingCover());
+  test::expectMatchesReference(moved, ref, true);
+
+  OccupancyMap assigned(params2D(MergePolicy::Off));
+  insertAll(assigned);
+  assigned = copy;
+  EXPECT_EQ(serialized(assigned), serialized(copy));
+
+  OccupancyMap written(params2D(MergePolicy::Equal));
+  insertAll(written);
+  ASSERT_TRUE(written.hasPendingCover());
+  std::istringstream is(serialized(written));
+  const OccupancyMap read = OccupancyMap::read(is);
+  test::expectMatchesReference(read, ref, true);
+  EXPECT_EQ(serialized(read), serialized(copy));
+}
+
+TEST(Reference2D, ConcurrentReadersOfAPendingMapAgree) {
+  const auto scans = loadSenaScans(20);
+  InsertParams ip;
+  ip.max_range = 30.0;
+  OccupancyMap map(params2D(MergePolicy::Equal));
+  for (const auto& s : scans) map.insertPointCloud(s.origin, s.points, ip);
+  const std::int64_t expected_cells = OccupancyMap(map).cellCount();
+  for (const auto& s : scans) map.insertPointCloud(s.origin, s.points, ip);  // pending again
+  ASSERT_TRUE(map.hasPendingCover());
+  std::int64_t cells[2] = {0, 0};
+  std::thread other([&] { cells[1] = map.cellCount(); });
+  cells[0] = map.cellCount();
+  other.join();
+  EXPECT_EQ(cells[0], expected_cells);  // the same scans again: no new cells
+  EXPECT_EQ(cells[1], expected_cells);
+  EXPECT_EQ(map.checkInvariants(), "");
+}
+
+// A planar scan long enough to be traced by two threads gives the same map, byte for byte.
+TEST(Reference2D, ThreadCountDoesNotChangeAPlanarMap) {
+  const auto scans = loadSenaScans(40);
+  PlanarScan joined{scans.front().origin, {}};
+  for (const auto& s : scans)
+    for (const auto& q : s.points) joined.points.emplace_back(q.x(), q.y(), float(joined.origin.z()));
+  ASSERT_GT(joined.points.size(), 3u * 4096u);
+  std::string bytes[2];
+  for (const int threads : {1, 2}) {
+    InsertParams ip;
+    ip.max_range = 30.0;
+    ip.threads = threads;
+    OccupancyMap map(params2D(MergePolicy::Equal));
+    map.insertPointCloud(joined.origin, joined.points, ip);
+    EXPECT_TRUE(map.hasPendingCover());
+    map.insertPointCloud(scans.back().origin, scans.back().points, ip);
+    bytes[threads - 1] = serialized(map);
+  }
+  EXPECT_EQ(bytes[0], bytes[1]);
 }
 
 }  // namespace

@@ -70,11 +70,53 @@ OccupancyMap::OccupancyMap(const MapParams& params)
       upper_(params.rtree),
       local_(kBrickCells, -1) {}
 
+OccupancyMap::OccupancyMap(const OccupancyMap& other)
+    : params_(other.params_), lattice_(other.lattice_), model_(other.model_), upper_(other.params_.rtree) {
+  *this = other;
+}
+
+OccupancyMap::OccupancyMap(OccupancyMap&& other)
+    : params_(other.params_), lattice_(other.lattice_), model_(other.model_), upper_(other.params_.rtree) {
+  *this = std::move(other);
+}
+
+OccupancyMap& OccupancyMap::operator=(const OccupancyMap& other) {
+  if (this == &other) return *this;
+  other.ensureCovered();
+  clear();
+  params_ = other.params_;
+  lattice_ = other.lattice_;
+  model_ = other.model_;
+  upper_ = other.upper_;
+  brick_index_ = other.brick_index_;
+  bricks_ = other.bricks_;
+  leaf_count_ = other.leaf_count_;
+  return *this;
+}
+
+OccupancyMap& OccupancyMap::operator=(OccupancyMap&& other) {
+  if (this == &other) return *this;
+  other.flush();
+  clear();
+  params_ = other.params_;
+  lattice_ = other.lattice_;
+  model_ = other.model_;
+  upper_ = std::move(other.upper_);
+  brick_index_ = std::move(other.brick_index_);
+  bricks_ = std::move(other.bricks_);
+  leaf_count_ = other.leaf_count_;
+  other.clear();
+  return *this;
+}
+
 void OccupancyMap::clear() {
   upper_.clear();
   brick_index_.clear();
   bricks_.clear();
   leaf_count_ = 0;
+  planar_layers_.clear();
+  planar_index_.clear();
+  cover_pending_.store(false, std::memory_order_release);
 }
 
 std::uint32_t OccupancyMap::brickSlot(const Key& brick) {
@@ -124,6 +166,7 @@ bool OccupancyMap::mergeable(float v) const {
 }
 
 std::optional<float> OccupancyMap::logOdds(const Key& k) const {
+  ensureCovered();
   const LeafEntry* e = findLeaf(k);
   if (!e) return std::nullopt;
   return e->value;
@@ -145,6 +188,7 @@ CellState OccupancyMap::stateAt(const Eigen::Vector3d& p) const {
 }
 
 BoxSummary OccupancyMap::summarize(const Box& b) const {
+  ensureCovered();
   BoxSummary s;
   std::int64_t known = 0;
   forEachLeafIn(b, [&](const Box& lb, float v) {
@@ -158,6 +202,7 @@ BoxSummary OccupancyMap::summarize(const Box& b) const {
 
 OccupancyMap::RayHit OccupancyMap::castRay(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction,
                                            double max_range) const {
+  ensureCovered();
   RayHit r;
   const double n = direction.norm();
   if (!(n > 0.0) || !std::isfinite(n) || !origin.allFinite() || !(max_range > 0.0)) return r;
@@ -189,6 +234,7 @@ OccupancyMap::RayHit OccupancyMap::castRay(const Eigen::Vector3d& origin, const 
 }
 
 OccupancyMap::NearestHit OccupancyMap::nearestOccupied(const Eigen::Vector3d& p, double max_distance) const {
+  ensureCovered();
   NearestHit r;
   if (!p.allFinite()) return r;
   const Eigen::Vector3d pl = lattice_.toLattice(p);
@@ -214,6 +260,7 @@ OccupancyMap::NearestHit OccupancyMap::nearestOccupied(const Eigen::Vector3d& p,
 }
 
 std::int64_t OccupancyMap::cellCount() const {
+  ensureCovered();
   std::int64_t n = 0;
   forEachLeaf([&](const Box& b, float) { n += b.volume(); });
   return n;
@@ -223,10 +270,11 @@ std::size_t OccupancyMap::memoryBytes() const {
   std::size_t bytes = sizeof(*this) + upper_.memoryBytes() + brick_index_.memoryBytes() +
                       bricks_.capacity() * sizeof(Brick) + local_.capacity() * sizeof(std::int32_t);
   for (const Brick& b : bricks_) bytes += b.leaves.capacity() * sizeof(LeafEntry) + b.nodes.capacity() * sizeof(Handle);
-  return bytes;
+  return bytes + planar_layers_.capacity() * sizeof(PlanarLayer) + planar_index_.memoryBytes();
 }
 
 MapStatistics OccupancyMap::statistics() const {
+  ensureCovered();
   MapStatistics s;
   forEachLeaf([&](const Box& b, float v) {
     const bool occ = model_.classify(v) == CellState::Occupied;
@@ -244,6 +292,7 @@ MapStatistics OccupancyMap::statistics() const {
 }
 
 std::string OccupancyMap::checkInvariants() const {
+  ensureCovered();
   // Leaf-node boxes may overlap (inner boxes of an R-tree); leaves may not, checked below.
   std::string err = upper_.checkInvariants(false);
   if (!err.empty()) return "R-tree: " + err;

@@ -10,12 +10,62 @@
 
 namespace rtog {
 
+namespace {
+
+enum class BeamEnd { Hit, Truncated, NonFinite, ZeroLength, OutOfRange };
+
+// Where a beam from `origin` to `p` ends (cut at max_range) and its end cell.
+inline BeamEnd endOfBeam(const Lattice& lattice, const Eigen::Vector3d& origin, const Eigen::Vector3d& p,
+                         bool returned, double max_range, Eigen::Vector3d& end, Key& end_key) {
+  if (!p.allFinite()) return BeamEnd::NonFinite;
+  const Eigen::Vector3d diff = p - origin;
+  const double dist2 = diff.squaredNorm();
+  if (!(dist2 > 0.0)) return BeamEnd::ZeroLength;
+  end = p;
+  if (max_range > 0.0 && std::isfinite(max_range)) {
+    const double dist = std::sqrt(dist2);
+    if (dist > max_range) {
+      end = origin + diff * (max_range / dist);
+      returned = false;
+    }
+  }
+  if (!lattice.tryKey(end, end_key)) return BeamEnd::OutOfRange;
+  return returned ? BeamEnd::Hit : BeamEnd::Truncated;
+}
+
+}  // namespace
+
+bool OccupancyMap::planarExtent(const Eigen::Vector3d& origin, const Eigen::Vector3f* points, std::size_t count,
+                                const InsertParams& ip, Key& lo, Key& hi) const {
+  Key origin_key;
+  if (!lattice_.tryKey(origin, origin_key)) return false;
+  lo = hi = origin_key;
+  Eigen::Vector3d end;
+  Key end_key;
+  for (std::size_t i = 0; i < count; ++i) {
+    const BeamEnd e = endOfBeam(lattice_, origin, points[i].cast<double>(), true, ip.max_range, end, end_key);
+    if (e != BeamEnd::Hit && e != BeamEnd::Truncated) continue;
+    if (end_key.z != origin_key.z) return false;
+    lo = Key{std::min(lo.x, end_key.x), std::min(lo.y, end_key.y), lo.z};
+    hi = Key{std::max(hi.x, end_key.x), std::max(hi.y, end_key.y), hi.z};
+  }
+  return true;
+}
+
 InsertStats OccupancyMap::insertPointCloud(const Eigen::Vector3d& origin, const Eigen::Vector3f* points,
                                            std::size_t count, const InsertParams& ip, const std::uint8_t* is_hit) {
   if (ip.threads < 1) throw std::invalid_argument("InsertParams: threads must be >= 1");
+  // A planar batch of more than this many bricks (16 MiB: a 1 km wide scan at 5 cm) takes
+  // the general path instead.
+  constexpr std::size_t kMaxPlanarTiles = std::size_t{1} << 18;
+  Key lo, hi;
+  const bool planar = ip.planar_cache && planarExtent(origin, points, count, ip, lo, hi) &&
+                      PlanarBatch::tilesFor(lo, hi) <= kMaxPlanarTiles;
+  if (!planar && hasPendingCover()) flush();
   // Below a few thousand beams a thread costs more than it saves.
   const std::size_t threads = std::min<std::size_t>(static_cast<std::size_t>(ip.threads), 1 + count / 4096);
   if (batches_.size() < threads) batches_.resize(threads);
+  if (planar && planar_batches_.size() < threads) planar_batches_.resize(threads);
   std::vector<InsertStats> part(threads);
   std::vector<std::exception_ptr> errors(threads);
   // Chunks dealt round-robin (neighbouring beams have similar lengths, so this balances the
@@ -26,13 +76,22 @@ InsertStats OccupancyMap::insertPointCloud(const Eigen::Vector3d& origin, const 
                                           : std::size_t{2048};
   const auto trace = [&](std::size_t t) {
     try {
-      batches_[t].clear();
       InsertStats own;  // counted locally: neighbouring entries of `part` share a cache line
+      if (planar) {
+        planar_batches_[t].reset(lo, hi);
+      } else {
+        batches_[t].clear();
+      }
       for (std::size_t first = t * chunk; first < count; first += threads * chunk) {
         const std::size_t n = std::min(chunk, count - first);
-        computeUpdate(origin, points + first, n, ip, is_hit ? is_hit + first : nullptr, batches_[t], own);
+        const std::uint8_t* hits = is_hit ? is_hit + first : nullptr;
+        if (planar) {
+          traceBeams(origin, points + first, n, ip, hits, planar_batches_[t], own);
+        } else {
+          traceBeams(origin, points + first, n, ip, hits, batches_[t], own);
+        }
       }
-      batches_[t].finalize();
+      if (!planar) batches_[t].finalize();
       part[t] = own;
     } catch (...) {
       errors[t] = std::current_exception();
@@ -46,45 +105,41 @@ InsertStats OccupancyMap::insertPointCloud(const Eigen::Vector3d& origin, const 
     if (e) std::rethrow_exception(e);
   InsertStats stats;
   for (std::size_t t = 0; t < threads; ++t) stats += part[t];
-  std::vector<const UpdateBatch*> batches;
-  for (std::size_t t = 0; t < threads; ++t) batches.push_back(&batches_[t]);
-  applyUpdate(batches, stats, static_cast<int>(threads));
+  if (planar) {
+    applyPlanar(threads, lo.z, stats);
+  } else {
+    std::vector<const UpdateBatch*> batches;
+    for (std::size_t t = 0; t < threads; ++t) batches.push_back(&batches_[t]);
+    applyUpdate(batches, stats, static_cast<int>(threads));
+  }
   return stats;
 }
 
 void OccupancyMap::computeUpdate(const Eigen::Vector3d& origin, const Eigen::Vector3f* points, std::size_t count,
                                  const InsertParams& ip, const std::uint8_t* is_hit, UpdateBatch& batch,
                                  InsertStats& stats) const {
+  traceBeams(origin, points, count, ip, is_hit, batch, stats);
+}
+
+template <class Batch>
+void OccupancyMap::traceBeams(const Eigen::Vector3d& origin, const Eigen::Vector3f* points, std::size_t count,
+                              const InsertParams& ip, const std::uint8_t* is_hit, Batch& batch,
+                              InsertStats& stats) const {
   const Key origin_key = lattice_.key(origin);  // throws for a bad origin
   const Eigen::Vector3d origin_l = lattice_.toLattice(origin);
-  const bool limited = ip.max_range > 0.0 && std::isfinite(ip.max_range);
   const bool trace = ip.model == SensorModel::BeamBased;
+  Eigen::Vector3d end;
+  Key end_key;
   for (std::size_t i = 0; i < count; ++i) {
-    const Eigen::Vector3d p = points[i].cast<double>();
-    if (!p.allFinite()) {
-      ++stats.skipped_non_finite;
-      continue;
+    const BeamEnd kind =
+        endOfBeam(lattice_, origin, points[i].cast<double>(), is_hit == nullptr || is_hit[i] != 0, ip.max_range, end, end_key);
+    switch (kind) {
+      case BeamEnd::NonFinite: ++stats.skipped_non_finite; continue;
+      case BeamEnd::ZeroLength: ++stats.skipped_zero_length; continue;
+      case BeamEnd::OutOfRange: ++stats.skipped_out_of_range; continue;
+      default: break;
     }
-    const Eigen::Vector3d diff = p - origin;
-    const double dist2 = diff.squaredNorm();
-    if (!(dist2 > 0.0)) {
-      ++stats.skipped_zero_length;
-      continue;
-    }
-    bool hit = is_hit == nullptr || is_hit[i] != 0;
-    Eigen::Vector3d end = p;
-    if (limited) {
-      const double dist = std::sqrt(dist2);
-      if (dist > ip.max_range) {
-        end = origin + diff * (ip.max_range / dist);
-        hit = false;
-      }
-    }
-    Key end_key;
-    if (!lattice_.tryKey(end, end_key)) {
-      ++stats.skipped_out_of_range;
-      continue;
-    }
+    const bool hit = kind == BeamEnd::Hit;
     ++(hit ? stats.rays_hit : stats.rays_truncated);
     Eigen::Vector3d end_l;
     if (ip.discretize) {
@@ -103,29 +158,48 @@ void OccupancyMap::applyUpdate(const UpdateBatch& batch, InsertStats& stats, int
   applyUpdate(std::vector<const UpdateBatch*>{&batch}, stats, threads);
 }
 
+void OccupancyMap::groupByBrick(const std::vector<const UpdateBatch*>& batches,
+                                std::vector<const UpdateBatch::BrickUpdates*>& sources,
+                                std::vector<std::uint32_t>& first) {
+  // A merge of the batches' sorted brick lists.
+  sources.clear();
+  first.clear();
+  std::vector<std::size_t> pos(batches.size(), 0);
+  for (;;) {
+    const UpdateBatch::BrickUpdates* next = nullptr;
+    for (std::size_t b = 0; b < batches.size(); ++b)
+      if (pos[b] < batches[b]->bricks().size()) {
+        const auto* u = batches[b]->bricks()[pos[b]];
+        if (next == nullptr || u->brick < next->brick) next = u;
+      }
+    if (next == nullptr) break;
+    first.push_back(static_cast<std::uint32_t>(sources.size()));
+    for (std::size_t b = 0; b < batches.size(); ++b)
+      if (pos[b] < batches[b]->bricks().size() && batches[b]->bricks()[pos[b]]->brick == next->brick)
+        sources.push_back(batches[b]->bricks()[pos[b]++]);
+  }
+  first.push_back(static_cast<std::uint32_t>(sources.size()));
+}
+
+const UpdateBatch::BrickUpdates* OccupancyMap::unionOf(const UpdateBatch::BrickUpdates* const* sources, std::size_t n,
+                                                       UpdateBatch::BrickUpdates& scratch) {
+  if (n == 1) return sources[0];
+  scratch = *sources[0];
+  for (std::size_t s = 1; s < n; ++s)
+    for (std::size_t w = 0; w < static_cast<std::size_t>(kBrickWords); ++w) {
+      scratch.occupied[w] |= sources[s]->occupied[w];
+      scratch.free[w] |= sources[s]->free[w];
+    }
+  for (std::size_t w = 0; w < static_cast<std::size_t>(kBrickWords); ++w) scratch.free[w] &= ~scratch.occupied[w];
+  return &scratch;
+}
+
 void OccupancyMap::applyUpdate(const std::vector<const UpdateBatch*>& batches, InsertStats& stats, int threads) {
   if (threads < 1) throw std::invalid_argument("applyUpdate: threads must be >= 1");
-  // Union of the batches by brick: a merge of their sorted brick lists. Group g's updates are
-  // sources[first[g] .. first[g + 1]).
+  if (hasPendingCover()) flush();
   std::vector<const UpdateBatch::BrickUpdates*> sources;
   std::vector<std::uint32_t> first;
-  {
-    std::vector<std::size_t> pos(batches.size(), 0);
-    for (;;) {
-      const UpdateBatch::BrickUpdates* next = nullptr;
-      for (std::size_t b = 0; b < batches.size(); ++b)
-        if (pos[b] < batches[b]->bricks().size()) {
-          const auto* u = batches[b]->bricks()[pos[b]];
-          if (next == nullptr || u->brick < next->brick) next = u;
-        }
-      if (next == nullptr) break;
-      first.push_back(static_cast<std::uint32_t>(sources.size()));
-      for (std::size_t b = 0; b < batches.size(); ++b)
-        if (pos[b] < batches[b]->bricks().size() && batches[b]->bricks()[pos[b]]->brick == next->brick)
-          sources.push_back(batches[b]->bricks()[pos[b]++]);
-    }
-    first.push_back(static_cast<std::uint32_t>(sources.size()));
-  }
+  groupByBrick(batches, sources, first);
   const std::size_t groups = first.size() - 1;
   std::vector<std::uint32_t> slots(groups);
   for (std::size_t g = 0; g < groups; ++g) slots[g] = brickSlot(sources[first[g]]->brick);
@@ -148,19 +222,7 @@ void OccupancyMap::applyUpdate(const std::vector<const UpdateBatch*>& batches, I
         if (g >= groups) break;
         e = std::min(groups, g + kGrain);
       }
-      const UpdateBatch::BrickUpdates* upd = sources[first[g]];
-      if (first[g + 1] - first[g] > 1) {
-        UpdateBatch::BrickUpdates& m = ctx.merged;
-        m = *upd;
-        for (std::uint32_t s = first[g] + 1; s < first[g + 1]; ++s)
-          for (std::size_t w = 0; w < static_cast<std::size_t>(kBrickWords); ++w) {
-            m.occupied[w] |= sources[s]->occupied[w];
-            m.free[w] |= sources[s]->free[w];
-          }
-        for (std::size_t w = 0; w < static_cast<std::size_t>(kBrickWords); ++w) m.free[w] &= ~m.occupied[w];
-        upd = &m;
-      }
-      applyBrick(*upd, slots[g], ctx);
+      applyBrick(*unionOf(&sources[first[g]], first[g + 1] - first[g], ctx.merged), slots[g], ctx);
     }
   };
   std::vector<std::thread> workers;
@@ -174,6 +236,10 @@ void OccupancyMap::applyUpdate(const std::vector<const UpdateBatch*>& batches, I
     reshaped_bricks_.insert(reshaped_bricks_.end(), apply_ctx_[t].reshaped.begin(), apply_ctx_[t].reshaped.end());
   }
   std::sort(reshaped_bricks_.begin(), reshaped_bricks_.end());
+  refreshUpperTree();
+}
+
+void OccupancyMap::refreshUpperTree() {
   // Leaf nodes whose boxes changed go into the upper tree one by one, unless they are many
   // compared with the tree (a first scan, a new area): then one bulk load is cheaper.
   std::size_t touched_nodes = 0;
@@ -600,6 +666,164 @@ void OccupancyMap::syncLeafNodes(std::uint32_t slot) {
     upper_.remove(br.nodes.back());
     br.nodes.pop_back();
   }
+}
+
+// ---- planar cache ------------------------------------------------------------------------
+
+OccupancyMap::PlanarLayer& OccupancyMap::planarLayer(std::uint32_t slot, int z) {
+  const auto next = static_cast<std::uint32_t>(planar_layers_.size());
+  const std::uint32_t index = planar_index_.findOrInsert(std::uint64_t{slot} * kBrickSize + static_cast<std::uint64_t>(z), next);
+  if (index != next) return planar_layers_[index];
+  planar_layers_.emplace_back();
+  PlanarLayer& layer = planar_layers_.back();
+  layer.slot = slot;
+  layer.z = z;
+  layer.known.fill(0);
+  layer.value.fill(model_.prior());
+  // The layer's cells as the leaves crossing it hold them.
+  for (const LeafEntry& e : bricks_[slot].leaves) {
+    if (z < e.lo[2] || z > e.hi[2]) continue;
+    const std::uint64_t run = xRun(e.lo[0], e.hi[0]);
+    for (int y = e.lo[1]; y <= e.hi[1]; ++y) {
+      const int base = y * kBrickSize;
+      for (int x = e.lo[0]; x <= e.hi[0]; ++x) layer.value[static_cast<std::size_t>(base + x)] = e.value;
+      layer.known[static_cast<std::size_t>(base >> 6)] |= run << (base & 63);
+    }
+  }
+  return layer;
+}
+
+void OccupancyMap::applyPlanar(std::size_t batches, int z, InsertStats& stats) {
+  const PlanarBatch& b0 = planar_batches_[0];
+  const float hit = model_.hitDelta(), miss = model_.missDelta();
+  const int local_z = z & (kBrickSize - 1);
+  for (std::size_t t = 0; t < b0.tiles().size(); ++t) {
+    // The union over the threads' batches, occupied winning.
+    PlanarBatch::Tile tile = b0.tiles()[t];
+    for (std::size_t k = 1; k < batches; ++k)
+      for (int w = 0; w < kLayerWords; ++w) {
+        tile.occupied[static_cast<std::size_t>(w)] |= planar_batches_[k].tiles()[t].occupied[static_cast<std::size_t>(w)];
+        tile.free[static_cast<std::size_t>(w)] |= planar_batches_[k].tiles()[t].free[static_cast<std::size_t>(w)];
+      }
+    std::uint64_t any = 0;
+    for (int w = 0; w < kLayerWords; ++w) any |= tile.occupied[static_cast<std::size_t>(w)] | tile.free[static_cast<std::size_t>(w)];
+    if (any == 0) continue;
+    const auto width = static_cast<std::size_t>(b0.width());
+    const Key brick{b0.brickX0() + static_cast<int>(t % width), b0.brickY0() + static_cast<int>(t / width),
+                    z >> kBrickBits};
+    PlanarLayer& layer = planarLayer(brickSlot(brick), local_z);
+    // Unknown cells hold the prior, so a first update is an update like any other: no branch
+    // on the cell's state in this loop, which runs once per updated cell.
+    std::size_t occupied_cells = 0, updated_cells = 0, unchanged = 0;
+    for (int w = 0; w < kLayerWords; ++w) {
+      const auto wi = static_cast<std::size_t>(w);
+      const std::uint64_t occupied = tile.occupied[wi], known = layer.known[wi];
+      float* values = layer.value.data() + w * 64;
+      for (std::uint64_t bits = occupied | tile.free[wi]; bits; bits &= bits - 1) {
+        const int b = __builtin_ctzll(bits);
+        const float v = values[b];
+        const float nv = model_.update(v, (occupied >> b) & 1u ? hit : miss);
+        unchanged += (nv == v) & ((known >> b) & 1u);
+        values[b] = nv;
+        ++updated_cells;
+      }
+      for (std::uint64_t bits = occupied; bits; bits &= bits - 1) ++occupied_cells;
+      layer.known[wi] = known | occupied | tile.free[wi];
+    }
+    stats.cells_occupied += occupied_cells;
+    stats.cells_free += updated_cells - occupied_cells;
+    stats.cells_unchanged += unchanged;
+  }
+  if (!planar_layers_.empty()) cover_pending_.store(true, std::memory_order_release);
+}
+
+InsertStats OccupancyMap::coverPlanarLayers() {
+  InsertStats stats;
+  if (planar_layers_.empty()) return stats;
+  // A brick's layers together, bricks in slot order (deterministic whatever the scans' order).
+  std::vector<std::uint32_t> order(planar_layers_.size());
+  for (std::uint32_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) {
+    const PlanarLayer &la = planar_layers_[a], &lb = planar_layers_[b];
+    return la.slot != lb.slot ? la.slot < lb.slot : la.z < lb.z;
+  });
+  if (apply_ctx_.empty()) apply_ctx_.resize(1);
+  std::vector<LeafEntry>& out = apply_ctx_[0].rebuilt;
+  const auto& rank = mortonRank();
+  reshaped_bricks_.clear();
+  for (std::size_t i = 0; i < order.size();) {
+    const std::uint32_t slot = planar_layers_[order[i]].slot;
+    const PlanarLayer* layer_at[kBrickSize] = {};
+    BrickMask known{};
+    for (; i < order.size() && planar_layers_[order[i]].slot == slot; ++i) {
+      const PlanarLayer& layer = planar_layers_[order[i]];
+      layer_at[layer.z] = &layer;
+      std::copy(layer.known.begin(), layer.known.end(), known.begin() + layer.z * kLayerWords);
+    }
+    // Leaves outside the cached layers stay; those crossing them keep their parts outside.
+    std::vector<LeafEntry>& leaves = bricks_[slot].leaves;
+    out.clear();
+    for (const LeafEntry& e : leaves) {
+      bool crosses = false;
+      for (int z = e.lo[2]; z <= e.hi[2] && !crosses; ++z) crosses = layer_at[z] != nullptr;
+      if (!crosses) {
+        out.push_back(e);
+        continue;
+      }
+      for (int z = e.lo[2]; z <= e.hi[2]; ++z) {
+        if (layer_at[z]) continue;
+        int z1 = z;
+        while (z1 + 1 <= e.hi[2] && !layer_at[z1 + 1]) ++z1;
+        LeafEntry piece = e;
+        piece.lo[2] = static_cast<std::uint8_t>(z);
+        piece.hi[2] = static_cast<std::uint8_t>(z1);
+        out.push_back(piece);
+        ++stats.leaves_created;
+        z = z1;
+      }
+      ++stats.leaves_merged;
+    }
+    const auto valueAt = [&](int cell) { return layer_at[cell / kLayerCells]->value[static_cast<std::size_t>(cell % kLayerCells)]; };
+    const std::size_t kept = out.size();
+    coverGreedily(
+        known,
+        [&](int start, int cell) {
+          const float v = valueAt(start);
+          return valueAt(cell) == v && mergeable(v);
+        },
+        [&](const std::uint8_t lo[3], const std::uint8_t hi[3], int start) {
+          out.push_back(LeafEntry{{lo[0], lo[1], lo[2]}, {hi[0], hi[1], hi[2]}, valueAt(start)});
+        });
+    stats.leaves_created += out.size() - kept;
+    std::sort(out.begin(), out.end(), [&](const LeafEntry& a, const LeafEntry& b) {
+      return rank[static_cast<std::size_t>(localIdx(a.lo[0], a.lo[1], a.lo[2]))] <
+             rank[static_cast<std::size_t>(localIdx(b.lo[0], b.lo[1], b.lo[2]))];
+    });
+    leaf_count_ = leaf_count_ + out.size() - leaves.size();
+    leaves.assign(out.begin(), out.end());
+    reshaped_bricks_.push_back(slot);
+  }
+  refreshUpperTree();
+  planar_index_.clear();
+  planar_layers_.clear();
+  // Keep a sensor's worth of layers for the next scans, not a whole log's.
+  constexpr std::size_t kKeptLayers = 4096;
+  if (planar_layers_.capacity() > kKeptLayers) planar_layers_.shrink_to_fit();
+  return stats;
+}
+
+void OccupancyMap::coverLocked() {
+  std::lock_guard<std::mutex> lock(cover_mutex_);
+  if (!cover_pending_.load(std::memory_order_relaxed)) return;
+  coverPlanarLayers();
+  cover_pending_.store(false, std::memory_order_release);
+}
+
+InsertStats OccupancyMap::flush() {
+  std::lock_guard<std::mutex> lock(cover_mutex_);
+  const InsertStats stats = coverPlanarLayers();
+  cover_pending_.store(false, std::memory_order_release);
+  return stats;
 }
 
 }  // namespace rtog

@@ -63,6 +63,7 @@ class Reader {
 }  // namespace
 
 void OccupancyMap::write(std::ostream& os) const {
+  ensureCovered();
   os.write(kMagic, sizeof(kMagic));
   Writer w(os);
   w.put(kFormatVersion);

@@ -62,4 +62,37 @@ void UpdateBatch::finalize() {
   std::sort(sorted_.begin(), sorted_.end(), [](const BrickUpdates* a, const BrickUpdates* b) { return a->brick < b->brick; });
 }
 
+void PlanarBatch::reset(const Key& lo, const Key& hi) {
+  bx0_ = lo.x >> kBrickBits;
+  by0_ = lo.y >> kBrickBits;
+  width_ = (hi.x >> kBrickBits) - bx0_ + 1;
+  tiles_.assign(tilesFor(lo, hi), Tile{});
+}
+
+void PlanarBatch::markRayFree(const Eigen::Vector3d& from, const Eigen::Vector3d& to, const Key& from_key,
+                              const Key& to_key) {
+  // As UpdateBatch's cursor: only a carry out of the brick moves to another tile.
+  struct TileCursor {
+    PlanarBatch& batch;
+    Key cell;
+    int local[3];
+    std::uint64_t* words;
+    void visit() {
+      const int i = local[0] | (local[1] << kBrickBits);
+      words[i >> 6] |= std::uint64_t{1} << (i & 63);
+    }
+    void move(int axis, int s) {
+      cell[axis] += s;
+      local[axis] += s;  // the walk of a planar beam never steps z
+      if (local[axis] & ~(kBrickSize - 1)) {
+        local[axis] &= kBrickSize - 1;
+        words = batch.tileOf(cell.x, cell.y).free.data();
+      }
+    }
+  };
+  constexpr int m = kBrickSize - 1;
+  TileCursor cursor{*this, from_key, {from_key.x & m, from_key.y & m, 0}, tileOf(from_key.x, from_key.y).free.data()};
+  walkRay(from, to, from_key, to_key, cursor);
+}
+
 }  // namespace rtog

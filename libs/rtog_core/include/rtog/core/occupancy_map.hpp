@@ -3,8 +3,11 @@
 // where a sensor observed; unknown space has no leaf.
 #pragma once
 
+#include <array>
+#include <atomic>
 #include <cstdint>
 #include <iosfwd>
+#include <mutex>
 #include <optional>
 #include <string>
 #include <vector>
@@ -57,6 +60,10 @@ struct InsertParams {
   bool discretize = false;
   /// Threads tracing beams; the map is bit-identical for any count. (Default: 1)
   int threads = 1;
+  /// Scans whose origin and end cells all lie in one z-layer (2D range scans) update the log-odds
+  /// of their bricks' layers in place and are covered with leaves when the map is next read,
+  /// instead of reshaping leaves at every scan. The cells are the same either way. (Default: true)
+  bool planar_cache = true;
 };
 
 /// What one insertion did; every input beam is counted in exactly one of the first five.
@@ -70,7 +77,8 @@ struct InsertStats {
   std::size_t cells_free = 0;            ///< distinct cells updated as free
   std::size_t cells_unchanged = 0;       ///< updates absorbed by clamping
   // The leaf count changes by leaves_created - leaves_merged. A brick rebuilt in one pass (many
-  // updates) counts its new leaves as created and its old ones as merged away.
+  // updates, or the planar cache covered again) counts its new leaves as created and its old ones
+  // as merged away. Scans held in the planar cache report their leaves in flush().
   std::size_t leaves_created = 0;
   std::size_t leaves_merged = 0;         ///< merges performed (each removes one leaf)
   std::size_t leaves_split = 0;          ///< merged cuboids split by disagreeing evidence
@@ -101,6 +109,12 @@ struct BoxSummary {
 class OccupancyMap {
  public:
   explicit OccupancyMap(const MapParams& params = {});
+  // Copies and moves cover the source's planar cache first and leave scratch behind.
+  OccupancyMap(const OccupancyMap& other);
+  OccupancyMap(OccupancyMap&& other);
+  OccupancyMap& operator=(const OccupancyMap& other);
+  OccupancyMap& operator=(OccupancyMap&& other);
+  ~OccupancyMap() = default;
 
   const MapParams& params() const { return params_; }
   const Lattice& lattice() const { return lattice_; }
@@ -109,6 +123,13 @@ class OccupancyMap {
 
   /// Removes every leaf; parameters stay.
   void clear();
+
+  /// Covers the cells held in the planar cache (see InsertParams::planar_cache) with leaves and
+  /// returns the leaf figures of that. Every reading call does this first by itself (safely from
+  /// concurrent readers); calling it moves the cost to a time of your choosing.
+  InsertStats flush();
+  /// True while scans wait in the planar cache.
+  bool hasPendingCover() const { return cover_pending_.load(std::memory_order_acquire); }
 
   // ---- insertion --------------------------------------------------------------------
   /// Integrates one scan: beams from `origin` to each point (map frame, metres). `is_hit`
@@ -161,6 +182,7 @@ class OccupancyMap {
   /// Calls fn(box, log_odds) for every leaf.
   template <class Fn>
   void forEachLeaf(Fn&& fn) const {
+    ensureCovered();
     for (const Brick& b : bricks_) {
       const Key o = brickOrigin(b.brick);
       for (const LeafEntry& e : b.leaves) fn(globalBox(o, e), e.value);
@@ -171,6 +193,7 @@ class OccupancyMap {
   /// cost follows the region, not the map.
   template <class Fn>
   void forEachLeafIn(const Box& region, Fn&& fn) const {
+    ensureCovered();
     upper_.queryBox(region, [&](Handle h, const Box&) {
       forEachInLeafNode(h, [&](const Box& b, float v) {
         if (b.intersects(region)) fn(b, v);
@@ -178,11 +201,17 @@ class OccupancyMap {
     });
   }
 
-  std::size_t leafCount() const { return leaf_count_; }
+  std::size_t leafCount() const {
+    ensureCovered();
+    return leaf_count_;
+  }
   /// Cells covered by leaves (a merged cuboid counts all its cells).
   std::int64_t cellCount() const;
   /// Smallest box containing every leaf (Box::empty() if none).
-  Box keyBounds() const { return upper_.bounds(); }
+  Box keyBounds() const {
+    ensureCovered();
+    return upper_.bounds();
+  }
   std::size_t memoryBytes() const;
   MapStatistics statistics() const;
 
@@ -251,6 +280,45 @@ class OccupancyMap {
   void syncLeafNodes(std::uint32_t slot);
   /// Packs every brick's leaf nodes into a fresh upper tree (STR bulk load).
   void rebuildUpperTree();
+  /// Brings the upper tree up to date with the leaf nodes of reshaped_bricks_ (sorted).
+  void refreshUpperTree();
+  /// Groups the bricks of several finalized batches: group g's updates are
+  /// sources[first[g] .. first[g + 1]), groups in brick order.
+  static void groupByBrick(const std::vector<const UpdateBatch*>& batches,
+                           std::vector<const UpdateBatch::BrickUpdates*>& sources, std::vector<std::uint32_t>& first);
+  /// The union of a group's updates (occupied winning), in `scratch` if there are several.
+  static const UpdateBatch::BrickUpdates* unionOf(const UpdateBatch::BrickUpdates* const* sources, std::size_t n,
+                                                  UpdateBatch::BrickUpdates& scratch);
+
+  // Planar cache: one z-layer of a brick as a dense table of log-odds, updated in place by
+  // planar scans, until coverPlanarLayers() turns the brick's layers into leaves again. Costs
+  // O(updated cells) per scan instead of O(leaves in the touched bricks).
+  static constexpr int kLayerCells = kBrickSize * kBrickSize;
+  static constexpr int kLayerWords = kLayerCells / 64;
+  struct PlanarLayer {
+    std::uint32_t slot;  // brick
+    int z;               // brick-local z of the layer
+    std::array<std::uint64_t, kLayerWords> known;
+    std::array<float, kLayerCells> value;  // the prior where unknown
+  };
+  /// True if every traced beam of the scan stays in the origin's z-layer; then [lo, hi] bounds
+  /// the cells in x and y.
+  bool planarExtent(const Eigen::Vector3d& origin, const Eigen::Vector3f* points, std::size_t count,
+                    const InsertParams& ip, Key& lo, Key& hi) const;
+  template <class Batch>
+  void traceBeams(const Eigen::Vector3d& origin, const Eigen::Vector3f* points, std::size_t count,
+                  const InsertParams& ip, const std::uint8_t* is_hit, Batch& batch, InsertStats& stats) const;
+  /// Applies the union of planar_batches_[0 .. batches) of a scan in z-layer `z` to the cache.
+  void applyPlanar(std::size_t batches, int z, InsertStats& stats);
+  PlanarLayer& planarLayer(std::uint32_t slot, int z);
+  InsertStats coverPlanarLayers();
+  /// Readers call this first: covers pending planar layers once, under a lock. Sound on a const
+  /// object: layers come only from insertion, and copies and moves are made covered.
+  void ensureCovered() const {
+    if (cover_pending_.load(std::memory_order_acquire)) const_cast<OccupancyMap*>(this)->coverLocked();
+  }
+  void coverLocked();
+
   /// Visits the leaf entries of one upper-tree item.
   template <class Fn>
   void forEachInLeafNode(Handle h, Fn&& fn) const {
@@ -273,6 +341,11 @@ class OccupancyMap {
   std::vector<UpdateBatch> batches_;  // per-thread scratch, reused across insertions
   std::vector<ApplyContext> apply_ctx_;
   std::vector<std::uint32_t> reshaped_bricks_;  // bricks whose leaf nodes changed in this batch
+  std::vector<PlanarBatch> planar_batches_;  // per-thread scratch
+  std::vector<PlanarLayer> planar_layers_;
+  detail::FlatHashMap64 planar_index_;  // brick slot * kBrickSize + z -> index in planar_layers_
+  std::mutex cover_mutex_;
+  std::atomic<bool> cover_pending_{false};
 };
 
 }  // namespace rtog

@@ -41,6 +41,22 @@ std::int64_t walkRay(const Eigen::Vector3d& from, const Eigen::Vector3d& to, con
   // Scalars, not arrays indexed by the chosen axis: keeps the loop in registers (~2 ns/step).
   std::int32_t x = from_key.x, y = from_key.y, z = from_key.z;
   double tx = t_max[0], ty = t_max[1], tz = t_max[2];
+  if (step[2] == 0) {
+    // The same walk for a segment within one z-layer (a 2D scan): one comparison per step.
+    for (std::int64_t i = 0; i < n; ++i) {
+      cursor.visit();
+      if (tx <= ty) {
+        x += step[0];
+        tx = x == to_key.x ? inf : tx + t_delta[0];
+        cursor.move(0, step[0]);
+      } else {
+        y += step[1];
+        ty = y == to_key.y ? inf : ty + t_delta[1];
+        cursor.move(1, step[1]);
+      }
+    }
+    return n;
+  }
   for (std::int64_t i = 0; i < n; ++i) {
     cursor.visit();
     if (tx <= ty && tx <= tz) {

@@ -115,4 +115,44 @@ class alignas(64) UpdateBatch {
   std::vector<const BrickUpdates*> sorted_;
 };
 
+/// The update set of a planar scan, whose cells all lie in one z-layer: the layer masks of the
+/// bricks under the scan's bounding box in a dense grid, found by arithmetic instead of a hash.
+class PlanarBatch {
+ public:
+  static constexpr int kLayerWords = kBrickSize * kBrickSize / 64;
+  struct Tile {
+    std::array<std::uint64_t, kLayerWords> occupied, free;  ///< bit (y % 16) * 16 + x % 16
+  };
+  /// Bricks a batch over cells [lo, hi] (x and y) would hold.
+  static std::size_t tilesFor(const Key& lo, const Key& hi) {
+    return static_cast<std::size_t>((hi.x >> kBrickBits) - (lo.x >> kBrickBits) + 1) *
+           static_cast<std::size_t>((hi.y >> kBrickBits) - (lo.y >> kBrickBits) + 1);
+  }
+  /// Starts an empty batch over cells [lo, hi]; z is not looked at.
+  void reset(const Key& lo, const Key& hi);
+  bool markOccupied(const Key& k) {
+    const int i = bitOf(k.x, k.y);
+    std::uint64_t& w = tileOf(k.x, k.y).occupied[static_cast<std::size_t>(i >> 6)];
+    const std::uint64_t bit = std::uint64_t{1} << (i & 63);
+    const bool fresh = (w & bit) == 0;
+    w |= bit;
+    return fresh;
+  }
+  void markRayFree(const Eigen::Vector3d& from, const Eigen::Vector3d& to, const Key& from_key, const Key& to_key);
+
+  int brickX0() const { return bx0_; }
+  int brickY0() const { return by0_; }
+  int width() const { return width_; }  ///< bricks along x
+  const std::vector<Tile>& tiles() const { return tiles_; }
+  std::size_t memoryBytes() const { return tiles_.capacity() * sizeof(Tile); }
+
+ private:
+  static int bitOf(int x, int y) { return (x & (kBrickSize - 1)) | ((y & (kBrickSize - 1)) << kBrickBits); }
+  Tile& tileOf(int x, int y) {
+    return tiles_[static_cast<std::size_t>(((y >> kBrickBits) - by0_) * width_ + ((x >> kBrickBits) - bx0_))];
+  }
+  int bx0_ = 0, by0_ = 0, width_ = 0;
+  std::vector<Tile> tiles_;
+};
+
 }  // namespace rtog
