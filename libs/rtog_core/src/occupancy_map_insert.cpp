@@ -695,7 +695,7 @@ OccupancyMap::PlanarLayer& OccupancyMap::planarLayer(std::uint32_t slot, int z) 
 
 void OccupancyMap::applyPlanar(std::size_t batches, int z, InsertStats& stats) {
   const PlanarBatch& b0 = planar_batches_[0];
-  const float hit = model_.hitDelta(), miss = model_.missDelta();
+  const float hit = model_.hitDelta(), miss = model_.missDelta(), lo = model_.clampMin(), hi = model_.clampMax();
   const int local_z = z & (kBrickSize - 1);
   for (std::size_t t = 0; t < b0.tiles().size(); ++t) {
     // The union over the threads' batches, occupied winning.
@@ -713,26 +713,27 @@ void OccupancyMap::applyPlanar(std::size_t batches, int z, InsertStats& stats) {
                     z >> kBrickBits};
     PlanarLayer& layer = planarLayer(brickSlot(brick), local_z);
     // Unknown cells hold the prior, so a first update is an update like any other: no branch
-    // on the cell's state in this loop, which runs once per updated cell.
-    std::size_t occupied_cells = 0, updated_cells = 0, unchanged = 0;
+    // in this loop, which runs once per updated cell.
     for (int w = 0; w < kLayerWords; ++w) {
       const auto wi = static_cast<std::size_t>(w);
-      const std::uint64_t occupied = tile.occupied[wi], known = layer.known[wi];
+      const std::uint64_t occupied = tile.occupied[wi], free = tile.free[wi] & ~occupied, known = layer.known[wi];
       float* values = layer.value.data() + w * 64;
-      for (std::uint64_t bits = occupied | tile.free[wi]; bits; bits &= bits - 1) {
-        const int b = __builtin_ctzll(bits);
-        const float v = values[b];
-        const float nv = model_.update(v, (occupied >> b) & 1u ? hit : miss);
-        unchanged += (nv == v) & ((known >> b) & 1u);
-        values[b] = nv;
-        ++updated_cells;
-      }
-      for (std::uint64_t bits = occupied; bits; bits &= bits - 1) ++occupied_cells;
-      layer.known[wi] = known | occupied | tile.free[wi];
+      const auto update = [&](std::uint64_t bits, float delta) {
+        std::size_t unchanged = 0;  // locals: the stores to `values` could alias members
+        for (; bits; bits &= bits - 1) {
+          const int b = __builtin_ctzll(bits);
+          const float v = values[b], nv = std::min(std::max(v + delta, lo), hi);
+          unchanged += static_cast<std::size_t>(nv == v) & ((known >> b) & 1u);
+          values[b] = nv;
+        }
+        stats.cells_unchanged += unchanged;
+      };
+      update(free, miss);
+      update(occupied, hit);
+      stats.cells_free += popcount64(free);
+      stats.cells_occupied += popcount64(occupied);
+      layer.known[wi] = known | occupied | free;
     }
-    stats.cells_occupied += occupied_cells;
-    stats.cells_free += updated_cells - occupied_cells;
-    stats.cells_unchanged += unchanged;
   }
   if (!planar_layers_.empty()) cover_pending_.store(true, std::memory_order_release);
 }

@@ -1,6 +1,8 @@
 // Log-odds occupancy: the Bayes update l = l_prev + l_meas - l0 with clamping.
 #pragma once
 
+#include <algorithm>
+
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -41,8 +43,8 @@ class LogOddsModel {
 
   /// One Bayes update of a cell's log-odds, clamped to [µmin, µmax].
   float update(float prev, float delta) const {
-    float v = prev + delta;
-    return v < min_ ? min_ : (v > max_ ? max_ : v);
+    // min/max rather than nested conditions: compiles to minss/maxss, no branch.
+    return std::min(std::max(prev + delta, min_), max_);
   }
   /// Value of a cell created by its first measurement.
   float first(float delta) const { return update(l0_, delta); }

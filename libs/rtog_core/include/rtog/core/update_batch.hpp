@@ -36,15 +36,17 @@ inline Key localKey(int index) {
   return Key{index & m, (index >> kBrickBits) & m, (index >> (2 * kBrickBits)) & m};
 }
 
-inline std::size_t maskPopcount(const std::array<std::uint64_t, kBrickWords>& words) {
+inline std::size_t popcount64(std::uint64_t w) {
   // SWAR count: the baseline x86-64 target has no POPCNT instruction.
+  w = w - ((w >> 1) & 0x5555555555555555ull);
+  w = (w & 0x3333333333333333ull) + ((w >> 2) & 0x3333333333333333ull);
+  w = (w + (w >> 4)) & 0x0f0f0f0f0f0f0f0full;
+  return static_cast<std::size_t>((w * 0x0101010101010101ull) >> 56);
+}
+
+inline std::size_t maskPopcount(const std::array<std::uint64_t, kBrickWords>& words) {
   std::size_t n = 0;
-  for (std::uint64_t w : words) {
-    w = w - ((w >> 1) & 0x5555555555555555ull);
-    w = (w & 0x3333333333333333ull) + ((w >> 2) & 0x3333333333333333ull);
-    w = (w + (w >> 4)) & 0x0f0f0f0f0f0f0f0full;
-    n += static_cast<std::size_t>((w * 0x0101010101010101ull) >> 56);
-  }
+  for (const std::uint64_t w : words) n += popcount64(w);
   return n;
 }
 
