@@ -143,6 +143,7 @@ TEST(MapOptions, SaveToConfigFileRoundTrip) {
   io.maxDistanceInsertion = 7.5f;
   io.mergePolicy = "off";
   io.discretize = true;
+  io.planarCache = false;
   CRTreeOccupancyGridMap::TLikelihoodOptions lo;
   lo.likelihoodMethod = CRTreeOccupancyGridMap::lmRayTracing;
   lo.LF_maxCorrsDistance = 0.7f;
@@ -157,6 +158,7 @@ TEST(MapOptions, SaveToConfigFileRoundTrip) {
   EXPECT_FLOAT_EQ(io2.maxDistanceInsertion, 7.5f);
   EXPECT_EQ(io2.mergePolicy, "off");
   EXPECT_TRUE(io2.discretize);
+  EXPECT_FALSE(io2.planarCache);
   EXPECT_EQ(lo2.likelihoodMethod, CRTreeOccupancyGridMap::lmRayTracing);
   EXPECT_FLOAT_EQ(lo2.LF_maxCorrsDistance, 0.7f);
 }

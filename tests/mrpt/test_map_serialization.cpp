@@ -27,8 +27,9 @@ std::map<std::uint64_t, std::pair<rtog::Box, float>> leaves(const rtog::Occupanc
   return out;
 }
 
-CRTreeOccupancyGridMap senaMap(std::size_t frames) {
+CRTreeOccupancyGridMap senaMap(std::size_t frames, bool planar_cache = true) {
   CRTreeOccupancyGridMap m(0.05);
+  m.insertionOptions.planarCache = planar_cache;
   m.insertionOptions.maxOccupancyUpdateCertainty = 0.7f;
   m.likelihoodOptions.LF_stdHit = 0.25f;
   m.likelihoodOptions.likelihoodMethod = CRTreeOccupancyGridMap::lmRayTracing;
@@ -43,22 +44,25 @@ void expectSame(const CRTreeOccupancyGridMap& a, const CRTreeOccupancyGridMap& b
   EXPECT_EQ(a.insertionOptions.maxOccupancyUpdateCertainty, b.insertionOptions.maxOccupancyUpdateCertainty);
   EXPECT_EQ(a.likelihoodOptions.LF_stdHit, b.likelihoodOptions.LF_stdHit);
   EXPECT_EQ(a.likelihoodOptions.likelihoodMethod, b.likelihoodOptions.likelihoodMethod);
+  EXPECT_EQ(a.insertionOptions.planarCache, b.insertionOptions.planarCache);
   EXPECT_EQ(b.map().checkInvariants(), "");
 }
 
 }  // namespace
 
 TEST(MapSerialization, MemoryRoundTrip) {
-  const auto m = senaMap(40);
-  ASSERT_GT(m.map().leafCount(), 1000u);
-  mrpt::io::CMemoryStream buf;
-  auto ar = mrpt::serialization::archiveFrom(buf);
-  ar << m;
-  buf.Seek(0);
-  auto obj = ar.ReadObject();
-  auto back = std::dynamic_pointer_cast<CRTreeOccupancyGridMap>(obj);
-  ASSERT_TRUE(back);
-  expectSame(m, *back);
+  for (const bool planar_cache : {true, false}) {
+    const auto m = senaMap(40, planar_cache);
+    ASSERT_GT(m.map().leafCount(), 1000u);
+    mrpt::io::CMemoryStream buf;
+    auto ar = mrpt::serialization::archiveFrom(buf);
+    ar << m;
+    buf.Seek(0);
+    auto obj = ar.ReadObject();
+    auto back = std::dynamic_pointer_cast<CRTreeOccupancyGridMap>(obj);
+    ASSERT_TRUE(back);
+    expectSame(m, *back);
+  }
 }
 
 TEST(MapSerialization, FileRoundTripAndRepresentation) {

@@ -54,6 +54,7 @@ void CRTreeOccupancyGridMap::TInsertionOptions::loadFromConfigFile(const mrpt::c
   mergePolicy = s.read_string(sec, "mergePolicy", mergePolicy);
   discretize = s.read_bool(sec, "discretize", discretize);
   threads = s.read_int(sec, "threads", threads);
+  planarCache = s.read_bool(sec, "planarCache", planarCache);
   rotatingScan_minElevation_deg = s.read_float(sec, "rotatingScan_minElevation_deg", rotatingScan_minElevation_deg);
   rotatingScan_maxElevation_deg = s.read_float(sec, "rotatingScan_maxElevation_deg", rotatingScan_maxElevation_deg);
   try {
@@ -77,6 +78,7 @@ void CRTreeOccupancyGridMap::TInsertionOptions::saveToConfigFile(mrpt::config::C
   c.write(sec, "mergePolicy", mergePolicy);
   c.write(sec, "discretize", discretize);
   c.write(sec, "threads", threads);
+  c.write(sec, "planarCache", planarCache);
   c.write(sec, "rotatingScan_minElevation_deg", rotatingScan_minElevation_deg);
   c.write(sec, "rotatingScan_maxElevation_deg", rotatingScan_maxElevation_deg);
 }

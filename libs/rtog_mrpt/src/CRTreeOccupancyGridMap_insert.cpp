@@ -229,6 +229,7 @@ bool CRTreeOccupancyGridMap::internal_insertObservation(const mrpt::obs::CObserv
   ip.max_range = insertionOptions.maxDistanceInsertion;
   ip.discretize = insertionOptions.discretize;
   ip.threads = insertionOptions.threads;
+  ip.planar_cache = insertionOptions.planarCache;
   lastInsertStats = map_.insertPointCloud(beams.origin, beams.points.data(), beams.points.size(), ip,
                                           beams.is_hit.data());
   totalInsertStats += lastInsertStats;

@@ -15,8 +15,9 @@
 namespace rtog {
 
 // Version 0: genericMapParams, insertion and likelihood options, then the core map's own
-// binary format (doc/format.md) as a length-prefixed byte block.
-uint8_t CRTreeOccupancyGridMap::serializeGetVersion() const { return 0; }
+// binary format (doc/format.md) as a length-prefixed byte block. Version 1 adds
+// insertionOptions.planarCache after the rotating-scan elevations.
+uint8_t CRTreeOccupancyGridMap::serializeGetVersion() const { return 1; }
 
 void CRTreeOccupancyGridMap::serializeTo(mrpt::serialization::CArchive& out) const {
   out << genericMapParams;
@@ -24,7 +25,7 @@ void CRTreeOccupancyGridMap::serializeTo(mrpt::serialization::CArchive& out) con
   out << io.sensorModel << io.maxOccupancyUpdateCertainty << io.maxFreenessUpdateCertainty << io.clampingMin
       << io.clampingMax << io.occupiedThreshold << io.maxDistanceInsertion << io.decimation << io.decimation_3d_range
       << io.mergePolicy << io.discretize << static_cast<int32_t>(io.threads) << io.rotatingScan_minElevation_deg
-      << io.rotatingScan_maxElevation_deg;
+      << io.rotatingScan_maxElevation_deg << io.planarCache;
   const auto& lo = likelihoodOptions;
   out << static_cast<int32_t>(lo.likelihoodMethod) << lo.LF_stdHit << lo.LF_zHit << lo.LF_zRandom << lo.LF_maxRange
       << lo.LF_decimation << lo.LF_maxCorrsDistance << lo.LF_useSquareDist << lo.enableLikelihoodCache
@@ -38,7 +39,8 @@ void CRTreeOccupancyGridMap::serializeTo(mrpt::serialization::CArchive& out) con
 
 void CRTreeOccupancyGridMap::serializeFrom(mrpt::serialization::CArchive& in, uint8_t version) {
   switch (version) {
-    case 0: {
+    case 0:
+    case 1: {
       in >> genericMapParams;
       auto& io = insertionOptions;
       int32_t threads = 1;
@@ -47,6 +49,8 @@ void CRTreeOccupancyGridMap::serializeFrom(mrpt::serialization::CArchive& in, ui
           io.decimation_3d_range >> io.mergePolicy >> io.discretize >> threads >> io.rotatingScan_minElevation_deg >>
           io.rotatingScan_maxElevation_deg;
       io.threads = threads;
+      io.planarCache = true;
+      if (version >= 1) in >> io.planarCache;
       auto& lo = likelihoodOptions;
       int32_t method = 0;
       in >> method >> lo.LF_stdHit >> lo.LF_zHit >> lo.LF_zRandom >> lo.LF_maxRange >> lo.LF_decimation >>

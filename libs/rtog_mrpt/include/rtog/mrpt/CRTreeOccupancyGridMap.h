@@ -68,6 +68,9 @@ class CRTreeOccupancyGridMap : public mrpt::maps::CMetricMap {
     bool discretize{false};
     /// Threads tracing beams (the result does not depend on it). (Default: 1)
     int threads{1};
+    /// 2D scans update dense per-brick layers in place and become leaves when the map is next
+    /// read, not at every scan (the cells are the same either way). (Default: true)
+    bool planarCache{true};
     /// Lowest / highest elevation [deg] of the rings of a CObservationRotatingScan (MRPT 2.5 carries
     /// no ring calibration): row r is at min + r*(max-min)/(rows-1). (Default: -15 / 15, a VLP-16)
     float rotatingScan_minElevation_deg{-15.0f};
