@@ -159,23 +159,28 @@ void OccupancyMap::applyUpdate(const UpdateBatch& batch, InsertStats& stats, int
 }
 
 void OccupancyMap::groupByBrick(const std::vector<const UpdateBatch*>& batches,
-                                std::vector<const UpdateBatch::BrickUpdates*>& sources,
-                                std::vector<std::uint32_t>& first) {
+                                std::vector<const UpdateBatch::BrickUpdates*>& sources, std::vector<std::uint32_t>& first,
+                                std::vector<Key>& keys) {
   // A merge of the batches' sorted brick lists.
   sources.clear();
   first.clear();
+  keys.clear();
+  // Keys from the batches' key lists: reading them through the pointers would miss the cache
+  // once per brick, on data another thread wrote.
   std::vector<std::size_t> pos(batches.size(), 0);
   for (;;) {
-    const UpdateBatch::BrickUpdates* next = nullptr;
+    const Key* next = nullptr;
     for (std::size_t b = 0; b < batches.size(); ++b)
-      if (pos[b] < batches[b]->bricks().size()) {
-        const auto* u = batches[b]->bricks()[pos[b]];
-        if (next == nullptr || u->brick < next->brick) next = u;
+      if (pos[b] < batches[b]->brickKeys().size()) {
+        const Key& k = batches[b]->brickKeys()[pos[b]];
+        if (next == nullptr || k < *next) next = &k;
       }
     if (next == nullptr) break;
+    const Key brick = *next;
+    keys.push_back(brick);
     first.push_back(static_cast<std::uint32_t>(sources.size()));
     for (std::size_t b = 0; b < batches.size(); ++b)
-      if (pos[b] < batches[b]->bricks().size() && batches[b]->bricks()[pos[b]]->brick == next->brick)
+      if (pos[b] < batches[b]->brickKeys().size() && batches[b]->brickKeys()[pos[b]] == brick)
         sources.push_back(batches[b]->bricks()[pos[b]++]);
   }
   first.push_back(static_cast<std::uint32_t>(sources.size()));
@@ -199,10 +204,11 @@ void OccupancyMap::applyUpdate(const std::vector<const UpdateBatch*>& batches, I
   if (hasPendingCover()) flush();
   std::vector<const UpdateBatch::BrickUpdates*> sources;
   std::vector<std::uint32_t> first;
-  groupByBrick(batches, sources, first);
+  std::vector<Key> brick_keys;
+  groupByBrick(batches, sources, first, brick_keys);
   const std::size_t groups = first.size() - 1;
   std::vector<std::uint32_t> slots(groups);
-  for (std::size_t g = 0; g < groups; ++g) slots[g] = brickSlot(sources[first[g]]->brick);
+  for (std::size_t g = 0; g < groups; ++g) slots[g] = brickSlot(brick_keys[g]);
   // Bricks are independent: threads take runs of them as they go (bricks near the sensor cost
   // far more than distant ones), each with its own scratch. The results do not depend on who
   // applied which brick: statistics are sums and the reshaped bricks are sorted afterwards.
@@ -236,32 +242,42 @@ void OccupancyMap::applyUpdate(const std::vector<const UpdateBatch*>& batches, I
     reshaped_bricks_.insert(reshaped_bricks_.end(), apply_ctx_[t].reshaped.begin(), apply_ctx_[t].reshaped.end());
   }
   std::sort(reshaped_bricks_.begin(), reshaped_bricks_.end());
-  refreshUpperTree();
+  refreshUpperTree(static_cast<int>(n));
 }
 
-void OccupancyMap::refreshUpperTree() {
+void OccupancyMap::refreshUpperTree(int threads) {
   // Leaf nodes whose boxes changed go into the upper tree one by one, unless they are many
   // compared with the tree (a first scan, a new area): then one bulk load is cheaper.
   std::size_t touched_nodes = 0;
   for (const std::uint32_t slot : reshaped_bricks_)
     touched_nodes += (bricks_[slot].leaves.size() + leafNodeSize() - 1) / leafNodeSize();
   if (touched_nodes * 2 > upper_.size()) {
-    rebuildUpperTree();
+    rebuildUpperTree(threads);
   } else {
     for (const std::uint32_t slot : reshaped_bricks_) syncLeafNodes(slot);
   }
 }
 
-void OccupancyMap::rebuildUpperTree() {
-  std::vector<std::pair<Box, LeafNodeRef>> nodes;
-  nodes.reserve(upper_.size() + 16);
-  for (std::uint32_t slot = 0; slot < bricks_.size(); ++slot) {
-    Brick& br = bricks_[slot];
-    br.nodes.clear();
-    const std::size_t n = (br.leaves.size() + leafNodeSize() - 1) / leafNodeSize();
-    for (std::size_t k = 0; k < n; ++k)
-      nodes.push_back({leafNodeBox(br, k), LeafNodeRef{slot, static_cast<std::uint32_t>(k)}});
-  }
+void OccupancyMap::rebuildUpperTree(int threads) {
+  // The leaf nodes' boxes read every leaf of the map: bricks split across the threads.
+  const auto slots = static_cast<std::uint32_t>(bricks_.size());
+  const std::uint32_t parts = std::max<std::uint32_t>(1, std::min<std::uint32_t>(threads, 1 + slots / 1024));
+  std::vector<std::vector<std::pair<Box, LeafNodeRef>>> part(parts);
+  const auto collect = [&](std::uint32_t p) {
+    for (std::uint32_t slot = slots / parts * p; slot < (p + 1 == parts ? slots : slots / parts * (p + 1)); ++slot) {
+      Brick& br = bricks_[slot];
+      br.nodes.clear();
+      const std::size_t n = (br.leaves.size() + leafNodeSize() - 1) / leafNodeSize();
+      for (std::size_t k = 0; k < n; ++k)
+        part[p].push_back({leafNodeBox(br, k), LeafNodeRef{slot, static_cast<std::uint32_t>(k)}});
+    }
+  };
+  std::vector<std::thread> workers;
+  for (std::uint32_t p = 1; p < parts; ++p) workers.emplace_back(collect, p);
+  collect(0);
+  for (auto& w : workers) w.join();
+  std::vector<std::pair<Box, LeafNodeRef>> nodes = std::move(part[0]);
+  for (std::uint32_t p = 1; p < parts; ++p) nodes.insert(nodes.end(), part[p].begin(), part[p].end());
   // Morton packing: one sort instead of STR's three nested ones; a first scan of a long-range
   // LiDAR brings ~10^5 leaf nodes and this runs on one thread.
   upper_.bulkLoad(nodes, RTree<LeafNodeRef>::Packing::Morton);  // handles 0..n-1 follow `nodes`

@@ -9,6 +9,7 @@ void UpdateBatch::clear() {
   count_ = 0;
   index_.clear();
   sorted_.clear();
+  sorted_keys_.clear();
   cached_ = nullptr;
 }
 
@@ -60,6 +61,8 @@ void UpdateBatch::finalize() {
     sorted_.push_back(&b);
   });
   std::sort(sorted_.begin(), sorted_.end(), [](const BrickUpdates* a, const BrickUpdates* b) { return a->brick < b->brick; });
+  sorted_keys_.clear();
+  for (const BrickUpdates* b : sorted_) sorted_keys_.push_back(b->brick);
 }
 
 void PlanarBatch::reset(const Key& lo, const Key& hi) {

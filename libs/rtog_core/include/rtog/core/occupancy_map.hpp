@@ -279,13 +279,14 @@ class OccupancyMap {
   /// Brings the brick's leaf nodes in the upper tree up to date with its leaves.
   void syncLeafNodes(std::uint32_t slot);
   /// Packs every brick's leaf nodes into a fresh upper tree (STR bulk load).
-  void rebuildUpperTree();
+  void rebuildUpperTree(int threads = 1);
   /// Brings the upper tree up to date with the leaf nodes of reshaped_bricks_ (sorted).
-  void refreshUpperTree();
-  /// Groups the bricks of several finalized batches: group g's updates are
+  void refreshUpperTree(int threads = 1);
+  /// Groups the bricks of several finalized batches: group g is brick keys[g], its updates are
   /// sources[first[g] .. first[g + 1]), groups in brick order.
   static void groupByBrick(const std::vector<const UpdateBatch*>& batches,
-                           std::vector<const UpdateBatch::BrickUpdates*>& sources, std::vector<std::uint32_t>& first);
+                           std::vector<const UpdateBatch::BrickUpdates*>& sources, std::vector<std::uint32_t>& first,
+                           std::vector<Key>& keys);
   /// The union of a group's updates (occupied winning), in `scratch` if there are several.
   static const UpdateBatch::BrickUpdates* unionOf(const UpdateBatch::BrickUpdates* const* sources, std::size_t n,
                                                   UpdateBatch::BrickUpdates& scratch);

@@ -624,7 +624,7 @@ class RTree {
     return Hit{};
   }
 
-  /// Sort-Tile-Recursive grouping of entries into nodes of at most M entries.
+  /// Orders entries by the Morton code of their box centres.
   static void mortonSort(std::vector<Entry>& es) {
     const auto spread = [](std::uint64_t v) {  // 21 bits -> every third bit of 63
       v &= 0x1FFFFF;
@@ -661,6 +661,7 @@ class RTree {
     return out;
   }
 
+  /// Sort-Tile-Recursive grouping of entries into nodes of at most M entries.
   std::vector<std::vector<Entry>> strPack(std::vector<Entry> es) const {
     const std::size_t M = params_.max_entries;
     const std::size_t nodes = (es.size() + M - 1) / M;

@@ -88,9 +88,11 @@ class alignas(64) UpdateBatch {
 
   /// The touched bricks in (z, y, x) order, after finalize().
   const std::vector<const BrickUpdates*>& bricks() const { return sorted_; }
+  /// Their keys, in the same order.
+  const std::vector<Key>& brickKeys() const { return sorted_keys_; }
   std::size_t memoryBytes() const {
     return chunks_.size() * sizeof(Chunk) + chunks_.capacity() * sizeof(void*) + index_.memoryBytes() +
-           sorted_.capacity() * sizeof(void*);
+           sorted_.capacity() * sizeof(void*) + sorted_keys_.capacity() * sizeof(Key);
   }
 
  private:
@@ -115,6 +117,7 @@ class alignas(64) UpdateBatch {
   detail::FlatHashMap64 index_;
   BrickUpdates* cached_ = nullptr;
   std::vector<const BrickUpdates*> sorted_;
+  std::vector<Key> sorted_keys_;
 };
 
 /// The update set of a planar scan, whose cells all lie in one z-layer: the layer masks of the
