@@ -1,5 +1,6 @@
 // Voxel traversal: the walk is a 6-connected path from the start cell to the end cell whose
-// cells all touch the segment, and it matches a brute-force slab test in general position.
+// cells all touch the segment, and it matches a brute-force slab test in general position; the
+// planar batch marks the same cells.
 #include <gtest/gtest.h>
 
 #include <random>
@@ -7,6 +8,7 @@
 
 #include "rtog/core/ray_traversal.hpp"
 #include "rtog/core/rtree.hpp"  // intersectRay
+#include "rtog/core/update_batch.hpp"
 
 using namespace rtog;
 
@@ -69,3 +71,47 @@ TEST(RayTraversal, AxisAlignedAndDegenerateSegments) {
 }
 
 }  // namespace
+
+// The planar batch (a dense grid of tiles) marks exactly walkRay's cells: random segments,
+// segments from cell corners, exact diagonals and axis-parallel ones, across tile borders and
+// negative keys.
+TEST(RayTraversal, PlanarBatchWalkMarksWalkRaysCells) {
+  std::mt19937 rng(21);
+  std::uniform_real_distribution<double> c(-70.0, 70.0);
+  std::uniform_int_distribution<int> ci(-70, 70), kind(0, 4);
+  PlanarBatch batch;
+  for (int trial = 0; trial < 4000; ++trial) {
+    Eigen::Vector3d a(c(rng), c(rng), 3.5), b(c(rng), c(rng), 3.5);
+    switch (kind(rng)) {
+      case 1:  // cell corners: every boundary crossing a tie
+        a = Eigen::Vector3d(ci(rng), ci(rng), 3.5), b = Eigen::Vector3d(ci(rng), ci(rng), 3.5);
+        break;
+      case 2: {  // exact diagonal
+        const double s = c(rng);
+        b = a + Eigen::Vector3d(s, trial % 2 ? s : -s, 0.0);
+        break;
+      }
+      case 3:  // axis-parallel
+        b[trial % 2] = a[trial % 2];
+        break;
+      default: break;
+    }
+    const Key ka = floorKey(a), kb = floorKey(b);
+    std::set<Key> expected;
+    traverseRay(a, b, ka, kb, [&](const Key& k) { expected.insert(k); });
+    // The batch spans the segment's cells, as the scan's bounding box does in insertPointCloud.
+    batch.reset(Key{std::min(ka.x, kb.x), std::min(ka.y, kb.y), 3}, Key{std::max(ka.x, kb.x), std::max(ka.y, kb.y), 3});
+    batch.markRayFree(a, b, ka, kb);
+    std::set<Key> marked;
+    for (std::size_t t = 0; t < batch.tiles().size(); ++t)
+      for (int w = 0; w < PlanarBatch::kLayerWords; ++w)
+        for (std::uint64_t bits = batch.tiles()[t].free[static_cast<std::size_t>(w)]; bits; bits &= bits - 1) {
+          const int i = w * 64 + __builtin_ctzll(bits);
+          const int bx = batch.brickX0() + static_cast<int>(t % static_cast<std::size_t>(batch.width()));
+          const int by = batch.brickY0() + static_cast<int>(t / static_cast<std::size_t>(batch.width()));
+          marked.insert(Key{bx * kBrickSize + (i & (kBrickSize - 1)), by * kBrickSize + (i >> kBrickBits), 3});
+        }
+    ASSERT_EQ(marked, expected) << "trial " << trial << " from (" << a.x() << ", " << a.y() << ") to (" << b.x()
+                                << ", " << b.y() << ")";
+  }
+}

@@ -821,11 +821,16 @@ InsertStats OccupancyMap::coverPlanarLayers() {
     reshaped_bricks_.push_back(slot);
   }
   refreshUpperTree();
-  planar_index_.clear();
-  planar_layers_.clear();
-  // Keep a sensor's worth of layers for the next scans, not a whole log's.
-  constexpr std::size_t kKeptLayers = 4096;
-  if (planar_layers_.capacity() > kKeptLayers) planar_layers_.shrink_to_fit();
+  // Keep room for the layers of a scan or two (a 2D scan at 5 cm touches about 200), not for
+  // those of a whole log: the pool counts in memoryBytes().
+  constexpr std::size_t kKeptLayers = 512;
+  if (planar_layers_.capacity() > kKeptLayers) {
+    planar_layers_ = {};
+    planar_index_ = {};
+  } else {
+    planar_layers_.clear();
+    planar_index_.clear();
+  }
   return stats;
 }
 

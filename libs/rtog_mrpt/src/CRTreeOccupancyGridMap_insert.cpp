@@ -52,6 +52,28 @@ void addLocalPoints(const CPose3D& sensor, const std::vector<Eigen::Vector3f>& l
 
 }  // namespace
 
+std::shared_ptr<const CRTreeOccupancyGridMap::Caches::ScanAngles> CRTreeOccupancyGridMap::scanAngles(
+    const mrpt::obs::CObservation2DRangeScan& scan) const {
+  const std::size_t n = scan.getScanSize();
+  {
+    std::lock_guard<std::mutex> lk(caches_.mutex);
+    const auto& a = caches_.scan_angles;
+    if (a && a->beams == n && a->aperture == scan.aperture && a->right_to_left == scan.rightToLeft) return a;
+  }
+  auto table = std::make_shared<Caches::ScanAngles>();
+  table->beams = n;
+  table->aperture = scan.aperture;
+  table->right_to_left = scan.rightToLeft;
+  for (std::size_t i = 0; i < n; ++i) {
+    const double a = scan.getScanAngle(i);
+    table->cos.push_back(std::cos(a));
+    table->sin.push_back(std::sin(a));
+  }
+  std::lock_guard<std::mutex> lk(caches_.mutex);
+  caches_.scan_angles = table;
+  return table;
+}
+
 template <class Decode>
 void CRTreeOccupancyGridMap::localPointsCached(const mrpt::obs::CObservation& obs, std::size_t decimation,
                                                Decode&& decode, std::vector<Eigen::Vector3f>& pts,
@@ -96,6 +118,7 @@ bool CRTreeOccupancyGridMap::extractBeams(const mrpt::obs::CObservation& obs, co
         obs, dec,
         [&](std::vector<Eigen::Vector3f>& pts, std::size_t& invalid) {
           const std::size_t n = scan->getScanSize();
+          const auto angles = scanAngles(*scan);
           pts.reserve(n / dec + 1);
           for (std::size_t i = 0; i < n; i += dec) {
             const float r = scan->getScanRange(i);
@@ -103,8 +126,7 @@ bool CRTreeOccupancyGridMap::extractBeams(const mrpt::obs::CObservation& obs, co
               ++invalid;
               continue;
             }
-            const double a = scan->getScanAngle(i);
-            pts.emplace_back(static_cast<float>(r * std::cos(a)), static_cast<float>(r * std::sin(a)), 0.0f);
+            pts.emplace_back(static_cast<float>(r * angles->cos[i]), static_cast<float>(r * angles->sin[i]), 0.0f);
           }
         },
         local, out.invalid);

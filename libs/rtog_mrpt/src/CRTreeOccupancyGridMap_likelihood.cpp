@@ -33,43 +33,46 @@ double CRTreeOccupancyGridMap::beamsLikelihood(const ObservationBeams& b) const 
   return likelihoodOptions.likelihoodMethod == lmRayTracing ? rayTracing(b) : likelihoodField(b);
 }
 
-float CRTreeOccupancyGridMap::distanceToOccupiedLocked(const Eigen::Vector3d& p) const {
-  const float cap = likelihoodOptions.LF_maxCorrsDistance;
+float CRTreeOccupancyGridMap::fieldTermLocked(const Eigen::Vector3d& p, const FieldParams& f) const {
+  const auto termAt = [&](double d) {
+    return static_cast<float>(f.squareDist ? -d * d * f.inv2var
+                                           : std::log(f.zRandomTerm + f.zHit * std::exp(-d * d * f.inv2var)));
+  };
+  const auto term = [&](const Eigen::Vector3d& q) {
+    const auto h = map_.nearestOccupied(q, f.cap);
+    return termAt(h.found ? std::min<double>(h.distance, f.cap) : f.cap);
+  };
   Key k;
-  if (!map_.lattice().tryKey(p, k)) return cap;
-  if (!likelihoodOptions.enableLikelihoodCache) {
-    const auto h = map_.nearestOccupied(p, cap);
-    return h.found ? static_cast<float>(std::min<double>(h.distance, cap)) : cap;
-  }
-  // Cached per lattice cell: the distance from the cell centre.
+  if (!map_.lattice().tryKey(p, k)) return termAt(f.cap);  // beyond the key range: nothing near
+  if (!likelihoodOptions.enableLikelihoodCache) return term(p);
+  // Cached per lattice cell: the term at the cell centre.
   const std::uint64_t pk = packKey(k);
   std::uint32_t bits = caches_.lf.find(pk);
-  float d;
+  float t;
   if (bits != detail::FlatHashMap64::kAbsent) {
-    std::memcpy(&d, &bits, sizeof d);
-    return d;
+    std::memcpy(&t, &bits, sizeof t);
+    return t;
   }
-  const auto h = map_.nearestOccupied(map_.lattice().cellCenter(k), cap);
-  d = h.found ? static_cast<float>(std::min<double>(h.distance, cap)) : cap;
-  std::memcpy(&bits, &d, sizeof d);  // a distance is never NaN, so never kAbsent's bits
+  t = term(map_.lattice().cellCenter(k));
+  std::memcpy(&bits, &t, sizeof t);  // a finite term is never NaN, so never kAbsent's bits
   caches_.lf.findOrInsert(pk, bits);
-  return d;
+  return t;
 }
 
 double CRTreeOccupancyGridMap::likelihoodField(const ObservationBeams& b) const {
   const auto& o = likelihoodOptions;
-  const double inv2var = 1.0 / (2.0 * double(o.LF_stdHit) * o.LF_stdHit);
-  const double zRandomTerm = double(o.LF_zRandom) / o.LF_maxRange;
+  const FieldParams f{1.0 / (2.0 * double(o.LF_stdHit) * o.LF_stdHit), o.LF_zHit, double(o.LF_zRandom) / o.LF_maxRange,
+                      o.LF_maxCorrsDistance, o.LF_useSquareDist};
   double sum = 0.0;
   // One lock per scan, not per point: a particle filter calls this for every particle.
   std::lock_guard<std::mutex> lk(caches_.mutex);
+  if (!caches_.lf_params || !(*caches_.lf_params == f)) {  // options changed since the terms were cached
+    caches_.lf.clear();
+    caches_.lf_params = f;
+  }
   for (std::size_t i = 0; i < b.points.size(); ++i) {
     if (!b.is_hit[i] || b.ranges[i] > o.LF_maxRange) continue;
-    const double d = distanceToOccupiedLocked(b.points[i].cast<double>());
-    if (o.LF_useSquareDist)
-      sum -= d * d * inv2var;
-    else
-      sum += std::log(zRandomTerm + o.LF_zHit * std::exp(-d * d * inv2var));
+    sum += fieldTermLocked(b.points[i].cast<double>(), f);
   }
   return sum;
 }

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <unordered_map>
 #include <vector>
@@ -14,6 +15,7 @@
 #include <mrpt/config/CLoadableOptions.h>
 #include <mrpt/maps/CMetricMap.h>
 #include <mrpt/maps/CSimplePointsMap.h>
+#include <mrpt/obs/CObservation2DRangeScan.h>
 #include <mrpt/poses/CPose3D.h>
 
 #include "rtog/core/detail/flat_hash_map.hpp"
@@ -192,9 +194,20 @@ class CRTreeOccupancyGridMap : public mrpt::maps::CMetricMap {
   void syncParams();
   double likelihoodField(const ObservationBeams& b) const;
   double rayTracing(const ObservationBeams& b) const;
-  /// Distance from p to the nearest occupied cuboid, capped at LF_maxCorrsDistance; with the
-  /// cache on, per lattice cell. The caller holds caches_.mutex.
-  float distanceToOccupiedLocked(const Eigen::Vector3d& p) const;
+  /// The likelihood field's parameters, folded once per scan.
+  struct FieldParams {
+    double inv2var, zHit, zRandomTerm;
+    float cap;
+    bool squareDist;
+    bool operator==(const FieldParams& o) const {
+      return inv2var == o.inv2var && zHit == o.zHit && zRandomTerm == o.zRandomTerm && cap == o.cap &&
+             squareDist == o.squareDist;
+    }
+  };
+  /// The log-likelihood term of an end point at p: its distance to the nearest occupied cuboid
+  /// (capped) through the field's Gaussian-plus-uniform mixture. With the cache on, per lattice
+  /// cell, as COccupancyGridMap2D's precomputed field. The caller holds caches_.mutex.
+  float fieldTermLocked(const Eigen::Vector3d& p, const FieldParams& f) const;
   /// Sensor-frame points of `obs` (decoded by `decode` once per observation and decimation).
   template <class Decode>
   void localPointsCached(const mrpt::obs::CObservation& obs, std::size_t decimation, Decode&& decode,
@@ -203,7 +216,8 @@ class CRTreeOccupancyGridMap : public mrpt::maps::CMetricMap {
   /// Derived data; copies start empty (a copy rebuilds them on demand).
   struct Caches {
     std::mutex mutex;
-    detail::FlatHashMap64 lf;  ///< packed key -> distance to occupied (float bits)
+    detail::FlatHashMap64 lf;  ///< packed key -> likelihood-field term (float bits)
+    std::optional<FieldParams> lf_params;  ///< what the terms in `lf` were computed with
     bool points_dirty{true};
     mrpt::maps::CSimplePointsMap occupied_points;
     /// Sensor-frame points of the last decoded observation (Velodyne raw packets, depth image),
@@ -213,11 +227,21 @@ class CRTreeOccupancyGridMap : public mrpt::maps::CMetricMap {
     std::size_t local_decimation{0};
     std::vector<Eigen::Vector3f> local_points;
     std::size_t local_invalid{0};
+    /// cos/sin of the beam angles of the last 2D scan geometry (a log's scans share one), so
+    /// that a scan is turned into points without trigonometry, as MRPT's grids do.
+    struct ScanAngles {
+      std::size_t beams;
+      float aperture;
+      bool right_to_left;
+      std::vector<double> cos, sin;
+    };
+    std::shared_ptr<const ScanAngles> scan_angles;
     Caches() = default;
     Caches(const Caches&) {}
     Caches& operator=(const Caches&) {
       std::lock_guard<std::mutex> lk(mutex);
       lf.clear();
+      lf_params.reset();
       points_dirty = true;
       local_obs = nullptr;
       return *this;
@@ -226,6 +250,9 @@ class CRTreeOccupancyGridMap : public mrpt::maps::CMetricMap {
 
   OccupancyMap map_;
   mutable Caches caches_;
+
+  /// cos/sin of the scan's beam angles, from the cache when the geometry is the last one's.
+  std::shared_ptr<const Caches::ScanAngles> scanAngles(const mrpt::obs::CObservation2DRangeScan& scan) const;
 };
 
 }  // namespace rtog
