@@ -112,6 +112,10 @@ TEST(Reference2D, PlanarCacheEqualsTheGeneralPath) {
     }
     const InsertStats cover = a.flush();
     EXPECT_GT(cover.leaves_created, 0u);
+    // Covered, the map holds no more than the same map read from a file: the layers of the
+    // whole log (1 KiB of log-odds per touched brick) are released.
+    std::istringstream is(serialized(a));
+    EXPECT_LT(a.memoryBytes(), OccupancyMap::read(is).memoryBytes() + a.statistics().bricks * 256u);
     EXPECT_EQ(a.checkInvariants(), "");
     EXPECT_EQ(a.cellCount(), b.cellCount());
     test::expectMatchesReference(a, ref, true);

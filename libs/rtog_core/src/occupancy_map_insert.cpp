@@ -55,7 +55,7 @@ bool OccupancyMap::planarExtent(const Eigen::Vector3d& origin, const Eigen::Vect
 InsertStats OccupancyMap::insertPointCloud(const Eigen::Vector3d& origin, const Eigen::Vector3f* points,
                                            std::size_t count, const InsertParams& ip, const std::uint8_t* is_hit) {
   if (ip.threads < 1) throw std::invalid_argument("InsertParams: threads must be >= 1");
-  // A planar batch of more than this many bricks (16 MiB: a 1 km wide scan at 5 cm) takes
+  // A planar batch of more than this many bricks (16 MiB: a scan 400 m wide at 5 cm) takes
   // the general path instead.
   constexpr std::size_t kMaxPlanarTiles = std::size_t{1} << 18;
   Key lo, hi;
@@ -825,8 +825,8 @@ InsertStats OccupancyMap::coverPlanarLayers() {
   // those of a whole log: the pool counts in memoryBytes().
   constexpr std::size_t kKeptLayers = 512;
   if (planar_layers_.capacity() > kKeptLayers) {
-    planar_layers_ = {};
-    planar_index_ = {};
+    std::vector<PlanarLayer>().swap(planar_layers_);  // `= {}` would keep the capacity
+    planar_index_ = detail::FlatHashMap64();
   } else {
     planar_layers_.clear();
     planar_index_.clear();
