@@ -262,3 +262,28 @@ TEST(Reference2D, ThreadCountDoesNotChangeAPlanarMap) {
 }
 
 }  // namespace
+
+namespace {
+
+// A planar scan too wide for a dense tile grid (here 470 m at 5 cm: 600^2 bricks) takes the
+// general path, and cells are the same.
+TEST(Reference2D, VeryWidePlanarScanTakesTheGeneralPath) {
+  const Eigen::Vector3d origin(0.3, 0.3, 0.31);
+  std::vector<Eigen::Vector3f> points;
+  for (int i = 0; i < 8; ++i)
+    points.emplace_back(0.3f + 235.0f * std::cos(0.7f * float(i)), 0.3f + 235.0f * std::sin(0.7f * float(i)), 0.31f);
+  InsertParams ip;  // no range limit
+  OccupancyMap map(params2D(MergePolicy::Equal));
+  test::ReferenceGrid ref(params2D(MergePolicy::Equal));
+  map.insertPointCloud(origin, points, ip);
+  ref.insert(origin, points, ip);
+  EXPECT_FALSE(map.hasPendingCover());
+  const std::vector<Eigen::Vector3f> near{Eigen::Vector3f(3.0f, 1.0f, 0.31f)};  // then a small one: cached
+  map.insertPointCloud(origin, near, ip);
+  ref.insert(origin, near, ip);
+  EXPECT_TRUE(map.hasPendingCover());
+  EXPECT_EQ(map.checkInvariants(), "");
+  test::expectMatchesReference(map, ref, true);
+}
+
+}  // namespace
