@@ -104,7 +104,7 @@ TEST(RayTraversal, PlanarBatchWalkMarksWalkRaysCells) {
     batch.markRayFree(a, b, ka, kb);
     std::set<Key> marked;
     for (std::size_t t = 0; t < batch.tiles().size(); ++t)
-      for (int w = 0; w < PlanarBatch::kLayerWords; ++w)
+      for (int w = 0; w < kLayerWords; ++w)
         for (std::uint64_t bits = batch.tiles()[t].free[static_cast<std::size_t>(w)]; bits; bits &= bits - 1) {
           const int i = w * 64 + __builtin_ctzll(bits);
           const int bx = batch.brickX0() + static_cast<int>(t % static_cast<std::size_t>(batch.width()));

@@ -80,32 +80,29 @@ OccupancyMap::OccupancyMap(OccupancyMap&& other)
   *this = std::move(other);
 }
 
-OccupancyMap& OccupancyMap::operator=(const OccupancyMap& other) {
-  if (this == &other) return *this;
+template <class Other>
+void OccupancyMap::assignCovered(Other&& other) {
   other.ensureCovered();
   clear();
   params_ = other.params_;
   lattice_ = other.lattice_;
   model_ = other.model_;
-  upper_ = other.upper_;
-  brick_index_ = other.brick_index_;
-  bricks_ = other.bricks_;
+  upper_ = std::forward<Other>(other).upper_;  // each member moved at most once
+  brick_index_ = std::forward<Other>(other).brick_index_;
+  bricks_ = std::forward<Other>(other).bricks_;
   leaf_count_ = other.leaf_count_;
+}
+
+OccupancyMap& OccupancyMap::operator=(const OccupancyMap& other) {
+  if (this != &other) assignCovered(other);
   return *this;
 }
 
 OccupancyMap& OccupancyMap::operator=(OccupancyMap&& other) {
-  if (this == &other) return *this;
-  other.flush();
-  clear();
-  params_ = other.params_;
-  lattice_ = other.lattice_;
-  model_ = other.model_;
-  upper_ = std::move(other.upper_);
-  brick_index_ = std::move(other.brick_index_);
-  bricks_ = std::move(other.bricks_);
-  leaf_count_ = other.leaf_count_;
-  other.clear();
+  if (this != &other) {
+    assignCovered(std::move(other));
+    other.clear();
+  }
   return *this;
 }
 

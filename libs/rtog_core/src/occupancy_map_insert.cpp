@@ -278,10 +278,13 @@ void OccupancyMap::rebuildUpperTree(int threads) {
   for (auto& w : workers) w.join();
   std::vector<std::pair<Box, LeafNodeRef>> nodes = std::move(part[0]);
   for (std::uint32_t p = 1; p < parts; ++p) nodes.insert(nodes.end(), part[p].begin(), part[p].end());
-  // Morton packing: one sort instead of STR's three nested ones; a first scan of a long-range
-  // LiDAR brings ~10^5 leaf nodes and this runs on one thread.
-  upper_.bulkLoad(nodes, RTree<LeafNodeRef>::Packing::Morton);  // handles 0..n-1 follow `nodes`
-  for (std::size_t h = 0; h < nodes.size(); ++h) bricks_[nodes[h].second.brick].nodes.push_back(static_cast<Handle>(h));
+  // Morton packing: one sort instead of STR's three nested ones (a first scan of a long-range
+  // LiDAR brings ~10^5 leaf nodes, and the sort runs on one thread). Handles 0..n-1 follow
+  // `nodes`, and a brick's nodes come in order.
+  std::vector<std::uint32_t> owner(nodes.size());
+  for (std::size_t h = 0; h < nodes.size(); ++h) owner[h] = nodes[h].second.brick;
+  upper_.bulkLoad(std::move(nodes), RTree<LeafNodeRef>::Packing::Morton);
+  for (std::size_t h = 0; h < owner.size(); ++h) bricks_[owner[h]].nodes.push_back(static_cast<Handle>(h));
 }
 
 namespace {
@@ -347,6 +350,15 @@ static const std::array<std::uint16_t, kBrickCells>& mortonRank() {
     return r;
   }();
   return rank;
+}
+
+// Orders a brick's leaves by the Morton rank of their first cell, which keeps the leaf nodes cut
+// from the array compact.
+template <class Leaves>
+static void sortByFirstCell(Leaves& leaves) {
+  const auto& rank = mortonRank();
+  const auto key = [&](const auto& e) { return rank[static_cast<std::size_t>(localIdx(e.lo[0], e.lo[1], e.lo[2]))]; };
+  std::sort(leaves.begin(), leaves.end(), [&](const auto& a, const auto& b) { return key(a) < key(b); });
 }
 
 namespace {
@@ -592,12 +604,7 @@ void OccupancyMap::rebuildBrick(const UpdateBatch::BrickUpdates& upd, std::uint3
       [&](const std::uint8_t lo[3], const std::uint8_t hi[3], int start) {
         out.push_back(LeafEntry{{lo[0], lo[1], lo[2]}, {hi[0], hi[1], hi[2]}, value[static_cast<std::size_t>(start)]});
       });
-  // Morton order of first cells keeps the leaf nodes cut from the array compact.
-  const auto& rank = mortonRank();
-  std::sort(out.begin(), out.end(), [&](const LeafEntry& a, const LeafEntry& b) {
-    return rank[static_cast<std::size_t>(localIdx(a.lo[0], a.lo[1], a.lo[2]))] <
-           rank[static_cast<std::size_t>(localIdx(b.lo[0], b.lo[1], b.lo[2]))];
-  });
+  sortByFirstCell(out);
   stats.leaves_created += out.size();
   stats.leaves_merged += leaves.size();
   ctx.leaf_delta += static_cast<std::int64_t>(out.size()) - static_cast<std::int64_t>(leaves.size());
@@ -658,11 +665,7 @@ void OccupancyMap::packLeaves(std::uint32_t slot) {
     // Sparse brick: sort the few live leaves by the Morton rank of their first cell.
     for (const LeafEntry& e : br.leaves)
       if (e.lo[0] != kDead) packed.push_back(e);
-    const auto& rank = mortonRank();
-    std::sort(packed.begin(), packed.end(), [&](const LeafEntry& a, const LeafEntry& b) {
-      return rank[static_cast<std::size_t>(localIdx(a.lo[0], a.lo[1], a.lo[2]))] <
-             rank[static_cast<std::size_t>(localIdx(b.lo[0], b.lo[1], b.lo[2]))];
-    });
+    sortByFirstCell(packed);
   }
   br.leaves = std::vector<LeafEntry>(packed.begin(), packed.end());  // exact capacity
 }
@@ -766,7 +769,6 @@ InsertStats OccupancyMap::coverPlanarLayers() {
   });
   if (apply_ctx_.empty()) apply_ctx_.resize(1);
   std::vector<LeafEntry>& out = apply_ctx_[0].rebuilt;
-  const auto& rank = mortonRank();
   reshaped_bricks_.clear();
   for (std::size_t i = 0; i < order.size();) {
     const std::uint32_t slot = planar_layers_[order[i]].slot;
@@ -812,10 +814,7 @@ InsertStats OccupancyMap::coverPlanarLayers() {
           out.push_back(LeafEntry{{lo[0], lo[1], lo[2]}, {hi[0], hi[1], hi[2]}, valueAt(start)});
         });
     stats.leaves_created += out.size() - kept;
-    std::sort(out.begin(), out.end(), [&](const LeafEntry& a, const LeafEntry& b) {
-      return rank[static_cast<std::size_t>(localIdx(a.lo[0], a.lo[1], a.lo[2]))] <
-             rank[static_cast<std::size_t>(localIdx(b.lo[0], b.lo[1], b.lo[2]))];
-    });
+    sortByFirstCell(out);
     leaf_count_ = leaf_count_ + out.size() - leaves.size();
     leaves.assign(out.begin(), out.end());
     reshaped_bricks_.push_back(slot);
@@ -834,14 +833,8 @@ InsertStats OccupancyMap::coverPlanarLayers() {
   return stats;
 }
 
-void OccupancyMap::coverLocked() {
-  std::lock_guard<std::mutex> lock(cover_mutex_);
-  if (!cover_pending_.load(std::memory_order_relaxed)) return;
-  coverPlanarLayers();
-  cover_pending_.store(false, std::memory_order_release);
-}
-
 InsertStats OccupancyMap::flush() {
+  // Under the lock, so that concurrent readers cover once: the later ones find no layers.
   std::lock_guard<std::mutex> lock(cover_mutex_);
   const InsertStats stats = coverPlanarLayers();
   cover_pending_.store(false, std::memory_order_release);

@@ -278,7 +278,7 @@ class OccupancyMap {
   void packLeaves(std::uint32_t slot);
   /// Brings the brick's leaf nodes in the upper tree up to date with its leaves.
   void syncLeafNodes(std::uint32_t slot);
-  /// Packs every brick's leaf nodes into a fresh upper tree (STR bulk load).
+  /// Packs every brick's leaf nodes into a fresh upper tree (Morton-order bulk load).
   void rebuildUpperTree(int threads = 1);
   /// Brings the upper tree up to date with the leaf nodes of reshaped_bricks_ (sorted).
   void refreshUpperTree(int threads = 1);
@@ -294,8 +294,6 @@ class OccupancyMap {
   // Planar cache: one z-layer of a brick as a dense table of log-odds, updated in place by
   // planar scans, until coverPlanarLayers() turns the brick's layers into leaves again. Costs
   // O(updated cells) per scan instead of O(leaves in the touched bricks).
-  static constexpr int kLayerCells = kBrickSize * kBrickSize;
-  static constexpr int kLayerWords = kLayerCells / 64;
   struct PlanarLayer {
     std::uint32_t slot;  // brick
     int z;               // brick-local z of the layer
@@ -316,9 +314,11 @@ class OccupancyMap {
   /// Readers call this first: covers pending planar layers once, under a lock. Sound on a const
   /// object: layers come only from insertion, and copies and moves are made covered.
   void ensureCovered() const {
-    if (cover_pending_.load(std::memory_order_acquire)) const_cast<OccupancyMap*>(this)->coverLocked();
+    if (cover_pending_.load(std::memory_order_acquire)) const_cast<OccupancyMap*>(this)->flush();
   }
-  void coverLocked();
+  /// The assignments' common part: `other` covered, its leaves and index copied or moved.
+  template <class Other>
+  void assignCovered(Other&& other);
 
   /// Visits the leaf entries of one upper-tree item.
   template <class Fn>

@@ -19,6 +19,9 @@ constexpr int kBrickBits = 4;
 constexpr int kBrickSize = 1 << kBrickBits;
 constexpr int kBrickCells = kBrickSize * kBrickSize * kBrickSize;
 constexpr int kBrickWords = kBrickCells / 64;
+/// A brick's z-layer: kBrickSize^2 cells, local indices z * kLayerCells + (0 .. kLayerCells).
+constexpr int kLayerCells = kBrickSize * kBrickSize;
+constexpr int kLayerWords = kLayerCells / 64;
 
 inline Key brickOf(const Key& k) {
   // Arithmetic shift: floor division for negative keys too.
@@ -124,7 +127,6 @@ class alignas(64) UpdateBatch {
 /// bricks under the scan's bounding box in a dense grid, found by arithmetic instead of a hash.
 class PlanarBatch {
  public:
-  static constexpr int kLayerWords = kBrickSize * kBrickSize / 64;
   struct Tile {
     std::array<std::uint64_t, kLayerWords> occupied, free;  ///< bit (y % 16) * 16 + x % 16
   };
@@ -149,7 +151,6 @@ class PlanarBatch {
   int brickY0() const { return by0_; }
   int width() const { return width_; }  ///< bricks along x
   const std::vector<Tile>& tiles() const { return tiles_; }
-  std::size_t memoryBytes() const { return tiles_.capacity() * sizeof(Tile); }
 
  private:
   static int bitOf(int x, int y) { return (x & (kBrickSize - 1)) | ((y & (kBrickSize - 1)) << kBrickBits); }

@@ -15,11 +15,14 @@
 #include <mrpt/config/CLoadableOptions.h>
 #include <mrpt/maps/CMetricMap.h>
 #include <mrpt/maps/CSimplePointsMap.h>
-#include <mrpt/obs/CObservation2DRangeScan.h>
 #include <mrpt/poses/CPose3D.h>
 
 #include "rtog/core/detail/flat_hash_map.hpp"
 #include "rtog/core/occupancy_map.hpp"
+
+namespace mrpt::obs {
+class CObservation2DRangeScan;
+}
 
 namespace rtog {
 
