@@ -70,6 +70,80 @@ TEST(RayTraversal, AxisAlignedAndDegenerateSegments) {
   EXPECT_EQ(traverseRay(Eigen::Vector3d(0.0, 0.0, 0.0), Eigen::Vector3d(3.0, 3.0, 3.0), Key{0, 0, 0}, Key{3, 3, 3}, collect), 9);
 }
 
+// A segment within one z-layer is walked in exact integer form: the same properties, and the
+// same cells as the slab test in general position.
+TEST(RayTraversal, PlanarSegmentsMatchBruteForce) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> c(-40.0, 40.0);
+  for (int trial = 0; trial < 3000; ++trial) {
+    const Eigen::Vector3d a(c(rng), c(rng), -2.25), b(c(rng), c(rng), -2.75);
+    const Key ka = floorKey(a), kb = floorKey(b);
+    ASSERT_EQ(ka.z, kb.z);
+    std::vector<Key> walk;
+    const auto n = traverseRay(a, b, ka, kb, [&](const Key& k) { walk.push_back(k); });
+    const std::int64_t manhattan = std::abs(kb.x - ka.x) + std::abs(kb.y - ka.y);
+    ASSERT_EQ(n, manhattan);
+    ASSERT_EQ(static_cast<std::int64_t>(walk.size()), manhattan);
+    if (walk.empty()) continue;
+    ASSERT_EQ(walk.front(), ka);
+    walk.push_back(kb);
+    for (std::size_t i = 1; i < walk.size(); ++i)
+      ASSERT_EQ(std::abs(walk[i].x - walk[i - 1].x) + std::abs(walk[i].y - walk[i - 1].y), 1);
+    std::set<Key> brute;
+    const Eigen::Vector3d d = b - a;
+    const Box bb{Key{std::min(ka.x, kb.x), std::min(ka.y, kb.y), ka.z}, Key{std::max(ka.x, kb.x), std::max(ka.y, kb.y), ka.z}};
+    forEachCell(bb, [&](const Key& k) {
+      double t0, t1;
+      if (intersectRay(a, d, 1.0, Box::cell(k), t0, t1) && t1 - t0 > 1e-9) brute.insert(k);
+    });
+    ASSERT_EQ(std::set<Key>(walk.begin(), walk.end()), brute) << "trial " << trial;
+  }
+}
+
+// Through cell corners: a walk of cells that touch the segment, in every direction; where
+// both boundaries are crossed at once (along +x+y and -x-y from a corner), x goes first.
+TEST(RayTraversal, PlanarWalkThroughCornersBreaksTiesTowardsX) {
+  for (const int sx : {1, -1})
+    for (const int sy : {1, -1}) {
+      const Eigen::Vector3d a(3.0, 3.0, 0.5), b(3.0 + 3.0 * sx, 3.0 + 3.0 * sy, 0.5);
+      const Key ka = floorKey(a), kb = floorKey(b);
+      std::vector<Key> walk;
+      const auto n = traverseRay(a, b, ka, kb, [&](const Key& k) { walk.push_back(k); });
+      ASSERT_EQ(n, std::int64_t{std::abs(kb.x - ka.x) + std::abs(kb.y - ka.y)});
+      walk.push_back(kb);
+      for (std::size_t i = 0; i < walk.size(); ++i) {
+        double t0, t1;
+        EXPECT_TRUE(intersectRay(a, b - a, 1.0, Box::cell(walk[i]), t0, t1)) << sx << " " << sy << " cell " << i;
+        if (i > 0) {
+          EXPECT_EQ(std::abs(walk[i].x - walk[i - 1].x) + std::abs(walk[i].y - walk[i - 1].y), 1);
+        }
+      }
+      if (sx == sy) {
+        for (std::size_t i = 1; i < walk.size(); ++i)
+          EXPECT_EQ(walk[i].x != walk[i - 1].x, i % 2 == 1) << sx << " " << sy << " step " << i;
+      }
+    }
+}
+
+// Long planar segments near the ends of the key range: the products of the exact form stay in
+// range (UBSan would see an overflow), and the walk still ends at the end cell.
+TEST(RayTraversal, LongPlanarSegmentsAcrossTheKeyRange) {
+  const double edge = kKeyMax - 0.5;
+  const Eigen::Vector3d a(-edge, -edge + 10.25, 7.5), b(edge, edge - 3.75, 7.5);
+  const Key ka = floorKey(a), kb = floorKey(b);
+  Key last = ka;
+  std::int64_t visited = 0;
+  bool connected = true;
+  const auto n = traverseRay(a, b, ka, kb, [&](const Key& k) {
+    if (visited++ > 0) connected = connected && std::abs(k.x - last.x) + std::abs(k.y - last.y) == 1;
+    last = k;
+  });
+  EXPECT_EQ(n, std::int64_t{kb.x} - ka.x + kb.y - ka.y);
+  EXPECT_EQ(visited, n);
+  EXPECT_TRUE(connected);
+  EXPECT_EQ(std::abs(kb.x - last.x) + std::abs(kb.y - last.y), 1);
+}
+
 }  // namespace
 
 // The planar batch (a dense grid of tiles) marks exactly walkRay's cells: random segments,
@@ -78,7 +152,7 @@ TEST(RayTraversal, AxisAlignedAndDegenerateSegments) {
 TEST(RayTraversal, PlanarBatchWalkMarksWalkRaysCells) {
   std::mt19937 rng(21);
   std::uniform_real_distribution<double> c(-70.0, 70.0);
-  std::uniform_int_distribution<int> ci(-70, 70), kind(0, 4);
+  std::uniform_int_distribution<int> ci(-70, 70), kind(0, 5);
   PlanarBatch batch;
   for (int trial = 0; trial < 4000; ++trial) {
     Eigen::Vector3d a(c(rng), c(rng), 3.5), b(c(rng), c(rng), 3.5);
@@ -93,6 +167,9 @@ TEST(RayTraversal, PlanarBatchWalkMarksWalkRaysCells) {
       }
       case 3:  // axis-parallel
         b[trial % 2] = a[trial % 2];
+        break;
+      case 4:  // long: runs across many tiles
+        b = a + Eigen::Vector3d(c(rng), c(rng), 0.0) * 15.0;
         break;
       default: break;
     }

@@ -72,30 +72,115 @@ void PlanarBatch::reset(const Key& lo, const Key& hi) {
   tiles_.assign(tilesFor(lo, hi), Tile{});
 }
 
+namespace {
+
+// Nibble n spread to bits 0, 16, 32, 48: a column's rows r .. r + 3 in a word of a layer mask.
+constexpr std::array<std::uint64_t, 16> kColumnSpread = [] {
+  std::array<std::uint64_t, 16> t{};
+  for (unsigned n = 0; n < 16; ++n)
+    for (unsigned b = 0; b < 4; ++b)
+      if (n >> b & 1u) t[n] |= std::uint64_t{1} << (16 * b);
+  return t;
+}();
+
+}  // namespace
+
+namespace {
+
+// Marks a walk's runs in a planar batch's tiles, moving from tile to tile by pointer steps:
+// along the major axis a run is a mask in one row (kRows) or one column of a tile.
+template <bool kRows>
+struct RunMarker {
+  PlanarBatch::Tile* tile;
+  std::ptrdiff_t tile_step[2];  // to the next tile along the major and the minor axis
+  int local[2];                 // the current cell in its tile, major and minor axis
+  int dir[2];
+  // `len` + 1 cells from the current one on along the major axis; ends on the last of them.
+  void run(int len) {
+    constexpr int m = kBrickSize - 1;
+    for (;;) {
+      // Cells left in this tile after the current one, in the direction of the run.
+      const int room = dir[0] > 0 ? m - local[0] : local[0];
+      const int n = std::min(len, room);
+      const int first = dir[0] > 0 ? local[0] : local[0] - n;
+      const unsigned cells = ((2u << n) - 1) << first;
+      if (kRows) {
+        tile->free[static_cast<std::size_t>(local[1] >> 2)] |= std::uint64_t{cells} << ((local[1] & 3) * kBrickSize);
+      } else {
+        for (unsigned w = 0; w < kLayerWords; ++w) tile->free[w] |= kColumnSpread[(cells >> (4 * w)) & 15u] << local[1];
+      }
+      local[0] += dir[0] * n;
+      len -= n;
+      if (len == 0) return;
+      // On into the next tile.
+      tile += tile_step[0];
+      local[0] = dir[0] > 0 ? 0 : m;
+      --len;
+    }
+  }
+  void stepMinor() {
+    local[1] += dir[1];
+    if (local[1] & ~(kBrickSize - 1)) {
+      local[1] &= kBrickSize - 1;
+      tile += tile_step[1];
+    }
+  }
+};
+
+template <bool kRows>
+void markRuns(const PlanarSegment& seg, PlanarBatch::Tile* tile, std::ptrdiff_t width, const Key& from_key) {
+  constexpr int m = kBrickSize - 1;
+  const std::int64_t major_n = kRows ? seg.nx : seg.ny, minor_n = kRows ? seg.ny : seg.nx;
+  const int major_s = kRows ? seg.sx : seg.sy, minor_s = kRows ? seg.sy : seg.sx;
+  const std::ptrdiff_t step_x = seg.sx, step_y = seg.sy * width;
+  RunMarker<kRows> marker{tile,
+                          {kRows ? step_x : step_y, kRows ? step_y : step_x},
+                          {(kRows ? from_key.x : from_key.y) & m, (kRows ? from_key.y : from_key.x) & m},
+                          {major_s, minor_s}};
+  if (minor_n == 0) {
+    if (major_n > 0) marker.run(static_cast<int>(major_n - 1));
+    return;
+  }
+  // Run r ends at the count of major boundaries crossed before minor boundary r + 1, from the
+  // exact crossing times: floor(((r + 1) one major_d + major_0 minor_d - minor_0 major_d - t) / (one minor_d)),
+  // t = 0 for rows and 1 for columns (a tie goes to x: it ends a row and begins a column).
+  const std::int64_t one = std::int64_t{1} << seg.shift;
+  const std::int64_t major_d = kRows ? seg.dx : seg.dy, minor_d = kRows ? seg.dy : seg.dx;
+  const std::int64_t major_0 = kRows ? seg.x0 : seg.y0, minor_0 = kRows ? seg.y0 : seg.x0;
+  const std::int64_t den = one * minor_d, add = one * major_d;
+  const std::int64_t num = add + major_0 * minor_d - minor_0 * major_d - (kRows ? 0 : 1);
+  std::int64_t q = num / den, rem = num % den;
+  const std::int64_t add_q = add / den, add_r = add % den;
+  std::int64_t start = 0;
+  for (std::int64_t r = 0; r < minor_n; ++r) {
+    const std::int64_t end = std::min(q, major_n);
+    marker.run(static_cast<int>(end - start));
+    marker.stepMinor();
+    start = end;
+    // Without a branch: the carry comes as irregularly as a line's steps.
+    rem += add_r;
+    const std::int64_t carry = rem >= den;
+    rem -= den & -carry;
+    q += add_q + carry;
+  }
+  if (start < major_n) marker.run(static_cast<int>(major_n - 1 - start));
+}
+
+}  // namespace
+
 void PlanarBatch::markRayFree(const Eigen::Vector3d& from, const Eigen::Vector3d& to, const Key& from_key,
                               const Key& to_key) {
-  // As UpdateBatch's cursor: only a carry out of the brick moves to another tile.
-  struct TileCursor {
-    PlanarBatch& batch;
-    Key cell;
-    int local[3];
-    std::uint64_t* words;
-    void visit() {
-      const int i = local[0] | (local[1] << kBrickBits);
-      words[i >> 6] |= std::uint64_t{1} << (i & 63);
-    }
-    void move(int axis, int s) {
-      cell[axis] += s;
-      local[axis] += s;  // the walk of a planar beam never steps z
-      if (local[axis] & ~(kBrickSize - 1)) {
-        local[axis] &= kBrickSize - 1;
-        words = batch.tileOf(cell.x, cell.y).free.data();
-      }
-    }
-  };
-  constexpr int m = kBrickSize - 1;
-  TileCursor cursor{*this, from_key, {from_key.x & m, from_key.y & m, 0}, tileOf(from_key.x, from_key.y).free.data()};
-  walkRay(from, to, from_key, to_key, cursor);
+  // walkPlanar's cells as runs: along the axis that steps more, the walk's cells in each row
+  // (or column) of the other are one run, whose end follows from the exact crossing times by
+  // an integer division carried from run to run (as in run-slice line drawing).
+  const PlanarSegment seg = planarSegment(from, to, from_key, to_key);
+  if (seg.nx + seg.ny == 0) return;
+  Tile* tile = &tileOf(from_key.x, from_key.y);
+  if (seg.nx >= seg.ny) {
+    markRuns<true>(seg, tile, width_, from_key);
+  } else {
+    markRuns<false>(seg, tile, width_, from_key);
+  }
 }
 
 }  // namespace rtog
