@@ -89,37 +89,36 @@ namespace {
 
 // Marks a walk's runs in a planar batch's tiles, moving from tile to tile by pointer steps:
 // along the major axis a run is a mask in one row (kRows) or one column of a tile.
-template <bool kRows>
+template <bool kRows, int kMajorDir, int kMinorDir>
 struct RunMarker {
   PlanarBatch::Tile* tile;
   std::ptrdiff_t tile_step[2];  // to the next tile along the major and the minor axis
   int local[2];                 // the current cell in its tile, major and minor axis
-  int dir[2];
   // `len` + 1 cells from the current one on along the major axis; ends on the last of them.
   void run(int len) {
     constexpr int m = kBrickSize - 1;
     for (;;) {
       // Cells left in this tile after the current one, in the direction of the run.
-      const int room = dir[0] > 0 ? m - local[0] : local[0];
+      const int room = kMajorDir > 0 ? m - local[0] : local[0];
       const int n = std::min(len, room);
-      const int first = dir[0] > 0 ? local[0] : local[0] - n;
+      const int first = kMajorDir > 0 ? local[0] : local[0] - n;
       const unsigned cells = ((2u << n) - 1) << first;
       if (kRows) {
         tile->free[static_cast<std::size_t>(local[1] >> 2)] |= std::uint64_t{cells} << ((local[1] & 3) * kBrickSize);
       } else {
         for (unsigned w = 0; w < kLayerWords; ++w) tile->free[w] |= kColumnSpread[(cells >> (4 * w)) & 15u] << local[1];
       }
-      local[0] += dir[0] * n;
+      local[0] += kMajorDir * n;
       len -= n;
       if (len == 0) return;
       // On into the next tile.
       tile += tile_step[0];
-      local[0] = dir[0] > 0 ? 0 : m;
+      local[0] = kMajorDir > 0 ? 0 : m;
       --len;
     }
   }
   void stepMinor() {
-    local[1] += dir[1];
+    local[1] += kMinorDir;
     if (local[1] & ~(kBrickSize - 1)) {
       local[1] &= kBrickSize - 1;
       tile += tile_step[1];
@@ -127,16 +126,15 @@ struct RunMarker {
   }
 };
 
-template <bool kRows>
+template <bool kRows, int kMajorDir, int kMinorDir>
 void markRuns(const PlanarSegment& seg, PlanarBatch::Tile* tile, std::ptrdiff_t width, const Key& from_key) {
   constexpr int m = kBrickSize - 1;
   const std::int64_t major_n = kRows ? seg.nx : seg.ny, minor_n = kRows ? seg.ny : seg.nx;
-  const int major_s = kRows ? seg.sx : seg.sy, minor_s = kRows ? seg.sy : seg.sx;
   const std::ptrdiff_t step_x = seg.sx, step_y = seg.sy * width;
-  RunMarker<kRows> marker{tile,
-                          {kRows ? step_x : step_y, kRows ? step_y : step_x},
-                          {(kRows ? from_key.x : from_key.y) & m, (kRows ? from_key.y : from_key.x) & m},
-                          {major_s, minor_s}};
+  RunMarker<kRows, kMajorDir, kMinorDir> marker{
+      tile,
+      {kRows ? step_x : step_y, kRows ? step_y : step_x},
+      {(kRows ? from_key.x : from_key.y) & m, (kRows ? from_key.y : from_key.x) & m}};
   if (minor_n == 0) {
     if (major_n > 0) marker.run(static_cast<int>(major_n - 1));
     return;
@@ -176,10 +174,18 @@ void PlanarBatch::markRayFree(const Eigen::Vector3d& from, const Eigen::Vector3d
   const PlanarSegment seg = planarSegment(from, to, from_key, to_key);
   if (seg.nx + seg.ny == 0) return;
   Tile* tile = &tileOf(from_key.x, from_key.y);
-  if (seg.nx >= seg.ny) {
-    markRuns<true>(seg, tile, width_, from_key);
-  } else {
-    markRuns<false>(seg, tile, width_, from_key);
+  // One loop per orientation and direction: the directions are constants in the loop.
+  const int major_s = seg.nx >= seg.ny ? seg.sx : seg.sy, minor_s = seg.nx >= seg.ny ? seg.sy : seg.sx;
+  const int variant = (seg.nx >= seg.ny ? 4 : 0) + (major_s > 0 ? 2 : 0) + (minor_s > 0 ? 1 : 0);
+  switch (variant) {
+    case 0: markRuns<false, -1, -1>(seg, tile, width_, from_key); break;
+    case 1: markRuns<false, -1, 1>(seg, tile, width_, from_key); break;
+    case 2: markRuns<false, 1, -1>(seg, tile, width_, from_key); break;
+    case 3: markRuns<false, 1, 1>(seg, tile, width_, from_key); break;
+    case 4: markRuns<true, -1, -1>(seg, tile, width_, from_key); break;
+    case 5: markRuns<true, -1, 1>(seg, tile, width_, from_key); break;
+    case 6: markRuns<true, 1, -1>(seg, tile, width_, from_key); break;
+    default: markRuns<true, 1, 1>(seg, tile, width_, from_key); break;
   }
 }
 
