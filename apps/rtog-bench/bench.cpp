@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cstdio>
 #include <fstream>
+#include <functional>
 #include <iomanip>
 #include <memory>
 #include <random>
@@ -337,69 +338,86 @@ void run2D(const std::string& rawlog, const Options& opts, std::vector<Result>& 
   log << name << ": " << beams << " beams\n";
   const float max_range = 15.0f;  // COccupancyGridMap2D's default maxDistanceInsertion, for both
   constexpr int kLfDecimation = 5;  // COccupancyGridMap2D's default, set on both maps
+  struct Method2D {
+    std::string name;
+    std::function<std::shared_ptr<mrpt::maps::CMetricMap>()> make;
+    std::function<std::size_t(const mrpt::maps::CMetricMap&)> bytes;
+    std::vector<double> times;
+    std::shared_ptr<mrpt::maps::CMetricMap> map;
+  };
   for (const double res : opts.resolutions) {
-    const auto measure = [&](const std::string& method, auto make, auto bytes) {
-      if (!selected(opts, method)) return;
+    std::vector<Method2D> methods;
+    for (const std::string policy : {"equal", "clamped", "off"})
+      methods.push_back({"rtog (CRTreeOccupancyGridMap), merge " + policy,
+                         [=] {
+                           CRTreeOccupancyGridMap::TInsertionOptions io;
+                           io.maxDistanceInsertion = max_range;
+                           io.mergePolicy = policy;
+                           auto m = std::make_shared<CRTreeOccupancyGridMap>(res, io);
+                           m->likelihoodOptions.LF_decimation = kLfDecimation;
+                           return m;
+                         },
+                         [](const mrpt::maps::CMetricMap& m) {
+                           return dynamic_cast<const CRTreeOccupancyGridMap&>(m).map().memoryBytes();
+                         },
+                         {},
+                         nullptr});
+    methods.push_back({"MRPT COccupancyGridMap2D",
+                       [=] {
+                         auto g = std::make_shared<mrpt::maps::COccupancyGridMap2D>(-10.0f, 10.0f, -10.0f, 10.0f,
+                                                                                    float(res));
+                         g->insertionOptions.maxDistanceInsertion = max_range;
+                         g->likelihoodOptions.LF_decimation = kLfDecimation;
+                         return g;
+                       },
+                       [](const mrpt::maps::CMetricMap& m) {
+                         const auto& g = dynamic_cast<const mrpt::maps::COccupancyGridMap2D&>(m);
+                         return g.getRawMap().size() * sizeof(mrpt::maps::COccupancyGridMap2D::cellType);
+                       },
+                       {},
+                       nullptr});
+    methods.erase(std::remove_if(methods.begin(), methods.end(),
+                                 [&](const Method2D& m) { return !selected(opts, m.name); }),
+                  methods.end());
+    // Builds go in rounds, as for the 3D data: a slow spell of the machine hits all methods alike.
+    for (bool built = true; built;) {
+      built = false;
+      for (Method2D& m : methods) {
+        if (!wantsAnotherBuild(opts, m.times)) continue;
+        built = true;
+        m.map = m.make();
+        const auto t0 = Clock::now();
+        for (const auto& [pose, scan] : scans) m.map->insertObservation(*scan, pose);
+        // Until the map can be read: rtog covers the scans of its planar cache with leaves.
+        if (auto* rtog_map = dynamic_cast<CRTreeOccupancyGridMap*>(m.map.get())) rtog_map->map().flush();
+        m.times.push_back(seconds(t0, Clock::now()));
+      }
+    }
+    for (Method2D& m : methods) {
       Result r;
       r.dataset = name;
-      r.method = method;
+      r.method = m.name;
       r.resolution = res;
-      std::vector<double> times;
-      std::shared_ptr<mrpt::maps::CMetricMap> map;
-      while (wantsAnotherBuild(opts, times)) {
-        map = make();
-        const auto t0 = Clock::now();
-        for (const auto& [pose, scan] : scans) map->insertObservation(*scan, pose);
-        // Until the map can be read: rtog covers the scans of its planar cache with leaves.
-        if (auto* rtog_map = dynamic_cast<CRTreeOccupancyGridMap*>(map.get())) rtog_map->map().flush();
-        times.push_back(seconds(t0, Clock::now()));
-      }
-      r.insert_seconds = median(times);
-      r.extra["repeats"] = double(times.size());
+      r.insert_seconds = median(m.times);
+      r.extra["repeats"] = double(m.times.size());
       r.points_per_second = double(beams) / r.insert_seconds;
-      r.structure_bytes = bytes(*map);
+      r.structure_bytes = m.bytes(*m.map);
       // Likelihood of every scan at its own pose: one pass to warm caches, then the median of
       // nine timed passes (one pass takes a few milliseconds: a single hiccup would decide it).
       double sink = 0;
-      for (const auto& [pose, scan] : scans) sink += map->computeObservationLikelihood(*scan, pose);
+      for (const auto& [pose, scan] : scans) sink += m.map->computeObservationLikelihood(*scan, pose);
       std::vector<double> passes;
       for (int pass = 0; pass < 9; ++pass) {
         const auto t0 = Clock::now();
-        for (const auto& [pose, scan] : scans) sink += map->computeObservationLikelihood(*scan, pose);
+        for (const auto& [pose, scan] : scans) sink += m.map->computeObservationLikelihood(*scan, pose);
         passes.push_back(seconds(t0, Clock::now()));
       }
       r.extra["likelihood_us_per_scan"] = median(passes) / double(scans.size()) * 1e6;
       r.extra["likelihood_sum"] = sink;
-      log << "  " << std::left << std::setw(48) << method << " res " << res << ": " << r.insert_seconds << " s, "
+      log << "  " << std::left << std::setw(48) << m.name << " res " << res << ": " << r.insert_seconds << " s, "
           << r.extra["likelihood_us_per_scan"] << " us/likelihood\n";
       out.push_back(r);
-    };
-    for (const std::string policy : {"equal", "clamped", "off"})
-      measure(
-          "rtog (CRTreeOccupancyGridMap), merge " + policy,
-          [&] {
-            CRTreeOccupancyGridMap::TInsertionOptions io;
-            io.maxDistanceInsertion = max_range;
-            io.mergePolicy = policy;
-            auto m = std::make_shared<CRTreeOccupancyGridMap>(res, io);
-            m->likelihoodOptions.LF_decimation = kLfDecimation;
-            return m;
-          },
-          [](const mrpt::maps::CMetricMap& m) {
-            return dynamic_cast<const CRTreeOccupancyGridMap&>(m).map().memoryBytes();
-          });
-    measure(
-        "MRPT COccupancyGridMap2D",
-        [&] {
-          auto g = std::make_shared<mrpt::maps::COccupancyGridMap2D>(-10.0f, 10.0f, -10.0f, 10.0f, float(res));
-          g->insertionOptions.maxDistanceInsertion = max_range;
-          g->likelihoodOptions.LF_decimation = kLfDecimation;
-          return g;
-        },
-        [](const mrpt::maps::CMetricMap& m) {
-          const auto& g = dynamic_cast<const mrpt::maps::COccupancyGridMap2D&>(m);
-          return g.getRawMap().size() * sizeof(mrpt::maps::COccupancyGridMap2D::cellType);
-        });
+    }
   }
 }
 
