@@ -109,8 +109,8 @@ void writeMarkdown(const std::vector<Result>& results, const std::string& path, 
   const nlohmann::json m = machine();
   md << "# Benchmarks\n\nMeasured by `rtog-bench` (Release build), every method in one process on the same scans,\n"
      << "resolution and sensor model (OctoMap's defaults). Insertion time is the median of at least 5 builds,\n"
-     << "repeated until 1 s of building was timed (at most 60 builds; the count is in the JSON). 3D methods\n"
-     << "build in rounds, each once per round, so that the machine's slow spells hit them alike. A build ends\n"
+     << "repeated until 1 s of building was timed (at most 60 builds; the count is in the JSON). Methods build\n"
+     << "in rounds, each once per round, so that the machine's slow spells hit them alike. A build ends\n"
      << "when the map can be read: rtog's timed build includes covering its planar cache (2D scans). The 2D\n"
      << "likelihood figure is the median of nine passes over all scans, after one pass to fill caches.\n\n"
      << "Machine: " << m["cpu"].get<std::string>() << ", " << m["cores"].get<std::string>() << " cores, "

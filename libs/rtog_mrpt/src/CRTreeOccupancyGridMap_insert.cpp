@@ -17,10 +17,19 @@ using mrpt::poses::CPose3D;
 
 namespace {
 
-void addLocalPoint(const CPose3D& sensor, double lx, double ly, double lz, ObservationBeams& out) {
-  double gx, gy, gz;
-  sensor.composePoint(lx, ly, lz, gx, gy, gz);
-  out.points.emplace_back(static_cast<float>(gx), static_cast<float>(gy), static_cast<float>(gz));
+// A pose's rotation and translation taken out once per observation: CPose3D::composePoint is
+// a library call per point. Same arithmetic, same order.
+struct Frame {
+  explicit Frame(const CPose3D& pose) : R(pose.getRotationMatrix()), t{pose.x(), pose.y(), pose.z()} {}
+  mrpt::math::CMatrixDouble33 R;
+  double t[3];
+};
+
+void addLocalPoint(const Frame& f, double lx, double ly, double lz, ObservationBeams& out) {
+  const auto& R = f.R;
+  out.points.emplace_back(static_cast<float>(R(0, 0) * lx + R(0, 1) * ly + R(0, 2) * lz + f.t[0]),
+                          static_cast<float>(R(1, 0) * lx + R(1, 1) * ly + R(1, 2) * lz + f.t[1]),
+                          static_cast<float>(R(2, 0) * lx + R(2, 1) * ly + R(2, 2) * lz + f.t[2]));
   out.is_hit.push_back(1);
   out.ranges.push_back(static_cast<float>(std::sqrt(lx * lx + ly * ly + lz * lz)));
 }
@@ -29,25 +38,33 @@ void setOrigin(const CPose3D& sensor, ObservationBeams& out) {
   out.origin = Eigen::Vector3d(sensor.x(), sensor.y(), sensor.z());
 }
 
+void reserveMore(ObservationBeams& out, std::size_t n) {
+  out.points.reserve(out.points.size() + n);
+  out.is_hit.reserve(out.is_hit.size() + n);
+  out.ranges.reserve(out.ranges.size() + n);
+}
+
 // Points of a points map, given in the frame `frame`, into `out`.
 void addPointsMap(const mrpt::maps::CPointsMap& pm, const CPose3D& frame, std::size_t decimation,
                   ObservationBeams& out) {
   const auto& xs = pm.getPointsBufferRef_x();
   const auto& ys = pm.getPointsBufferRef_y();
   const auto& zs = pm.getPointsBufferRef_z();
-  out.points.reserve(out.points.size() + xs.size() / decimation + 1);
+  reserveMore(out, xs.size() / decimation + 1);
+  const Frame f(frame);
   for (std::size_t i = 0; i < xs.size(); i += decimation) {
     if (!std::isfinite(xs[i]) || !std::isfinite(ys[i]) || !std::isfinite(zs[i])) {
       ++out.invalid;
       continue;
     }
-    addLocalPoint(frame, xs[i], ys[i], zs[i], out);
+    addLocalPoint(f, xs[i], ys[i], zs[i], out);
   }
 }
 
 void addLocalPoints(const CPose3D& sensor, const std::vector<Eigen::Vector3f>& local, ObservationBeams& out) {
-  out.points.reserve(out.points.size() + local.size());
-  for (const auto& p : local) addLocalPoint(sensor, p.x(), p.y(), p.z(), out);
+  reserveMore(out, local.size());
+  const Frame f(sensor);
+  for (const auto& p : local) addLocalPoint(f, p.x(), p.y(), p.z(), out);
 }
 
 }  // namespace
@@ -101,7 +118,14 @@ void CRTreeOccupancyGridMap::localPointsCached(const mrpt::obs::CObservation& ob
 bool CRTreeOccupancyGridMap::extractBeams(const mrpt::obs::CObservation& obs, const CPose3D& robotPose,
                                           ObservationBeams& out, bool forInsertion) const {
   using namespace mrpt::obs;
-  out = ObservationBeams{};
+  // Cleared, not replaced: callers reuse `out` and keep its capacity.
+  out.origin.setZero();
+  out.points.clear();
+  out.is_hit.clear();
+  out.ranges.clear();
+  out.invalid = 0;
+  // Scratch for the sensor-frame points, kept per thread from call to call.
+  thread_local std::vector<Eigen::Vector3f> local;
   std::size_t dec = insertionOptions.decimation;
   if (!forInsertion)
     dec = likelihoodOptions.likelihoodMethod == lmRayTracing ? likelihoodOptions.rayTracing_decimation
@@ -113,7 +137,6 @@ bool CRTreeOccupancyGridMap::extractBeams(const mrpt::obs::CObservation& obs, co
     setOrigin(sensor, out);
     // Sensor-frame points once per scan: a particle filter evaluates the same scan at every
     // particle's pose.
-    std::vector<Eigen::Vector3f> local;
     localPointsCached(
         obs, dec,
         [&](std::vector<Eigen::Vector3f>& pts, std::size_t& invalid) {
@@ -144,7 +167,6 @@ bool CRTreeOccupancyGridMap::extractBeams(const mrpt::obs::CObservation& obs, co
   if (const auto* velo = dynamic_cast<const CObservationVelodyneScan*>(&obs)) {
     const CPose3D sensor = robotPose + velo->sensorPose;
     setOrigin(sensor, out);
-    std::vector<Eigen::Vector3f> local;
     localPointsCached(
         obs, dec,
         [&](std::vector<Eigen::Vector3f>& pts, std::size_t& invalid) {
@@ -170,6 +192,7 @@ bool CRTreeOccupancyGridMap::extractBeams(const mrpt::obs::CObservation& obs, co
   }
   if (const auto* rot = dynamic_cast<const CObservationRotatingScan*>(&obs)) {
     const CPose3D sensor = robotPose + rot->sensorPose;
+    const Frame frame(sensor);
     setOrigin(sensor, out);
     const std::size_t rows = rot->rangeImage.rows(), cols = rot->rangeImage.cols();
     const double el0 = insertionOptions.rotatingScan_minElevation_deg * M_PI / 180.0;
@@ -185,7 +208,7 @@ bool CRTreeOccupancyGridMap::extractBeams(const mrpt::obs::CObservation& obs, co
           continue;
         }
         const double az = rot->startAzimuth + (cols > 1 ? rot->azimuthSpan * double(c) / double(cols - 1) : 0.0);
-        addLocalPoint(sensor, range * ce * std::cos(az), range * ce * std::sin(az), range * se, out);
+        addLocalPoint(frame, range * ce * std::cos(az), range * ce * std::sin(az), range * se, out);
       }
     }
     return true;
@@ -193,6 +216,7 @@ bool CRTreeOccupancyGridMap::extractBeams(const mrpt::obs::CObservation& obs, co
   if (const auto* depth = dynamic_cast<const CObservation3DRangeScan*>(&obs)) {
     depth->load();
     const CPose3D sensor = robotPose + depth->sensorPose;
+    const Frame frame(sensor);
     if (!depth->hasRangeImage) {
       if (!depth->hasPoints3D) return false;
       // Only the point cloud was stored (sensor frame).
@@ -203,7 +227,7 @@ bool CRTreeOccupancyGridMap::extractBeams(const mrpt::obs::CObservation& obs, co
           ++out.invalid;
           continue;
         }
-        addLocalPoint(sensor, x, y, z, out);
+        addLocalPoint(frame, x, y, z, out);
       }
       return true;
     }
@@ -211,7 +235,6 @@ bool CRTreeOccupancyGridMap::extractBeams(const mrpt::obs::CObservation& obs, co
     // MRPT's own unprojection through the camera model, into the sensor frame (x forward), once
     // per observation; then the sensor pose on the robot and the robot pose.
     const std::size_t ddec = forInsertion ? insertionOptions.decimation_3d_range : std::min<std::size_t>(dec, 255);
-    std::vector<Eigen::Vector3f> local;
     localPointsCached(
         obs, ddec,
         [&](std::vector<Eigen::Vector3f>& pts, std::size_t& invalid) {

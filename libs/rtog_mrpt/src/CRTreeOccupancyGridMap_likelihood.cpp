@@ -23,7 +23,8 @@ bool CRTreeOccupancyGridMap::internal_canComputeObservationLikelihood(const mrpt
 
 double CRTreeOccupancyGridMap::internal_computeObservationLikelihood(const mrpt::obs::CObservation& obs,
                                                                      const mrpt::poses::CPose3D& takenFrom) const {
-  ObservationBeams beams;
+  // Per thread and kept: a particle filter calls this for every particle.
+  thread_local ObservationBeams beams;
   if (!extractBeams(obs, takenFrom, beams, false)) return 0.0;  // no information: neutral
   return beamsLikelihood(beams);
 }
