@@ -32,6 +32,7 @@ std::uint64_t updateLayerWord(float* values, std::uint64_t occupied, std::uint64
   };
   const __m128 vhit = _mm_set1_ps(hit), vmiss = _mm_set1_ps(miss), vlo = _mm_set1_ps(lo), vhi = _mm_set1_ps(hi);
   std::uint64_t same = 0;
+#pragma GCC unroll 16
   for (int g = 0; g < 16; ++g) {
     const __m128 o = lanes(occupied, g), f = lanes(free, g), touched = _mm_or_ps(o, f);
     const __m128 delta = _mm_or_ps(_mm_and_ps(o, vhit), _mm_and_ps(f, vmiss));
@@ -399,11 +400,26 @@ static const std::array<std::uint16_t, kBrickCells>& mortonRank() {
 
 // Orders a brick's leaves by the Morton rank of their first cell, which keeps the leaf nodes cut
 // from the array compact.
+// Disjoint boxes have distinct first cells, so a bit per rank sorts them in O(n + 64 words).
 template <class Leaves>
 static void sortByFirstCell(Leaves& leaves) {
+  if (leaves.size() < 2) return;
   const auto& rank = mortonRank();
-  const auto key = [&](const auto& e) { return rank[static_cast<std::size_t>(localIdx(e.lo[0], e.lo[1], e.lo[2]))]; };
-  std::sort(leaves.begin(), leaves.end(), [&](const auto& a, const auto& b) { return key(a) < key(b); });
+  thread_local std::array<std::uint64_t, kBrickWords> present;
+  thread_local std::array<std::uint32_t, kBrickCells> index_at;
+  thread_local Leaves sorted;
+  present.fill(0);
+  for (std::size_t i = 0; i < leaves.size(); ++i) {
+    const auto& e = leaves[i];
+    const std::uint16_t r = rank[static_cast<std::size_t>(localIdx(e.lo[0], e.lo[1], e.lo[2]))];
+    present[r >> 6] |= std::uint64_t{1} << (r & 63);
+    index_at[r] = static_cast<std::uint32_t>(i);
+  }
+  sorted.clear();
+  for (std::size_t w = 0; w < kBrickWords; ++w)
+    for (std::uint64_t bits = present[w]; bits; bits &= bits - 1)
+      sorted.push_back(leaves[index_at[w * 64 + static_cast<std::size_t>(__builtin_ctzll(bits))]]);
+  std::copy(sorted.begin(), sorted.end(), leaves.begin());
 }
 
 namespace {

@@ -74,12 +74,14 @@ void PlanarBatch::reset(const Key& lo, const Key& hi) {
 
 namespace {
 
-// Nibble n spread to bits 0, 16, 32, 48: a column's rows r .. r + 3 in a word of a layer mask.
-constexpr std::array<std::uint64_t, 16> kColumnSpread = [] {
-  std::array<std::uint64_t, 16> t{};
-  for (unsigned n = 0; n < 16; ++n)
-    for (unsigned b = 0; b < 4; ++b)
-      if (n >> b & 1u) t[n] |= std::uint64_t{1} << (16 * b);
+// Rows first .. last of column 0 of a tile as layer mask words; a run in column x is this << x.
+using ColumnRun = std::array<std::uint64_t, kLayerWords>;
+constexpr std::array<std::array<ColumnRun, kBrickSize>, kBrickSize> kColumnRuns = [] {
+  std::array<std::array<ColumnRun, kBrickSize>, kBrickSize> t{};
+  for (int first = 0; first < kBrickSize; ++first)
+    for (int last = first; last < kBrickSize; ++last)
+      for (int row = first; row <= last; ++row)
+        t[first][last][row >> 2] |= std::uint64_t{1} << ((row & 3) * kBrickSize);
   return t;
 }();
 
@@ -102,11 +104,12 @@ struct RunMarker {
       const int room = kMajorDir > 0 ? m - local[0] : local[0];
       const int n = std::min(len, room);
       const int first = kMajorDir > 0 ? local[0] : local[0] - n;
-      const unsigned cells = ((2u << n) - 1) << first;
       if (kRows) {
+        const unsigned cells = ((2u << n) - 1) << first;
         tile->free[static_cast<std::size_t>(local[1] >> 2)] |= std::uint64_t{cells} << ((local[1] & 3) * kBrickSize);
       } else {
-        for (unsigned w = 0; w < kLayerWords; ++w) tile->free[w] |= kColumnSpread[(cells >> (4 * w)) & 15u] << local[1];
+        const ColumnRun& run = kColumnRuns[static_cast<std::size_t>(first)][static_cast<std::size_t>(first + n)];
+        for (std::size_t w = 0; w < kLayerWords; ++w) tile->free[w] |= run[w] << local[1];
       }
       local[0] += kMajorDir * n;
       len -= n;
