@@ -114,12 +114,13 @@ InsertStats OccupancyMap::insertPointCloud(const Eigen::Vector3d& origin, const 
   if (planar && planar_batches_.size() < threads) planar_batches_.resize(threads);
   std::vector<InsertStats> part(threads);
   std::vector<std::exception_ptr> errors(threads);
-  // Chunks dealt round-robin (neighbouring beams have similar lengths, so this balances the
-  // load), traced independently; their union does not depend on the split. With discretized
-  // end points a thread traces each end cell once, but neighbouring beams share end cells
-  // across a chunk border: then the chunks are few and large (two per thread).
-  const std::size_t chunk = ip.discretize ? std::max<std::size_t>(2048, (count + 2 * threads - 1) / (2 * threads))
+  // Chunks taken as threads become free, traced independently; their union does not depend on
+  // the split. With discretized end points a thread traces each end cell once, but neighbouring
+  // beams share end cells across a chunk border, so the chunks are larger then (four per
+  // thread: a depth image's rows differ too much in cost for two fixed halves).
+  const std::size_t chunk = ip.discretize ? std::max<std::size_t>(2048, (count + 4 * threads - 1) / (4 * threads))
                                           : std::size_t{2048};
+  std::atomic<std::size_t> next_chunk{0};
   const auto trace = [&](std::size_t t) {
     try {
       InsertStats own;  // counted locally: neighbouring entries of `part` share a cache line
@@ -128,7 +129,7 @@ InsertStats OccupancyMap::insertPointCloud(const Eigen::Vector3d& origin, const 
       } else {
         batches_[t].clear();
       }
-      for (std::size_t first = t * chunk; first < count; first += threads * chunk) {
+      for (std::size_t first; (first = next_chunk.fetch_add(chunk, std::memory_order_relaxed)) < count;) {
         const std::size_t n = std::min(chunk, count - first);
         const std::uint8_t* hits = is_hit ? is_hit + first : nullptr;
         if (planar) {
