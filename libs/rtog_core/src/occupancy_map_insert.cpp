@@ -118,8 +118,9 @@ InsertStats OccupancyMap::insertPointCloud(const Eigen::Vector3d& origin, const 
   // the split. With discretized end points a thread traces each end cell once, but neighbouring
   // beams share end cells across a chunk border, so the chunks are larger then (four per
   // thread: a depth image's rows differ too much in cost for two fixed halves).
+  // Without it, small chunks: one long-range scan is only a few thousand beams.
   const std::size_t chunk = ip.discretize ? std::max<std::size_t>(2048, (count + 4 * threads - 1) / (4 * threads))
-                                          : std::size_t{2048};
+                                          : std::clamp<std::size_t>(count / (16 * threads), 256, 2048);
   std::atomic<std::size_t> next_chunk{0};
   const auto trace = [&](std::size_t t) {
     try {
