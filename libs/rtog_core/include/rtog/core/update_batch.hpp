@@ -101,7 +101,14 @@ class alignas(64) UpdateBatch {
  private:
   BrickUpdates& brickFor(const Key& k) {
     const Key b = brickOf(k);
-    if (cached_ == nullptr || b != cached_->brick) cached_ = &brickAt(brickSlot(b));
+    if (cached_ == nullptr || b != cached_->brick) {
+      // Neighbouring beams cross the same bricks: a small direct-mapped table in front of the
+      // hash, which outgrows the cache on a long-range scan.
+      const std::uint64_t packed = packKey(b);
+      Recent& r = recent_[(packed ^ (packed >> 21) ^ (packed >> 42)) & (kRecent - 1)];
+      if (r.key != packed) r = Recent{packed, brickSlot(b)};
+      cached_ = &brickAt(r.slot);
+    }
     return *cached_;
   }
   std::uint32_t brickSlot(const Key& b);
@@ -119,6 +126,12 @@ class alignas(64) UpdateBatch {
   std::size_t count_ = 0;
   detail::FlatHashMap64 index_;
   BrickUpdates* cached_ = nullptr;
+  struct Recent {
+    std::uint64_t key = ~std::uint64_t{0};  // no packed key has all 64 bits set
+    std::uint32_t slot = 0;
+  };
+  static constexpr std::size_t kRecent = 512;
+  std::array<Recent, kRecent> recent_{};
   std::vector<const BrickUpdates*> sorted_;
   std::vector<Key> sorted_keys_;
 };
