@@ -342,8 +342,8 @@ void run2D(const std::string& rawlog, const Options& opts, std::vector<Result>& 
     std::string name;
     std::function<std::shared_ptr<mrpt::maps::CMetricMap>()> make;
     std::function<std::size_t(const mrpt::maps::CMetricMap&)> bytes;
-    std::vector<double> times;
-    std::shared_ptr<mrpt::maps::CMetricMap> map;
+    std::vector<double> times = {};
+    std::shared_ptr<mrpt::maps::CMetricMap> map = nullptr;
   };
   for (const double res : opts.resolutions) {
     std::vector<Method2D> methods;
@@ -359,9 +359,7 @@ void run2D(const std::string& rawlog, const Options& opts, std::vector<Result>& 
                          },
                          [](const mrpt::maps::CMetricMap& m) {
                            return dynamic_cast<const CRTreeOccupancyGridMap&>(m).map().memoryBytes();
-                         },
-                         {},
-                         nullptr});
+                         }});
     methods.push_back({"MRPT COccupancyGridMap2D",
                        [=] {
                          auto g = std::make_shared<mrpt::maps::COccupancyGridMap2D>(-10.0f, 10.0f, -10.0f, 10.0f,
@@ -373,9 +371,7 @@ void run2D(const std::string& rawlog, const Options& opts, std::vector<Result>& 
                        [](const mrpt::maps::CMetricMap& m) {
                          const auto& g = dynamic_cast<const mrpt::maps::COccupancyGridMap2D&>(m);
                          return g.getRawMap().size() * sizeof(mrpt::maps::COccupancyGridMap2D::cellType);
-                       },
-                       {},
-                       nullptr});
+                       }});
     methods.erase(std::remove_if(methods.begin(), methods.end(),
                                  [&](const Method2D& m) { return !selected(opts, m.name); }),
                   methods.end());

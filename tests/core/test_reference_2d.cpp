@@ -261,10 +261,6 @@ TEST(Reference2D, ThreadCountDoesNotChangeAPlanarMap) {
   EXPECT_EQ(bytes[0], bytes[1]);
 }
 
-}  // namespace
-
-namespace {
-
 // A planar scan too wide for a dense tile grid (here 470 m at 5 cm: 600^2 bricks) takes the
 // general path, and cells are the same.
 TEST(Reference2D, VeryWidePlanarScanTakesTheGeneralPath) {

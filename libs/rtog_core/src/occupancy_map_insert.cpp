@@ -115,10 +115,10 @@ InsertStats OccupancyMap::insertPointCloud(const Eigen::Vector3d& origin, const 
   std::vector<InsertStats> part(threads);
   std::vector<std::exception_ptr> errors(threads);
   // Chunks taken as threads become free, traced independently; their union does not depend on
-  // the split. With discretized end points a thread traces each end cell once, but neighbouring
-  // beams share end cells across a chunk border, so the chunks are larger then (four per
-  // thread: a depth image's rows differ too much in cost for two fixed halves).
-  // Without it, small chunks: one long-range scan is only a few thousand beams.
+  // the split. Small chunks (a sixteenth of a thread's share, 256 to 2,048 beams) balance a
+  // single long-range scan. With discretized end points a thread traces each end cell once, and
+  // neighbouring beams share end cells across a chunk border: then four large chunks per thread
+  // (two fixed halves were too uneven, a depth image's rows differing in cost).
   const std::size_t chunk = ip.discretize ? std::max<std::size_t>(2048, (count + 4 * threads - 1) / (4 * threads))
                                           : std::clamp<std::size_t>(count / (16 * threads), 256, 2048);
   std::atomic<std::size_t> next_chunk{0};
@@ -401,8 +401,8 @@ static const std::array<std::uint16_t, kBrickCells>& mortonRank() {
 }
 
 // Orders a brick's leaves by the Morton rank of their first cell, which keeps the leaf nodes cut
-// from the array compact.
-// Disjoint boxes have distinct first cells, so a bit per rank sorts them in O(n + 64 words).
+// from the array compact. Disjoint boxes have distinct first cells, so a bit per rank sorts them
+// in O(n + 64 words).
 template <class Leaves>
 static void sortByFirstCell(Leaves& leaves) {
   if (leaves.size() < 2) return;

@@ -86,10 +86,6 @@ constexpr std::array<std::array<ColumnRun, kBrickSize>, kBrickSize> kColumnRuns 
   return t;
 }();
 
-}  // namespace
-
-namespace {
-
 // Marks a walk's runs in a planar batch's tiles, moving from tile to tile by pointer steps:
 // along the major axis a run is a mask in one row (kRows) or one column of a tile.
 template <bool kRows, int kMajorDir, int kMinorDir>

@@ -96,6 +96,8 @@ std::int64_t walkPlanar(const PlanarSegment& seg, Cursor& cursor) {
 template <class Cursor>
 std::int64_t walkRay(const Eigen::Vector3d& from, const Eigen::Vector3d& to, const Key& from_key, const Key& to_key,
                      Cursor& cursor) {
+  // Before the floating-point set-up below, which a planar segment does not use.
+  if (from_key.z == to_key.z) return walkPlanar(planarSegment(from, to, from_key, to_key), cursor);
   constexpr double inf = std::numeric_limits<double>::infinity();
   const Eigen::Vector3d d = to - from;
   int step[3];
@@ -117,7 +119,6 @@ std::int64_t walkRay(const Eigen::Vector3d& from, const Eigen::Vector3d& to, con
   // Scalars, not arrays indexed by the chosen axis: keeps the loop in registers (~2 ns/step).
   std::int32_t x = from_key.x, y = from_key.y, z = from_key.z;
   double tx = t_max[0], ty = t_max[1], tz = t_max[2];
-  if (step[2] == 0) return walkPlanar(planarSegment(from, to, from_key, to_key), cursor);
   for (std::int64_t i = 0; i < n; ++i) {
     cursor.visit();
     if (tx <= ty && tx <= tz) {
