@@ -5,6 +5,7 @@
 
 #include <random>
 #include <set>
+#include <string>
 
 #include "rtog/core/ray_traversal.hpp"
 #include "rtog/core/rtree.hpp"  // intersectRay
@@ -144,6 +145,32 @@ TEST(RayTraversal, LongPlanarSegmentsAcrossTheKeyRange) {
   EXPECT_EQ(std::abs(kb.x - last.x) + std::abs(kb.y - last.y), 1);
 }
 
+// The cells a planar batch marked free, in layer z.
+std::set<Key> markedFree(const PlanarBatch& batch, int z) {
+  std::set<Key> marked;
+  const auto width = static_cast<std::size_t>(batch.width());
+  for (std::size_t t = 0; t < batch.tiles().size(); ++t)
+    for (int w = 0; w < kLayerWords; ++w)
+      for (std::uint64_t bits = batch.tiles()[t].free[static_cast<std::size_t>(w)]; bits; bits &= bits - 1) {
+        const int i = w * 64 + __builtin_ctzll(bits);
+        const int bx = batch.brickX0() + static_cast<int>(t % width), by = batch.brickY0() + static_cast<int>(t / width);
+        marked.insert(Key{bx * kBrickSize + (i & (kBrickSize - 1)), by * kBrickSize + (i >> kBrickBits), z});
+      }
+  return marked;
+}
+
+// The cells in one set and not the other, for a failure message.
+std::string difference(const std::set<Key>& got, const std::set<Key>& expected) {
+  std::string out;
+  const auto list = [&](const std::set<Key>& a, const std::set<Key>& b, const char* label) {
+    for (const Key& k : a)
+      if (!b.count(k)) out += std::string(label) + " (" + std::to_string(k.x) + ", " + std::to_string(k.y) + ") ";
+  };
+  list(got, expected, "extra");
+  list(expected, got, "missing");
+  return out.substr(0, 400);
+}
+
 }  // namespace
 
 // The planar batch (a dense grid of tiles) marks exactly walkRay's cells: random segments,
@@ -179,16 +206,89 @@ TEST(RayTraversal, PlanarBatchWalkMarksWalkRaysCells) {
     // The batch spans the segment's cells, as the scan's bounding box does in insertPointCloud.
     batch.reset(Key{std::min(ka.x, kb.x), std::min(ka.y, kb.y), 3}, Key{std::max(ka.x, kb.x), std::max(ka.y, kb.y), 3});
     batch.markRayFree(a, b, ka, kb);
-    std::set<Key> marked;
-    for (std::size_t t = 0; t < batch.tiles().size(); ++t)
-      for (int w = 0; w < kLayerWords; ++w)
-        for (std::uint64_t bits = batch.tiles()[t].free[static_cast<std::size_t>(w)]; bits; bits &= bits - 1) {
-          const int i = w * 64 + __builtin_ctzll(bits);
-          const int bx = batch.brickX0() + static_cast<int>(t % static_cast<std::size_t>(batch.width()));
-          const int by = batch.brickY0() + static_cast<int>(t / static_cast<std::size_t>(batch.width()));
-          marked.insert(Key{bx * kBrickSize + (i & (kBrickSize - 1)), by * kBrickSize + (i >> kBrickBits), 3});
-        }
-    ASSERT_EQ(marked, expected) << "trial " << trial << " from (" << a.x() << ", " << a.y() << ") to (" << b.x()
+    ASSERT_EQ(markedFree(batch, 3), expected) << "trial " << trial << " from (" << a.x() << ", " << a.y() << ") to (" << b.x()
                                 << ", " << b.y() << ")";
   }
+}
+
+// Leaving out the first k runs of a walk (rows when it steps more along x, else columns; the
+// last run stays) marks exactly the walk's cells k or more rows (columns) away from the start.
+TEST(RayTraversal, PlanarBatchSkipsLeadingRuns) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> c(-40.0, 40.0);
+  std::uniform_int_distribution<int> ci(-40, 40);
+  PlanarBatch batch;
+  std::int64_t partly_skipped = 0;
+  for (int trial = 0; trial < 3000; ++trial) {
+    Eigen::Vector3d a(c(rng), c(rng), 0.5), b(c(rng), c(rng), 0.5);
+    if (trial % 4 == 1) a = Eigen::Vector3d(ci(rng), ci(rng), 0.5), b = Eigen::Vector3d(ci(rng), ci(rng), 0.5);
+    if (trial % 4 == 2) b = a + (b - a) * 6.0;
+    const Key ka = floorKey(a), kb = floorKey(b);
+    const PlanarSegment seg = planarSegment(a, b, ka, kb);
+    const bool rows = seg.nx >= seg.ny;
+    const std::int64_t minor_n = rows ? seg.ny : seg.nx;
+    const std::int64_t skip = std::uniform_int_distribution<std::int64_t>(0, minor_n + 2)(rng);
+    std::set<Key> expected;
+    traverseRay(a, b, ka, kb, [&](const Key& k) {
+      if (std::abs(rows ? k.y - ka.y : k.x - ka.x) >= std::min(skip, minor_n)) expected.insert(k);
+    });
+    batch.reset(Key{std::min(ka.x, kb.x), std::min(ka.y, kb.y), 0}, Key{std::max(ka.x, kb.x), std::max(ka.y, kb.y), 0});
+    batch.markRayFree(seg, ka, skip);
+    const std::set<Key> marked = markedFree(batch, 0);
+    ASSERT_TRUE(marked == expected) << "trial " << trial << ", skip " << skip << " from (" << a.x() << ", " << a.y()
+                                    << ") to (" << b.x() << ", " << b.y() << "): " << difference(marked, expected);
+    partly_skipped += skip > 0 && skip < minor_n;
+  }
+  EXPECT_GT(partly_skipped, 1000);
+}
+
+// A scan's beams marked with fanSkipRuns's skips mark exactly the union of their whole walks:
+// sweeps of many angular steps and directions, short, missing and zero-length beams among long
+// ones, beams out of sweep order, starts on cell corners, a sweep over a full turn.
+TEST(RayTraversal, FanSkipsMarkTheUnionOfTheWholeWalks) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  PlanarBatch batch;
+  std::int64_t skipped = 0, runs = 0;
+  for (int trial = 0; trial < 300; ++trial) {
+    Eigen::Vector3d origin(-20.0 + 40.0 * u(rng), -20.0 + 40.0 * u(rng), 2.5);
+    if (trial % 5 == 0) origin = Eigen::Vector3d(std::floor(origin.x()), std::floor(origin.y()), 2.5);
+    const int count = 20 + static_cast<int>(u(rng) * 400);
+    const double step = (trial % 7 == 0 ? 6.283185307179586 / count : 0.001 + 0.05 * u(rng) * u(rng)) * (trial % 2 ? 1 : -1);
+    const double start = 6.283185307179586 * u(rng), reach = 5.0 + 150.0 * u(rng);
+    const Key ka = floorKey(origin);
+    std::vector<PlanarBeam> beams(static_cast<std::size_t>(count));
+    std::vector<Eigen::Vector3d> ends(beams.size());
+    Key lo = ka, hi = ka;
+    for (std::size_t i = 0; i < beams.size(); ++i) {
+      const double angle = start + step * static_cast<double>(i), r = u(rng);
+      // Mostly long beams, some short ones, some of zero length.
+      const double range = r < 0.2 ? 12.0 * u(rng) : (r < 0.23 ? 0.0 : reach * (0.5 + 0.5 * u(rng)));
+      ends[i] = origin + range * Eigen::Vector3d(std::cos(angle), std::sin(angle), 0.0);
+      if (r > 0.97 && i > 0) std::swap(ends[i], ends[i - 1]);  // out of sweep order
+    }
+    for (std::size_t i = 0; i < beams.size(); ++i) {
+      PlanarBeam& beam = beams[i];
+      beam.end = floorKey(ends[i]);
+      beam.traced = u(rng) > 0.03;  // a few missing
+      beam.seg = planarSegment(origin, ends[i], ka, beam.end);
+      lo = Key{std::min(lo.x, beam.end.x), std::min(lo.y, beam.end.y), 2};
+      hi = Key{std::max(hi.x, beam.end.x), std::max(hi.y, beam.end.y), 2};
+    }
+    fanSkipRuns(beams.data(), beams.size());
+    std::set<Key> expected;
+    batch.reset(lo, hi);
+    for (std::size_t i = 0; i < beams.size(); ++i) {
+      const PlanarBeam& beam = beams[i];
+      if (!beam.traced) continue;
+      traverseRay(origin, ends[i], ka, beam.end, [&](const Key& k) { expected.insert(k); });
+      batch.markRayFree(beam.seg, ka, beam.skip_runs);
+      skipped += beam.skip_runs;
+      runs += beam.seg.nx >= beam.seg.ny ? beam.seg.ny : beam.seg.nx;
+    }
+    const std::set<Key> marked = markedFree(batch, 2);
+    ASSERT_TRUE(marked == expected) << "trial " << trial << ": " << difference(marked, expected);
+  }
+  // The skips are not idle: a fifth of the runs or more.
+  EXPECT_GT(skipped * 5, runs);
 }

@@ -81,23 +81,6 @@ inline BeamEnd endOfBeam(const Lattice& lattice, const Eigen::Vector3d& origin, 
 
 }  // namespace
 
-bool OccupancyMap::planarExtent(const Eigen::Vector3d& origin, const Eigen::Vector3f* points, std::size_t count,
-                                const InsertParams& ip, Key& lo, Key& hi) const {
-  Key origin_key;
-  if (!lattice_.tryKey(origin, origin_key)) return false;
-  lo = hi = origin_key;
-  Eigen::Vector3d end;
-  Key end_key;
-  for (std::size_t i = 0; i < count; ++i) {
-    const BeamEnd e = endOfBeam(lattice_, origin, points[i].cast<double>(), true, ip.max_range, end, end_key);
-    if (e != BeamEnd::Hit && e != BeamEnd::Truncated) continue;
-    if (end_key.z != origin_key.z) return false;
-    lo = Key{std::min(lo.x, end_key.x), std::min(lo.y, end_key.y), lo.z};
-    hi = Key{std::max(hi.x, end_key.x), std::max(hi.y, end_key.y), hi.z};
-  }
-  return true;
-}
-
 InsertStats OccupancyMap::insertPointCloud(const Eigen::Vector3d& origin, const Eigen::Vector3f* points,
                                            std::size_t count, const InsertParams& ip, const std::uint8_t* is_hit) {
   if (ip.threads < 1) throw std::invalid_argument("InsertParams: threads must be >= 1");
@@ -105,8 +88,10 @@ InsertStats OccupancyMap::insertPointCloud(const Eigen::Vector3d& origin, const 
   // the general path instead.
   constexpr std::size_t kMaxPlanarTiles = std::size_t{1} << 18;
   Key lo, hi;
-  const bool planar = ip.planar_cache && planarExtent(origin, points, count, ip, lo, hi) &&
+  InsertStats stats;
+  const bool planar = ip.planar_cache && preparePlanarBeams(origin, points, count, ip, is_hit, lo, hi, stats) &&
                       PlanarBatch::tilesFor(lo, hi) <= kMaxPlanarTiles;
+  if (!planar) stats = InsertStats{};  // the general path counts the beams
   if (!planar && hasPendingCover()) flush();
   // Below a few thousand beams a thread costs more than it saves.
   const std::size_t threads = std::min<std::size_t>(static_cast<std::size_t>(ip.threads), 1 + count / 4096);
@@ -122,6 +107,8 @@ InsertStats OccupancyMap::insertPointCloud(const Eigen::Vector3d& origin, const 
   const std::size_t chunk = ip.discretize ? std::max<std::size_t>(2048, (count + 4 * threads - 1) / (4 * threads))
                                           : std::clamp<std::size_t>(count / (16 * threads), 256, 2048);
   std::atomic<std::size_t> next_chunk{0};
+  const Key origin_key = planar ? lattice_.key(origin) : Key{};
+  const bool trace_free = ip.model == SensorModel::BeamBased;
   const auto trace = [&](std::size_t t) {
     try {
       InsertStats own;  // counted locally: neighbouring entries of `part` share a cache line
@@ -134,7 +121,14 @@ InsertStats OccupancyMap::insertPointCloud(const Eigen::Vector3d& origin, const 
         const std::size_t n = std::min(chunk, count - first);
         const std::uint8_t* hits = is_hit ? is_hit + first : nullptr;
         if (planar) {
-          traceBeams(origin, points + first, n, ip, hits, planar_batches_[t], own);
+          PlanarBatch& batch = planar_batches_[t];
+          for (std::size_t i = first; i < first + n; ++i) {
+            const PlanarBeam& beam = planar_beams_[i];
+            if (!beam.traced) continue;
+            // With discretized ends, a beam to a cell already traced to in this batch adds nothing.
+            if (beam.hit && !batch.markOccupied(beam.end) && ip.discretize) continue;
+            if (trace_free) batch.markRayFree(beam.seg, origin_key, beam.skip_runs);
+          }
         } else {
           traceBeams(origin, points + first, n, ip, hits, batches_[t], own);
         }
@@ -151,7 +145,6 @@ InsertStats OccupancyMap::insertPointCloud(const Eigen::Vector3d& origin, const 
   for (auto& w : workers) w.join();
   for (const auto& e : errors)
     if (e) std::rethrow_exception(e);
-  InsertStats stats;
   for (std::size_t t = 0; t < threads; ++t) stats += part[t];
   if (planar) {
     applyPlanar(threads, lo.z, stats);
@@ -161,6 +154,42 @@ InsertStats OccupancyMap::insertPointCloud(const Eigen::Vector3d& origin, const 
     applyUpdate(batches, stats, static_cast<int>(threads));
   }
   return stats;
+}
+
+bool OccupancyMap::preparePlanarBeams(const Eigen::Vector3d& origin, const Eigen::Vector3f* points, std::size_t count,
+                                      const InsertParams& ip, const std::uint8_t* is_hit, Key& lo, Key& hi,
+                                      InsertStats& stats) {
+  Key origin_key;
+  if (!lattice_.tryKey(origin, origin_key)) return false;
+  const Eigen::Vector3d origin_l = lattice_.toLattice(origin);
+  lo = hi = origin_key;
+  planar_beams_.resize(count);
+  Eigen::Vector3d end;
+  for (std::size_t i = 0; i < count; ++i) {
+    PlanarBeam& beam = planar_beams_[i];
+    const BeamEnd kind = endOfBeam(lattice_, origin, points[i].cast<double>(), is_hit == nullptr || is_hit[i] != 0,
+                                   ip.max_range, end, beam.end);
+    beam.traced = false;
+    beam.skip_runs = 0;
+    switch (kind) {
+      case BeamEnd::NonFinite: ++stats.skipped_non_finite; continue;
+      case BeamEnd::ZeroLength: ++stats.skipped_zero_length; continue;
+      case BeamEnd::OutOfRange: ++stats.skipped_out_of_range; continue;
+      default: break;
+    }
+    if (beam.end.z != origin_key.z) return false;
+    lo = Key{std::min(lo.x, beam.end.x), std::min(lo.y, beam.end.y), lo.z};
+    hi = Key{std::max(hi.x, beam.end.x), std::max(hi.y, beam.end.y), hi.z};
+    beam.traced = true;
+    beam.hit = kind == BeamEnd::Hit;
+    ++(beam.hit ? stats.rays_hit : stats.rays_truncated);
+    const Eigen::Vector3d end_l = ip.discretize ? Eigen::Vector3d(beam.end.x + 0.5, beam.end.y + 0.5, beam.end.z + 0.5)
+                                                : lattice_.toLattice(end);
+    beam.seg = planarSegment(origin_l, end_l, origin_key, beam.end);
+  }
+  // Discretized beams are traced once per end cell, which a skip could not rely on.
+  if (ip.model == SensorModel::BeamBased && !ip.discretize) fanSkipRuns(planar_beams_.data(), count);
+  return true;
 }
 
 void OccupancyMap::computeUpdate(const Eigen::Vector3d& origin, const Eigen::Vector3f* points, std::size_t count,

@@ -1,6 +1,7 @@
 #include "rtog/core/update_batch.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <numeric>
 
 namespace rtog {
@@ -127,15 +128,15 @@ struct RunMarker {
 };
 
 template <bool kRows, int kMajorDir, int kMinorDir>
-void markRuns(const PlanarSegment& seg, PlanarBatch::Tile* tile, std::ptrdiff_t width, const Key& from_key) {
+void markRuns(const PlanarSegment& seg, PlanarBatch::Tile* tile, std::ptrdiff_t width, const Key& from_key,
+              std::int64_t skip_runs) {
   constexpr int m = kBrickSize - 1;
   const std::int64_t major_n = kRows ? seg.nx : seg.ny, minor_n = kRows ? seg.ny : seg.nx;
   const std::ptrdiff_t step_x = seg.sx, step_y = seg.sy * width;
-  RunMarker<kRows, kMajorDir, kMinorDir> marker{
-      tile,
-      {kRows ? step_x : step_y, kRows ? step_y : step_x},
-      {(kRows ? from_key.x : from_key.y) & m, (kRows ? from_key.y : from_key.x) & m}};
+  const int major_key = kRows ? from_key.x : from_key.y, minor_key = kRows ? from_key.y : from_key.x;
   if (minor_n == 0) {
+    RunMarker<kRows, kMajorDir, kMinorDir> marker{
+        tile, {kRows ? step_x : step_y, kRows ? step_y : step_x}, {major_key & m, minor_key & m}};
     if (major_n > 0) marker.run(static_cast<int>(major_n - 1));
     return;
   }
@@ -147,10 +148,27 @@ void markRuns(const PlanarSegment& seg, PlanarBatch::Tile* tile, std::ptrdiff_t 
   const std::int64_t major_0 = kRows ? seg.x0 : seg.y0, minor_0 = kRows ? seg.y0 : seg.x0;
   const std::int64_t den = one * minor_d, add = one * major_d;
   const std::int64_t num = add + major_0 * minor_d - minor_0 * major_d - (kRows ? 0 : 1);
-  std::int64_t q = num / den, rem = num % den;
   const std::int64_t add_q = add / den, add_r = add % den;
-  std::int64_t start = 0;
-  for (std::int64_t r = 0; r < minor_n; ++r) {
+  // Start at run `skip`: its first cell is where run skip - 1 ended (a product of up to
+  // 2^62 by the run count needs 128 bits).
+  const std::int64_t skip = std::min(skip_runs, minor_n);
+  std::int64_t start = 0, q = num / den, rem = num % den;
+  if (skip > 0) {
+    __extension__ using Wide = __int128;
+    start = std::min(static_cast<std::int64_t>((Wide{num} + Wide{add} * (skip - 1)) / den), major_n);
+    const Wide at_skip = Wide{num} + Wide{add} * skip;
+    q = static_cast<std::int64_t>(at_skip / den);
+    rem = static_cast<std::int64_t>(at_skip % den);
+  }
+  const int major_cell = major_key + kMajorDir * static_cast<int>(start);
+  const int minor_cell = minor_key + kMinorDir * static_cast<int>(skip);
+  const std::ptrdiff_t tiles_major = (major_cell >> kBrickBits) - (major_key >> kBrickBits);
+  const std::ptrdiff_t tiles_minor = (minor_cell >> kBrickBits) - (minor_key >> kBrickBits);
+  RunMarker<kRows, kMajorDir, kMinorDir> marker{
+      tile + (kRows ? tiles_major + tiles_minor * width : tiles_minor + tiles_major * width),
+      {kRows ? step_x : step_y, kRows ? step_y : step_x},
+      {major_cell & m, minor_cell & m}};
+  for (std::int64_t r = skip; r < minor_n; ++r) {
     const std::int64_t end = std::min(q, major_n);
     marker.run(static_cast<int>(end - start));
     marker.stepMinor();
@@ -166,26 +184,76 @@ void markRuns(const PlanarSegment& seg, PlanarBatch::Tile* tile, std::ptrdiff_t 
 
 }  // namespace
 
-void PlanarBatch::markRayFree(const Eigen::Vector3d& from, const Eigen::Vector3d& to, const Key& from_key,
-                              const Key& to_key) {
+void fanSkipRuns(PlanarBeam* beams, std::size_t count) {
+  // A beam's geometry in cells, unmirrored, from the rounded start point.
+  struct Ray {
+    double dx, dy, length;
+  };
+  thread_local std::vector<Ray> rays;
+  rays.resize(count);
+  for (std::size_t i = 0; i < count; ++i) {
+    const PlanarSegment& s = beams[i].seg;
+    const double cell = 1.0 / static_cast<double>(std::int64_t{1} << s.shift);
+    const double dx = static_cast<double>(s.sx * s.dx) * cell, dy = static_cast<double>(s.sy * s.dy) * cell;
+    rays[i] = Ray{dx, dy, std::sqrt(dx * dx + dy * dy)};
+    beams[i].skip_runs = 0;
+  }
+  const auto sameStart = [](const PlanarSegment& a, const PlanarSegment& b) {
+    const std::int64_t one = std::int64_t{1} << a.shift;
+    const auto ux = [one](const PlanarSegment& s) { return s.sx > 0 ? s.x0 : one - 1 - s.x0; };
+    const auto uy = [one](const PlanarSegment& s) { return s.sy > 0 ? s.y0 : one - 1 - s.y0; };
+    return a.shift == b.shift && ux(a) == ux(b) && uy(a) == uy(b);
+  };
+  constexpr double kDiagonal = 1.4142135623730951;
+  for (std::size_t i = 1; i < count; ++i) {
+    PlanarBeam& beam = beams[i];
+    const std::size_t step = i & (~i + 1);  // beams i -/+ step: fewer trailing zero bits than i
+    if (!beam.traced || i + step >= count) continue;
+    const PlanarBeam &left = beams[i - step], &right = beams[i + step];
+    const Ray &a = rays[i - step], &b = rays[i + step], &c = rays[i];
+    if (!left.traced || !right.traced || !(a.length > 2.0 && b.length > 2.0 && c.length > 0.0)) continue;
+    if (!sameStart(beam.seg, left.seg) || !sameStart(beam.seg, right.seg)) continue;
+    // Beam strictly between its neighbours, which are less than half a turn apart: sines of
+    // one sign, each well beyond its rounding.
+    const auto cross = [](const Ray& u, const Ray& v) { return u.dx * v.dy - u.dy * v.dx; };
+    const double ab = cross(a, b), ac = cross(a, c), cb = cross(c, b);
+    constexpr double sure = 1e-9;
+    const double ab_sure = sure * a.length * b.length, ac_sure = sure * a.length * c.length,
+                 cb_sure = sure * c.length * b.length;
+    if (!((ab > ab_sure && ac > ac_sure && cb > cb_sure) || (ab < -ab_sure && ac < -ac_sure && cb < -cb_sure))) continue;
+    // A unit cell inside the wedge of angle t holds a disc of radius 1/2 whose centre is at
+    // least 1 / (2 sin(t/2)) from the apex; a cell nearer crosses a side, inside that side's
+    // segment if the segment reaches 2 cells further (its end cell is not free).
+    const double cos_t = (a.dx * b.dx + a.dy * b.dy) / (a.length * b.length);
+    const double sin_half = std::sqrt(std::max(1.0 - cos_t, 0.0) / 2.0);
+    const double radius = std::min({0.999 / (2.0 * sin_half), a.length - 2.0, b.length - 2.0});
+    // The cells of runs before r lie within r / |minor extent| of the beam's length, plus a diagonal.
+    const bool rows = beam.seg.nx >= beam.seg.ny;
+    const double minor = std::abs(rows ? c.dy : c.dx);
+    if (!(radius > kDiagonal)) continue;
+    const double runs = std::floor((radius - kDiagonal) * minor / c.length);
+    beam.skip_runs = std::min(static_cast<std::int64_t>(runs), rows ? beam.seg.ny : beam.seg.nx);
+  }
+}
+
+void PlanarBatch::markRayFree(const PlanarSegment& seg, const Key& from_key, std::int64_t skip_runs) {
   // walkPlanar's cells as runs: along the axis that steps more, the walk's cells in each row
   // (or column) of the other are one run, whose end follows from the exact crossing times by
   // an integer division carried from run to run (as in run-slice line drawing).
-  const PlanarSegment seg = planarSegment(from, to, from_key, to_key);
   if (seg.nx + seg.ny == 0) return;
   Tile* tile = &tileOf(from_key.x, from_key.y);
   // One loop per orientation and direction: the directions are constants in the loop.
   const int major_s = seg.nx >= seg.ny ? seg.sx : seg.sy, minor_s = seg.nx >= seg.ny ? seg.sy : seg.sx;
   const int variant = (seg.nx >= seg.ny ? 4 : 0) + (major_s > 0 ? 2 : 0) + (minor_s > 0 ? 1 : 0);
   switch (variant) {
-    case 0: markRuns<false, -1, -1>(seg, tile, width_, from_key); break;
-    case 1: markRuns<false, -1, 1>(seg, tile, width_, from_key); break;
-    case 2: markRuns<false, 1, -1>(seg, tile, width_, from_key); break;
-    case 3: markRuns<false, 1, 1>(seg, tile, width_, from_key); break;
-    case 4: markRuns<true, -1, -1>(seg, tile, width_, from_key); break;
-    case 5: markRuns<true, -1, 1>(seg, tile, width_, from_key); break;
-    case 6: markRuns<true, 1, -1>(seg, tile, width_, from_key); break;
-    default: markRuns<true, 1, 1>(seg, tile, width_, from_key); break;
+    case 0: markRuns<false, -1, -1>(seg, tile, width_, from_key, skip_runs); break;
+    case 1: markRuns<false, -1, 1>(seg, tile, width_, from_key, skip_runs); break;
+    case 2: markRuns<false, 1, -1>(seg, tile, width_, from_key, skip_runs); break;
+    case 3: markRuns<false, 1, 1>(seg, tile, width_, from_key, skip_runs); break;
+    case 4: markRuns<true, -1, -1>(seg, tile, width_, from_key, skip_runs); break;
+    case 5: markRuns<true, -1, 1>(seg, tile, width_, from_key, skip_runs); break;
+    case 6: markRuns<true, 1, -1>(seg, tile, width_, from_key, skip_runs); break;
+    default: markRuns<true, 1, 1>(seg, tile, width_, from_key, skip_runs); break;
   }
 }
 

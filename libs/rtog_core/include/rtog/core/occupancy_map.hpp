@@ -300,10 +300,11 @@ class OccupancyMap {
     std::array<std::uint64_t, kLayerWords> known;
     std::array<float, kLayerCells> value;  // the prior where unknown
   };
-  /// True if every traced beam of the scan stays in the origin's z-layer; then [lo, hi] bounds
-  /// the cells in x and y.
-  bool planarExtent(const Eigen::Vector3d& origin, const Eigen::Vector3f* points, std::size_t count,
-                    const InsertParams& ip, Key& lo, Key& hi) const;
+  /// True if every traced beam of the scan stays in the origin's z-layer: then the beams in
+  /// exact planar form, with the runs each can skip (fanSkipRuns), are in planar_beams_, [lo, hi]
+  /// bounds their cells in x and y, and `stats` counts them.
+  bool preparePlanarBeams(const Eigen::Vector3d& origin, const Eigen::Vector3f* points, std::size_t count,
+                          const InsertParams& ip, const std::uint8_t* is_hit, Key& lo, Key& hi, InsertStats& stats);
   template <class Batch>
   void traceBeams(const Eigen::Vector3d& origin, const Eigen::Vector3f* points, std::size_t count,
                   const InsertParams& ip, const std::uint8_t* is_hit, Batch& batch, InsertStats& stats) const;
@@ -343,6 +344,7 @@ class OccupancyMap {
   std::vector<ApplyContext> apply_ctx_;
   std::vector<std::uint32_t> reshaped_bricks_;  // bricks whose leaf nodes changed in this batch
   std::vector<PlanarBatch> planar_batches_;  // per-thread scratch
+  std::vector<PlanarBeam> planar_beams_;     // scratch: a planar scan's beams
   std::vector<PlanarLayer> planar_layers_;
   detail::FlatHashMap64 planar_index_;  // brick slot * kBrickSize + z -> index in planar_layers_
   std::mutex cover_mutex_;

@@ -138,6 +138,24 @@ class alignas(64) UpdateBatch {
 
 /// The update set of a planar scan, whose cells all lie in one z-layer: the layer masks of the
 /// bricks under the scan's bounding box in a dense grid, found by arithmetic instead of a hash.
+/// A beam of a planar scan in the exact form a PlanarBatch walks.
+struct PlanarBeam {
+  PlanarSegment seg;
+  Key end;
+  bool traced = false;          ///< false for a beam skipped as bad input
+  bool hit = false;
+  std::int64_t skip_runs = 0;  ///< leading runs other beams of the scan are known to mark
+};
+
+/// For the beams of one scan from one origin (one start cell and one rounded start point), in
+/// the order of a scanner's sweep: sets each beam's skip_runs so that marking every beam
+/// without its skipped runs marks the same cells as the full walks.
+/// Beams closer in angle than a cell's width near the origin cross the same cells there, so
+/// beam i (i = odd * 2^k) leaves out the cells within the radius where, between beams i - 2^k
+/// and i + 2^k, no cell fits that neither crosses; those two have larger k, so by induction
+/// the cells they leave out are marked by others. Beams out of sweep order are walked whole.
+void fanSkipRuns(PlanarBeam* beams, std::size_t count);
+
 class PlanarBatch {
  public:
   struct Tile {
@@ -158,7 +176,12 @@ class PlanarBatch {
     w |= bit;
     return fresh;
   }
-  void markRayFree(const Eigen::Vector3d& from, const Eigen::Vector3d& to, const Key& from_key, const Key& to_key);
+  void markRayFree(const Eigen::Vector3d& from, const Eigen::Vector3d& to, const Key& from_key, const Key& to_key) {
+    markRayFree(planarSegment(from, to, from_key, to_key), from_key, 0);
+  }
+  /// Marks the walk of `seg` from cell `from_key`, leaving out its first `skip_runs` runs (rows
+  /// if it steps more along x, else columns; never the last).
+  void markRayFree(const PlanarSegment& seg, const Key& from_key, std::int64_t skip_runs);
 
   int brickX0() const { return bx0_; }
   int brickY0() const { return by0_; }
