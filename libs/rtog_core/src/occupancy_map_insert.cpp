@@ -7,11 +7,22 @@
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
+#if defined(__GNUC__) && (defined(__x86_64__) || defined(__i386__))
+#include <immintrin.h>
+#define RTOG_AVX2_DISPATCH 1
+#endif
 
+#include "rtog/core/detail/cover.hpp"
 #include "rtog/core/occupancy_map.hpp"
 #include "rtog/core/ray_traversal.hpp"
 
 namespace rtog {
+
+using detail::BrickMask;
+using detail::coverGreedily;
+using detail::coverLayer;
+using detail::localIdx;
+using detail::xRun;
 
 namespace {
 
@@ -58,6 +69,42 @@ std::uint64_t updateLayerWord(float* values, std::uint64_t occupied, std::uint64
 #endif
 }
 
+#if defined(RTOG_AVX2_DISPATCH)
+// updateLayerWord eight cells a step, for CPUs that have AVX2 (chosen at run time: the default
+// build targets any x86-64). The same operations per cell, so the same values.
+__attribute__((target("avx2"))) std::uint64_t updateLayerWordAvx2(float* values, std::uint64_t occupied,
+                                                                  std::uint64_t free, float hit, float miss, float lo,
+                                                                  float hi) {
+  // (A lambda would not inherit the target.)
+  const __m256i lane_bit = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
+  const __m256 vhit = _mm256_set1_ps(hit), vmiss = _mm256_set1_ps(miss), vlo = _mm256_set1_ps(lo),
+               vhi = _mm256_set1_ps(hi);
+  std::uint64_t same = 0;
+#pragma GCC unroll 8
+  for (int g = 0; g < 8; ++g) {
+    const __m256i ob = _mm256_set1_epi32(static_cast<int>((occupied >> (8 * g)) & 255u));
+    const __m256i fb = _mm256_set1_epi32(static_cast<int>((free >> (8 * g)) & 255u));
+    const __m256 o = _mm256_castsi256_ps(_mm256_cmpeq_epi32(_mm256_and_si256(ob, lane_bit), lane_bit));
+    const __m256 f = _mm256_castsi256_ps(_mm256_cmpeq_epi32(_mm256_and_si256(fb, lane_bit), lane_bit));
+    const __m256 touched = _mm256_or_ps(o, f);
+    const __m256 delta = _mm256_or_ps(_mm256_and_ps(o, vhit), _mm256_and_ps(f, vmiss));
+    const __m256 v = _mm256_loadu_ps(values + 8 * g);
+    const __m256 nv = _mm256_min_ps(_mm256_max_ps(_mm256_add_ps(v, delta), vlo), vhi);
+    _mm256_storeu_ps(values + 8 * g, _mm256_blendv_ps(v, nv, touched));
+    same |= static_cast<std::uint64_t>(_mm256_movemask_ps(_mm256_cmp_ps(nv, v, _CMP_EQ_OQ))) << (8 * g);
+  }
+  return same & (occupied | free);
+}
+#endif
+
+using UpdateLayerWordFn = std::uint64_t (*)(float*, std::uint64_t, std::uint64_t, float, float, float, float);
+UpdateLayerWordFn bestUpdateLayerWord() {
+#if defined(RTOG_AVX2_DISPATCH)
+  if (__builtin_cpu_supports("avx2")) return updateLayerWordAvx2;
+#endif
+  return updateLayerWord;
+}
+
 enum class BeamEnd { Hit, Truncated, NonFinite, ZeroLength, OutOfRange };
 
 // Where a beam from `origin` to `p` ends (cut at max_range) and its end cell.
@@ -68,7 +115,7 @@ inline BeamEnd endOfBeam(const Lattice& lattice, const Eigen::Vector3d& origin, 
   const double dist2 = diff.squaredNorm();
   if (!(dist2 > 0.0)) return BeamEnd::ZeroLength;
   end = p;
-  if (max_range > 0.0 && std::isfinite(max_range)) {
+  if (max_range > 0.0 && std::isfinite(max_range) && dist2 > max_range * max_range) {
     const double dist = std::sqrt(dist2);
     if (dist > max_range) {
       end = origin + diff * (max_range / dist);
@@ -391,8 +438,6 @@ int cutAround(const std::uint8_t lo[3], const std::uint8_t hi[3], const Key& cel
   return n;
 }
 
-inline int localIdx(int x, int y, int z) { return x | (y << kBrickBits) | (z << (2 * kBrickBits)); }
-
 template <class Fn>
 void forEachLocal(const std::uint8_t lo[3], const std::uint8_t hi[3], Fn&& fn) {
   for (int z = lo[2]; z <= hi[2]; ++z)
@@ -454,59 +499,6 @@ static void sortByFirstCell(Leaves& leaves) {
 }
 
 namespace {
-
-using BrickMask = std::array<std::uint64_t, kBrickWords>;
-
-// Bits lo..hi of a 16-cell x-row.
-inline std::uint32_t xRun(int lo, int hi) { return ((std::uint32_t{1} << (hi - lo + 1)) - 1u) << lo; }
-
-// Covers the set bits of `mask` with disjoint boxes, greedily: from the lowest uncovered cell
-// `start`, an x-run grown along y, then along z, over cells for which joins(start, cell) holds
-// (every cell, when the mask is one class of fresh cells; an equal value, when a brick is
-// rebuilt). emit(lo, hi, start) receives each box. A fresh 16^3 brick seen free becomes a
-// handful of boxes instead of 4096 cells merged one by one.
-template <class Joins, class Emit>
-void coverGreedily(BrickMask m, Joins&& joins, Emit&& emit) {
-  // Row (y, z) holds the 16 x-bits of word (y + 16 z) / 4 at bit 16 * (y % 4).
-  const auto row = [&](int y, int z) {
-    const int r = y + kBrickSize * z;
-    return static_cast<std::uint32_t>((m[static_cast<std::size_t>(r >> 2)] >> ((r & 3) * kBrickSize)) & 0xFFFFu);
-  };
-  const auto clear = [&](int y, int z, std::uint32_t run) {
-    const int r = y + kBrickSize * z;
-    m[static_cast<std::size_t>(r >> 2)] &= ~(std::uint64_t{run} << ((r & 3) * kBrickSize));
-  };
-  for (int w = 0; w < kBrickWords; ++w)
-    while (m[static_cast<std::size_t>(w)] != 0) {
-      const int b = __builtin_ctzll(m[static_cast<std::size_t>(w)]);
-      const int start = w * 64 + b;
-      const int r = start >> kBrickBits, y = r & (kBrickSize - 1), z = r >> kBrickBits;
-      const int x0 = b & (kBrickSize - 1);
-      const int len = __builtin_ctz(~(row(y, z) >> x0));  // bits above the row are zero: len <= 16 - x0
-      int x1 = x0;
-      while (x1 + 1 < x0 + len && joins(start, start + (x1 + 1 - x0))) ++x1;
-      const std::uint32_t run = xRun(x0, x1);
-      const auto rowJoins = [&](int yy, int zz) {
-        if ((row(yy, zz) & run) != run) return false;
-        const int base = localIdx(0, yy, zz);
-        for (int x = x0; x <= x1; ++x)
-          if (!joins(start, base + x)) return false;
-        return true;
-      };
-      int y1 = y;
-      while (y1 + 1 < kBrickSize && rowJoins(y1 + 1, z)) ++y1;
-      int z1 = z;
-      for (bool grow = true; grow && z1 + 1 < kBrickSize;) {
-        for (int yy = y; yy <= y1 && grow; ++yy) grow = rowJoins(yy, z1 + 1);
-        if (grow) ++z1;
-      }
-      for (int zz = z; zz <= z1; ++zz)
-        for (int yy = y; yy <= y1; ++yy) clear(yy, zz, run);
-      const auto u8 = [](int c) { return static_cast<std::uint8_t>(c); };
-      const std::uint8_t lo[3] = {u8(x0), u8(y), u8(z)}, hi[3] = {u8(x1), u8(y1), u8(z1)};
-      emit(lo, hi, start);
-    }
-}
 
 // Writes `leaf` into the scratch table over its box and sets the box's bits in `painted`.
 void paintLeaf(const std::uint8_t lo[3], const std::uint8_t hi[3], std::int32_t leaf, std::vector<std::int32_t>& local,
@@ -808,6 +800,7 @@ void OccupancyMap::applyPlanar(std::size_t batches, int z, InsertStats& stats) {
   const PlanarBatch& b0 = planar_batches_[0];
   const float hit = model_.hitDelta(), miss = model_.missDelta(), lo = model_.clampMin(), hi = model_.clampMax();
   const int local_z = z & (kBrickSize - 1);
+  static const UpdateLayerWordFn update_word = bestUpdateLayerWord();
   for (std::size_t t = 0; t < b0.tiles().size(); ++t) {
     // The union over the threads' batches, occupied winning.
     PlanarBatch::Tile tile = b0.tiles()[t];
@@ -828,7 +821,7 @@ void OccupancyMap::applyPlanar(std::size_t batches, int z, InsertStats& stats) {
       const auto wi = static_cast<std::size_t>(w);
       const std::uint64_t occupied = tile.occupied[wi], free = tile.free[wi] & ~occupied, known = layer.known[wi];
       if ((occupied | free) == 0) continue;
-      const std::uint64_t same = updateLayerWord(layer.value.data() + w * 64, occupied, free, hit, miss, lo, hi);
+      const std::uint64_t same = update_word(layer.value.data() + w * 64, occupied, free, hit, miss, lo, hi);
       stats.cells_unchanged += popcount64(same & known);
       stats.cells_free += popcount64(free);
       stats.cells_occupied += popcount64(occupied);
@@ -855,7 +848,8 @@ InsertStats OccupancyMap::coverPlanarLayers() {
     const std::uint32_t slot = planar_layers_[order[i]].slot;
     const PlanarLayer* layer_at[kBrickSize] = {};
     BrickMask known{};
-    for (; i < order.size() && planar_layers_[order[i]].slot == slot; ++i) {
+    int layers = 0;
+    for (; i < order.size() && planar_layers_[order[i]].slot == slot; ++i, ++layers) {
       const PlanarLayer& layer = planar_layers_[order[i]];
       layer_at[layer.z] = &layer;
       std::copy(layer.known.begin(), layer.known.end(), known.begin() + layer.z * kLayerWords);
@@ -885,15 +879,24 @@ InsertStats OccupancyMap::coverPlanarLayers() {
     }
     const auto valueAt = [&](int cell) { return layer_at[cell / kLayerCells]->value[static_cast<std::size_t>(cell % kLayerCells)]; };
     const std::size_t kept = out.size();
-    coverGreedily(
-        known,
-        [&](int start, int cell) {
-          const float v = valueAt(start);
-          return valueAt(cell) == v && mergeable(v);
-        },
-        [&](const std::uint8_t lo[3], const std::uint8_t hi[3], int start) {
-          out.push_back(LeafEntry{{lo[0], lo[1], lo[2]}, {hi[0], hi[1], hi[2]}, valueAt(start)});
-        });
+    if (layers == 1) {
+      const PlanarLayer& layer = planar_layers_[order[i - 1]];
+      coverLayer(
+          layer.known, layer.value.data(), layer.z, [&](float v) { return mergeable(v); },
+          [&](const std::uint8_t lo[3], const std::uint8_t hi[3], float v) {
+            out.push_back(LeafEntry{{lo[0], lo[1], lo[2]}, {hi[0], hi[1], hi[2]}, v});
+          });
+    } else {
+      coverGreedily(
+          known,
+          [&](int start, int cell) {
+            const float v = valueAt(start);
+            return valueAt(cell) == v && mergeable(v);
+          },
+          [&](const std::uint8_t lo[3], const std::uint8_t hi[3], int start) {
+            out.push_back(LeafEntry{{lo[0], lo[1], lo[2]}, {hi[0], hi[1], hi[2]}, valueAt(start)});
+          });
+    }
     stats.leaves_created += out.size() - kept;
     sortByFirstCell(out);
     leaf_count_ = leaf_count_ + out.size() - leaves.size();

@@ -187,7 +187,7 @@ void markRuns(const PlanarSegment& seg, PlanarBatch::Tile* tile, std::ptrdiff_t 
 void fanSkipRuns(PlanarBeam* beams, std::size_t count) {
   // A beam's geometry in cells, unmirrored, from the rounded start point.
   struct Ray {
-    double dx, dy, length;
+    double dx, dy, length, inverse_length;
   };
   thread_local std::vector<Ray> rays;
   rays.resize(count);
@@ -195,7 +195,8 @@ void fanSkipRuns(PlanarBeam* beams, std::size_t count) {
     const PlanarSegment& s = beams[i].seg;
     const double cell = 1.0 / static_cast<double>(std::int64_t{1} << s.shift);
     const double dx = static_cast<double>(s.sx * s.dx) * cell, dy = static_cast<double>(s.sy * s.dy) * cell;
-    rays[i] = Ray{dx, dy, std::sqrt(dx * dx + dy * dy)};
+    const double length = std::sqrt(dx * dx + dy * dy);
+    rays[i] = Ray{dx, dy, length, length > 0.0 ? 1.0 / length : 0.0};
     beams[i].skip_runs = 0;
   }
   const auto sameStart = [](const PlanarSegment& a, const PlanarSegment& b) {
@@ -224,14 +225,14 @@ void fanSkipRuns(PlanarBeam* beams, std::size_t count) {
     // A unit cell inside the wedge of angle t holds a disc of radius 1/2 whose centre is at
     // least 1 / (2 sin(t/2)) from the apex; a cell nearer crosses a side, inside that side's
     // segment if the segment reaches 2 cells further (its end cell is not free).
-    const double cos_t = (a.dx * b.dx + a.dy * b.dy) / (a.length * b.length);
+    const double cos_t = (a.dx * b.dx + a.dy * b.dy) * a.inverse_length * b.inverse_length;
     const double sin_half = std::sqrt(std::max(1.0 - cos_t, 0.0) / 2.0);
     const double radius = std::min({0.999 / (2.0 * sin_half), a.length - 2.0, b.length - 2.0});
     // The cells of runs before r lie within r / |minor extent| of the beam's length, plus a diagonal.
     const bool rows = beam.seg.nx >= beam.seg.ny;
     const double minor = std::abs(rows ? c.dy : c.dx);
     if (!(radius > kDiagonal)) continue;
-    const double runs = std::floor((radius - kDiagonal) * minor / c.length);
+    const double runs = std::floor((radius - kDiagonal) * minor * c.inverse_length);
     beam.skip_runs = std::min(static_cast<std::int64_t>(runs), rows ? beam.seg.ny : beam.seg.nx);
   }
 }
