@@ -146,7 +146,8 @@ TEST(RayTraversal, LongPlanarSegmentsAcrossTheKeyRange) {
 }
 
 // The cells a planar batch marked free, in layer z.
-std::set<Key> markedFree(const PlanarBatch& batch, int z) {
+std::set<Key> markedFree(PlanarBatch& batch, int z) {
+  batch.finalize();
   std::set<Key> marked;
   const auto width = static_cast<std::size_t>(batch.width());
   for (std::size_t t = 0; t < batch.tiles().size(); ++t)

@@ -180,7 +180,11 @@ InsertStats OccupancyMap::insertPointCloud(const Eigen::Vector3d& origin, const 
           traceBeams(origin, points + first, n, ip, hits, batches_[t], own);
         }
       }
-      if (!planar) batches_[t].finalize();
+      if (planar) {
+        planar_batches_[t].finalize();
+      } else {
+        batches_[t].finalize();
+      }
       part[t] = own;
     } catch (...) {
       errors[t] = std::current_exception();

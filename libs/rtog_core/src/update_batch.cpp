@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <type_traits>
 #include <numeric>
 
 namespace rtog {
@@ -72,26 +73,45 @@ void PlanarBatch::reset(const Key& lo, const Key& hi) {
   by0_ = lo.y >> kBrickBits;
   width_ = (hi.x >> kBrickBits) - bx0_ + 1;
   tiles_.assign(tilesFor(lo, hi), Tile{});
+  columns_.assign(tiles_.size(), ColumnTile{});
+}
+
+void PlanarBatch::finalize() {
+  for (std::size_t t = 0; t < columns_.size(); ++t) {
+    std::array<std::uint64_t, kLayerWords>& marks = columns_[t].free;
+    if ((marks[0] | marks[1] | marks[2] | marks[3]) == 0) continue;
+    // A 16 x 16 bit transpose by swapping the off-diagonal blocks of 8, 4, 2 and 1 rows (of
+    // 16 bits, four to a word: rows 8 and 4 apart are in other words, 2 and 1 apart in the same).
+    std::uint64_t w[kLayerWords] = {marks[0], marks[1], marks[2], marks[3]};
+    const auto acrossWords = [](std::uint64_t& a, std::uint64_t& b, int j, std::uint64_t low) {
+      const std::uint64_t swap = ((a >> j) ^ b) & low;
+      a ^= swap << j;
+      b ^= swap;
+    };
+    acrossWords(w[0], w[2], 8, 0x00FF00FF00FF00FFull);
+    acrossWords(w[1], w[3], 8, 0x00FF00FF00FF00FFull);
+    acrossWords(w[0], w[1], 4, 0x0F0F0F0F0F0F0F0Full);
+    acrossWords(w[2], w[3], 4, 0x0F0F0F0F0F0F0F0Full);
+    for (std::uint64_t& word : w) {
+      // Rows 2 apart: lanes 0, 1 with lanes 2, 3; then rows 1 apart: lanes 0, 2 with lanes 1, 3.
+      std::uint64_t swap = ((word >> 2) ^ (word >> 32)) & 0x0000000033333333ull;
+      word ^= (swap << 2) | (swap << 32);
+      swap = ((word >> 1) ^ (word >> 16)) & 0x0000555500005555ull;
+      word ^= (swap << 1) | (swap << 16);
+    }
+    for (std::size_t i = 0; i < kLayerWords; ++i) tiles_[t].free[i] |= w[i];
+    marks.fill(0);
+  }
 }
 
 namespace {
 
-// Rows first .. last of column 0 of a tile as layer mask words; a run in column x is this << x.
-using ColumnRun = std::array<std::uint64_t, kLayerWords>;
-constexpr std::array<std::array<ColumnRun, kBrickSize>, kBrickSize> kColumnRuns = [] {
-  std::array<std::array<ColumnRun, kBrickSize>, kBrickSize> t{};
-  for (int first = 0; first < kBrickSize; ++first)
-    for (int last = first; last < kBrickSize; ++last)
-      for (int row = first; row <= last; ++row)
-        t[first][last][row >> 2] |= std::uint64_t{1} << ((row & 3) * kBrickSize);
-  return t;
-}();
-
 // Marks a walk's runs in a planar batch's tiles, moving from tile to tile by pointer steps:
-// along the major axis a run is a mask in one row (kRows) or one column of a tile.
+// along the major axis a run is a mask in one row of a Tile (kRows) or of a ColumnTile.
 template <bool kRows, int kMajorDir, int kMinorDir>
 struct RunMarker {
-  PlanarBatch::Tile* tile;
+  using Tile = std::conditional_t<kRows, PlanarBatch::Tile, PlanarBatch::ColumnTile>;
+  Tile* tile;
   std::ptrdiff_t tile_step[2];  // to the next tile along the major and the minor axis
   int local[2];                 // the current cell in its tile, major and minor axis
   // `len` + 1 cells from the current one on along the major axis; ends on the last of them.
@@ -102,13 +122,8 @@ struct RunMarker {
       const int room = kMajorDir > 0 ? m - local[0] : local[0];
       const int n = std::min(len, room);
       const int first = kMajorDir > 0 ? local[0] : local[0] - n;
-      if (kRows) {
-        const unsigned cells = ((2u << n) - 1) << first;
-        tile->free[static_cast<std::size_t>(local[1] >> 2)] |= std::uint64_t{cells} << ((local[1] & 3) * kBrickSize);
-      } else {
-        const ColumnRun& run = kColumnRuns[static_cast<std::size_t>(first)][static_cast<std::size_t>(first + n)];
-        for (std::size_t w = 0; w < kLayerWords; ++w) tile->free[w] |= run[w] << local[1];
-      }
+      const unsigned cells = ((2u << n) - 1) << first;
+      tile->free[static_cast<std::size_t>(local[1] >> 2)] |= std::uint64_t{cells} << ((local[1] & 3) * kBrickSize);
       local[0] += kMajorDir * n;
       len -= n;
       if (len == 0) return;
@@ -128,8 +143,8 @@ struct RunMarker {
 };
 
 template <bool kRows, int kMajorDir, int kMinorDir>
-void markRuns(const PlanarSegment& seg, PlanarBatch::Tile* tile, std::ptrdiff_t width, const Key& from_key,
-              std::int64_t skip_runs) {
+void markRuns(const PlanarSegment& seg, typename RunMarker<kRows, kMajorDir, kMinorDir>::Tile* tile,
+              std::ptrdiff_t width, const Key& from_key, std::int64_t skip_runs) {
   constexpr int m = kBrickSize - 1;
   const std::int64_t major_n = kRows ? seg.nx : seg.ny, minor_n = kRows ? seg.ny : seg.nx;
   const std::ptrdiff_t step_x = seg.sx, step_y = seg.sy * width;
@@ -242,15 +257,17 @@ void PlanarBatch::markRayFree(const PlanarSegment& seg, const Key& from_key, std
   // (or column) of the other are one run, whose end follows from the exact crossing times by
   // an integer division carried from run to run (as in run-slice line drawing).
   if (seg.nx + seg.ny == 0) return;
-  Tile* tile = &tileOf(from_key.x, from_key.y);
+  const std::size_t at = static_cast<std::size_t>(&tileOf(from_key.x, from_key.y) - tiles_.data());
+  Tile* tile = &tiles_[at];
+  ColumnTile* column = &columns_[at];
   // One loop per orientation and direction: the directions are constants in the loop.
   const int major_s = seg.nx >= seg.ny ? seg.sx : seg.sy, minor_s = seg.nx >= seg.ny ? seg.sy : seg.sx;
   const int variant = (seg.nx >= seg.ny ? 4 : 0) + (major_s > 0 ? 2 : 0) + (minor_s > 0 ? 1 : 0);
   switch (variant) {
-    case 0: markRuns<false, -1, -1>(seg, tile, width_, from_key, skip_runs); break;
-    case 1: markRuns<false, -1, 1>(seg, tile, width_, from_key, skip_runs); break;
-    case 2: markRuns<false, 1, -1>(seg, tile, width_, from_key, skip_runs); break;
-    case 3: markRuns<false, 1, 1>(seg, tile, width_, from_key, skip_runs); break;
+    case 0: markRuns<false, -1, -1>(seg, column, width_, from_key, skip_runs); break;
+    case 1: markRuns<false, -1, 1>(seg, column, width_, from_key, skip_runs); break;
+    case 2: markRuns<false, 1, -1>(seg, column, width_, from_key, skip_runs); break;
+    case 3: markRuns<false, 1, 1>(seg, column, width_, from_key, skip_runs); break;
     case 4: markRuns<true, -1, -1>(seg, tile, width_, from_key, skip_runs); break;
     case 5: markRuns<true, -1, 1>(seg, tile, width_, from_key, skip_runs); break;
     case 6: markRuns<true, 1, -1>(seg, tile, width_, from_key, skip_runs); break;

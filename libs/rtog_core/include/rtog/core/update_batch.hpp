@@ -161,6 +161,11 @@ class PlanarBatch {
   struct Tile {
     std::array<std::uint64_t, kLayerWords> occupied, free;  ///< bit (y % 16) * 16 + x % 16
   };
+  /// Free marks of walks that step more along y, transposed: bit (x % 16) * 16 + y % 16, so that
+  /// a run in a column is one mask in one word, as a run in a row is in a Tile.
+  struct ColumnTile {
+    std::array<std::uint64_t, kLayerWords> free;
+  };
   /// Bricks a batch over cells [lo, hi] (x and y) would hold.
   static std::size_t tilesFor(const Key& lo, const Key& hi) {
     return static_cast<std::size_t>((hi.x >> kBrickBits) - (lo.x >> kBrickBits) + 1) *
@@ -182,6 +187,8 @@ class PlanarBatch {
   /// Marks the walk of `seg` from cell `from_key`, leaving out its first `skip_runs` runs (rows
   /// if it steps more along x, else columns; never the last).
   void markRayFree(const PlanarSegment& seg, const Key& from_key, std::int64_t skip_runs);
+  /// Folds the column marks into tiles(); call after the last markRayFree.
+  void finalize();
 
   int brickX0() const { return bx0_; }
   int brickY0() const { return by0_; }
@@ -195,6 +202,7 @@ class PlanarBatch {
   }
   int bx0_ = 0, by0_ = 0, width_ = 0;
   std::vector<Tile> tiles_;
+  std::vector<ColumnTile> columns_;  // indexed as tiles_
 };
 
 }  // namespace rtog
