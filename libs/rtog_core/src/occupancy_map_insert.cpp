@@ -777,10 +777,10 @@ void OccupancyMap::syncLeafNodes(std::uint32_t slot) {
 
 // ---- planar cache ------------------------------------------------------------------------
 
-OccupancyMap::PlanarLayer& OccupancyMap::planarLayer(std::uint32_t slot, int z) {
+std::uint32_t OccupancyMap::planarLayer(std::uint32_t slot, int z) {
   const auto next = static_cast<std::uint32_t>(planar_layers_.size());
   const std::uint32_t index = planar_index_.findOrInsert(std::uint64_t{slot} * kBrickSize + static_cast<std::uint64_t>(z), next);
-  if (index != next) return planar_layers_[index];
+  if (index != next) return index;
   planar_layers_.emplace_back();
   PlanarLayer& layer = planar_layers_.back();
   layer.slot = slot;
@@ -797,7 +797,7 @@ OccupancyMap::PlanarLayer& OccupancyMap::planarLayer(std::uint32_t slot, int z) 
       layer.known[static_cast<std::size_t>(base >> 6)] |= run << (base & 63);
     }
   }
-  return layer;
+  return next;
 }
 
 void OccupancyMap::applyPlanar(std::size_t batches, int z, InsertStats& stats) {
@@ -805,6 +805,7 @@ void OccupancyMap::applyPlanar(std::size_t batches, int z, InsertStats& stats) {
   const float hit = model_.hitDelta(), miss = model_.missDelta(), lo = model_.clampMin(), hi = model_.clampMax();
   const int local_z = z & (kBrickSize - 1);
   static const UpdateLayerWordFn update_word = bestUpdateLayerWord();
+  if (recent_layers_.empty()) recent_layers_.resize(std::size_t{1} << kRecentLayerBits);
   for (std::size_t t = 0; t < b0.tiles().size(); ++t) {
     // The union over the threads' batches, occupied winning.
     PlanarBatch::Tile tile = b0.tiles()[t];
@@ -819,7 +820,12 @@ void OccupancyMap::applyPlanar(std::size_t batches, int z, InsertStats& stats) {
     const auto width = static_cast<std::size_t>(b0.width());
     const Key brick{b0.brickX0() + static_cast<int>(t % width), b0.brickY0() + static_cast<int>(t / width),
                     z >> kBrickBits};
-    PlanarLayer& layer = planarLayer(brickSlot(brick), local_z);
+    // Most of a scan's tiles were layers of the scans before: a direct-mapped table of recent
+    // layers in front of the two hash lookups.
+    const std::uint64_t packed = packKey(Key{brick.x, brick.y, z});
+    RecentLayer& recent = recent_layers_[(packed * 0x9E3779B97F4A7C15ull) >> (64 - kRecentLayerBits)];
+    if (recent.key != packed) recent = RecentLayer{packed, planarLayer(brickSlot(brick), local_z)};
+    PlanarLayer& layer = planar_layers_[recent.layer];
     // Unknown cells hold the prior, so a first update is an update like any other.
     for (int w = 0; w < kLayerWords; ++w) {
       const auto wi = static_cast<std::size_t>(w);
@@ -911,6 +917,7 @@ InsertStats OccupancyMap::coverPlanarLayers() {
   // Keep room for the layers of a scan or two (a 2D scan at 5 cm touches about 200), not for
   // those of a whole log: the pool counts in memoryBytes().
   constexpr std::size_t kKeptLayers = 512;
+  std::fill(recent_layers_.begin(), recent_layers_.end(), RecentLayer{});
   if (planar_layers_.capacity() > kKeptLayers) {
     std::vector<PlanarLayer>().swap(planar_layers_);  // `= {}` would keep the capacity
     planar_index_ = detail::FlatHashMap64();

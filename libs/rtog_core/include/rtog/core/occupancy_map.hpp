@@ -310,7 +310,8 @@ class OccupancyMap {
                   const InsertParams& ip, const std::uint8_t* is_hit, Batch& batch, InsertStats& stats) const;
   /// Applies the union of planar_batches_[0 .. batches) of a scan in z-layer `z` to the cache.
   void applyPlanar(std::size_t batches, int z, InsertStats& stats);
-  PlanarLayer& planarLayer(std::uint32_t slot, int z);
+  /// The index in planar_layers_ of brick `slot`'s layer z, made from its leaves if new.
+  std::uint32_t planarLayer(std::uint32_t slot, int z);
   InsertStats coverPlanarLayers();
   /// Readers call this first: covers pending planar layers once, under a lock. Sound on a const
   /// object: layers come only from insertion, and copies and moves are made covered.
@@ -347,6 +348,12 @@ class OccupancyMap {
   std::vector<PlanarBeam> planar_beams_;     // scratch: a planar scan's beams
   std::vector<PlanarLayer> planar_layers_;
   detail::FlatHashMap64 planar_index_;  // brick slot * kBrickSize + z -> index in planar_layers_
+  struct RecentLayer {
+    std::uint64_t key = ~std::uint64_t{0};  // packKey of (brick x, brick y, cell z); never all ones
+    std::uint32_t layer = 0;
+  };
+  static constexpr int kRecentLayerBits = 10;
+  std::vector<RecentLayer> recent_layers_;  // direct-mapped, in front of planar_index_
   std::mutex cover_mutex_;
   std::atomic<bool> cover_pending_{false};
 };
