@@ -13,6 +13,7 @@
 #endif
 
 #include "rtog/core/detail/cover.hpp"
+#include "rtog/core/detail/layer_update.hpp"
 #include "rtog/core/occupancy_map.hpp"
 #include "rtog/core/ray_traversal.hpp"
 
@@ -69,6 +70,32 @@ std::uint64_t updateLayerWord(float* values, std::uint64_t occupied, std::uint64
 #endif
 }
 
+
+enum class BeamEnd { Hit, Truncated, NonFinite, ZeroLength, OutOfRange };
+
+// Where a beam from `origin` to `p` ends (cut at max_range) and its end cell.
+inline BeamEnd endOfBeam(const Lattice& lattice, const Eigen::Vector3d& origin, const Eigen::Vector3d& p,
+                         bool returned, double max_range, Eigen::Vector3d& end, Key& end_key) {
+  if (!p.allFinite()) return BeamEnd::NonFinite;
+  const Eigen::Vector3d diff = p - origin;
+  const double dist2 = diff.squaredNorm();
+  if (!(dist2 > 0.0)) return BeamEnd::ZeroLength;
+  end = p;
+  if (max_range > 0.0 && std::isfinite(max_range) && dist2 > max_range * max_range) {
+    const double dist = std::sqrt(dist2);
+    if (dist > max_range) {
+      end = origin + diff * (max_range / dist);
+      returned = false;
+    }
+  }
+  if (!lattice.tryKey(end, end_key)) return BeamEnd::OutOfRange;
+  return returned ? BeamEnd::Hit : BeamEnd::Truncated;
+}
+
+}  // namespace
+
+namespace detail {
+
 #if defined(RTOG_AVX2_DISPATCH)
 // updateLayerWord eight cells a step, for CPUs that have AVX2 (chosen at run time: the default
 // build targets any x86-64). The same operations per cell, so the same values.
@@ -95,38 +122,44 @@ __attribute__((target("avx2"))) std::uint64_t updateLayerWordAvx2(float* values,
   }
   return same & (occupied | free);
 }
-#endif
 
-using UpdateLayerWordFn = std::uint64_t (*)(float*, std::uint64_t, std::uint64_t, float, float, float, float);
-UpdateLayerWordFn bestUpdateLayerWord() {
-#if defined(RTOG_AVX2_DISPATCH)
-  if (__builtin_cpu_supports("avx2")) return updateLayerWordAvx2;
-#endif
-  return updateLayerWord;
-}
-
-enum class BeamEnd { Hit, Truncated, NonFinite, ZeroLength, OutOfRange };
-
-// Where a beam from `origin` to `p` ends (cut at max_range) and its end cell.
-inline BeamEnd endOfBeam(const Lattice& lattice, const Eigen::Vector3d& origin, const Eigen::Vector3d& p,
-                         bool returned, double max_range, Eigen::Vector3d& end, Key& end_key) {
-  if (!p.allFinite()) return BeamEnd::NonFinite;
-  const Eigen::Vector3d diff = p - origin;
-  const double dist2 = diff.squaredNorm();
-  if (!(dist2 > 0.0)) return BeamEnd::ZeroLength;
-  end = p;
-  if (max_range > 0.0 && std::isfinite(max_range) && dist2 > max_range * max_range) {
-    const double dist = std::sqrt(dist2);
-    if (dist > max_range) {
-      end = origin + diff * (max_range / dist);
-      returned = false;
-    }
+// Counted with the POPCNT instruction, which every AVX2 CPU has.
+__attribute__((target("avx2,popcnt"))) void updateLayerAvx2(float* values, std::uint64_t* known,
+                                                             const std::uint64_t* occupied, const std::uint64_t* free,
+                                                             const float deltas[4], LayerCounts& counts) {
+  for (std::size_t w = 0; w < kLayerWords; ++w) {
+    const std::uint64_t o = occupied[w], f = free[w] & ~o;
+    if ((o | f) == 0) continue;
+    const std::uint64_t same = updateLayerWordAvx2(values + w * 64, o, f, deltas[0], deltas[1], deltas[2], deltas[3]);
+    counts.unchanged += static_cast<std::size_t>(__builtin_popcountll(same & known[w]));
+    counts.free += static_cast<std::size_t>(__builtin_popcountll(f));
+    counts.occupied += static_cast<std::size_t>(__builtin_popcountll(o));
+    known[w] |= o | f;
   }
-  if (!lattice.tryKey(end, end_key)) return BeamEnd::OutOfRange;
-  return returned ? BeamEnd::Hit : BeamEnd::Truncated;
+}
+#endif
+
+void updateLayer(float* values, std::uint64_t* known, const std::uint64_t* occupied, const std::uint64_t* free,
+                 const float deltas[4], LayerCounts& counts) {
+  for (std::size_t w = 0; w < kLayerWords; ++w) {
+    const std::uint64_t o = occupied[w], f = free[w] & ~o;
+    if ((o | f) == 0) continue;
+    const std::uint64_t same = updateLayerWord(values + w * 64, o, f, deltas[0], deltas[1], deltas[2], deltas[3]);
+    counts.unchanged += popcount64(same & known[w]);
+    counts.free += popcount64(f);
+    counts.occupied += popcount64(o);
+    known[w] |= o | f;
+  }
 }
 
-}  // namespace
+std::array<UpdateLayerFn, 2> layerUpdateKernels() {
+#if defined(RTOG_AVX2_DISPATCH)
+  if (__builtin_cpu_supports("avx2") && __builtin_cpu_supports("popcnt")) return {updateLayer, updateLayerAvx2};
+#endif
+  return {updateLayer, nullptr};
+}
+
+}  // namespace detail
 
 InsertStats OccupancyMap::insertPointCloud(const Eigen::Vector3d& origin, const Eigen::Vector3f* points,
                                            std::size_t count, const InsertParams& ip, const std::uint8_t* is_hit) {
@@ -802,9 +835,14 @@ std::uint32_t OccupancyMap::planarLayer(std::uint32_t slot, int z) {
 
 void OccupancyMap::applyPlanar(std::size_t batches, int z, InsertStats& stats) {
   const PlanarBatch& b0 = planar_batches_[0];
-  const float hit = model_.hitDelta(), miss = model_.missDelta(), lo = model_.clampMin(), hi = model_.clampMax();
+  const float deltas[4] = {model_.hitDelta(), model_.missDelta(), model_.clampMin(), model_.clampMax()};
   const int local_z = z & (kBrickSize - 1);
-  static const UpdateLayerWordFn update_word = bestUpdateLayerWord();
+  // Unknown cells hold the prior, so a first update is an update like any other.
+  static const detail::UpdateLayerFn update_layer = [] {
+    const auto kernels = detail::layerUpdateKernels();
+    return kernels[1] ? kernels[1] : kernels[0];
+  }();
+  detail::LayerCounts counts;
   if (recent_layers_.empty()) recent_layers_.resize(std::size_t{1} << kRecentLayerBits);
   for (std::size_t t = 0; t < b0.tiles().size(); ++t) {
     // The union over the threads' batches, occupied winning.
@@ -826,18 +864,11 @@ void OccupancyMap::applyPlanar(std::size_t batches, int z, InsertStats& stats) {
     RecentLayer& recent = recent_layers_[(packed * 0x9E3779B97F4A7C15ull) >> (64 - kRecentLayerBits)];
     if (recent.key != packed) recent = RecentLayer{packed, planarLayer(brickSlot(brick), local_z)};
     PlanarLayer& layer = planar_layers_[recent.layer];
-    // Unknown cells hold the prior, so a first update is an update like any other.
-    for (int w = 0; w < kLayerWords; ++w) {
-      const auto wi = static_cast<std::size_t>(w);
-      const std::uint64_t occupied = tile.occupied[wi], free = tile.free[wi] & ~occupied, known = layer.known[wi];
-      if ((occupied | free) == 0) continue;
-      const std::uint64_t same = update_word(layer.value.data() + w * 64, occupied, free, hit, miss, lo, hi);
-      stats.cells_unchanged += popcount64(same & known);
-      stats.cells_free += popcount64(free);
-      stats.cells_occupied += popcount64(occupied);
-      layer.known[wi] = known | occupied | free;
-    }
+    update_layer(layer.value.data(), layer.known.data(), tile.occupied.data(), tile.free.data(), deltas, counts);
   }
+  stats.cells_unchanged += counts.unchanged;
+  stats.cells_free += counts.free;
+  stats.cells_occupied += counts.occupied;
   if (!planar_layers_.empty()) cover_pending_.store(true, std::memory_order_release);
 }
 
