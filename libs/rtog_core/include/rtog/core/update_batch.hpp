@@ -105,7 +105,7 @@ class alignas(64) UpdateBatch {
       // Neighbouring beams cross the same bricks: a small direct-mapped table in front of the
       // hash, which outgrows the cache on a long-range scan.
       const std::uint64_t packed = packKey(b);
-      Recent& r = recent_[(packed ^ (packed >> 21) ^ (packed >> 42)) & (kRecent - 1)];
+      Recent& r = recent_[(packed * 0x9E3779B97F4A7C15ull) >> (64 - kRecentBits)];
       if (r.key != packed) r = Recent{packed, brickSlot(b)};
       cached_ = &brickAt(r.slot);
     }
@@ -130,7 +130,8 @@ class alignas(64) UpdateBatch {
     std::uint64_t key = ~std::uint64_t{0};  // no packed key has all 64 bits set
     std::uint32_t slot = 0;
   };
-  static constexpr std::size_t kRecent = 512;
+  static constexpr int kRecentBits = 9;
+  static constexpr std::size_t kRecent = std::size_t{1} << kRecentBits;
   std::array<Recent, kRecent> recent_{};
   std::vector<const BrickUpdates*> sorted_;
   std::vector<Key> sorted_keys_;
