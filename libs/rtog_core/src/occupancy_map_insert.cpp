@@ -814,8 +814,7 @@ std::uint32_t OccupancyMap::planarLayer(std::uint32_t slot, int z) {
   const auto next = static_cast<std::uint32_t>(planar_layers_.size());
   const std::uint32_t index = planar_index_.findOrInsert(std::uint64_t{slot} * kBrickSize + static_cast<std::uint64_t>(z), next);
   if (index != next) return index;
-  planar_layers_.emplace_back();
-  PlanarLayer& layer = planar_layers_.back();
+  PlanarLayer& layer = planar_layers_.emplaceBack();
   layer.slot = slot;
   layer.z = z;
   layer.known.fill(0);
@@ -950,7 +949,7 @@ InsertStats OccupancyMap::coverPlanarLayers() {
   constexpr std::size_t kKeptLayers = 512;
   std::fill(recent_layers_.begin(), recent_layers_.end(), RecentLayer{});
   if (planar_layers_.capacity() > kKeptLayers) {
-    std::vector<PlanarLayer>().swap(planar_layers_);  // `= {}` would keep the capacity
+    planar_layers_.release();
     planar_index_ = detail::FlatHashMap64();
   } else {
     planar_layers_.clear();

@@ -14,6 +14,7 @@
 
 #include <Eigen/Core>
 
+#include "rtog/core/detail/chunked_vector.hpp"
 #include "rtog/core/detail/flat_hash_map.hpp"
 #include "rtog/core/key.hpp"
 #include "rtog/core/log_odds.hpp"
@@ -346,7 +347,7 @@ class OccupancyMap {
   std::vector<std::uint32_t> reshaped_bricks_;  // bricks whose leaf nodes changed in this batch
   std::vector<PlanarBatch> planar_batches_;  // per-thread scratch
   std::vector<PlanarBeam> planar_beams_;     // scratch: a planar scan's beams
-  std::vector<PlanarLayer> planar_layers_;
+  detail::ChunkedVector<PlanarLayer, 64> planar_layers_;
   detail::FlatHashMap64 planar_index_;  // brick slot * kBrickSize + z -> index in planar_layers_
   struct RecentLayer {
     std::uint64_t key = ~std::uint64_t{0};  // packKey of (brick x, brick y, cell z); never all ones
