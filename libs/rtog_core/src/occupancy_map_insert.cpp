@@ -247,10 +247,12 @@ bool OccupancyMap::preparePlanarBeams(const Eigen::Vector3d& origin, const Eigen
   if (!lattice_.tryKey(origin, origin_key)) return false;
   const Eigen::Vector3d origin_l = lattice_.toLattice(origin);
   lo = hi = origin_key;
-  planar_beams_.resize(count);
+  // Grown beam by beam: a volumetric scan usually leaves the layer within its first beams, and
+  // sizing for all of them (a depth image: 307,200) cost more than its whole planar test.
+  planar_beams_.clear();
   Eigen::Vector3d end;
   for (std::size_t i = 0; i < count; ++i) {
-    PlanarBeam& beam = planar_beams_[i];
+    PlanarBeam& beam = planar_beams_.emplace_back();
     const BeamEnd kind = endOfBeam(lattice_, origin, points[i].cast<double>(), is_hit == nullptr || is_hit[i] != 0,
                                    ip.max_range, end, beam.end);
     beam.traced = false;
