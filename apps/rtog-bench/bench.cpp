@@ -3,8 +3,10 @@
 #include <malloc.h>
 
 #include <algorithm>
-#include <numeric>
+#include <cctype>
 #include <chrono>
+#include <cmath>
+#include <numeric>
 #include <cstdio>
 #include <fstream>
 #include <functional>
@@ -422,6 +424,28 @@ void run2D(const std::string& rawlog, const Options& opts, std::vector<Result>& 
   }
 }
 
+std::size_t writeLogOddsRaster(const OccupancyMap& map, const std::string& path) {
+  const Box bounds = map.keyBounds();
+  if (bounds.isEmpty()) throw std::runtime_error("writeLogOddsRaster: empty map");
+  const auto extent = [&](int a) { return static_cast<std::size_t>(std::int64_t{bounds.max[a]} - bounds.min[a] + 1); };
+  const std::size_t nx = extent(0), ny = extent(1), nz = extent(2);
+  std::vector<signed char> raster(nx * ny * nz, 0);
+  map.forEachLeaf([&](const Box& b, float log_odds) {
+    const long step = std::lround(log_odds * 20.0f);
+    const auto value = static_cast<signed char>(step == 0 ? 1 : std::clamp<long>(step, -127, 127));
+    for (std::int32_t z = b.min.z; z <= b.max.z; ++z)
+      for (std::int32_t y = b.min.y; y <= b.max.y; ++y) {
+        const std::size_t row = (static_cast<std::size_t>(z - bounds.min.z) * ny + static_cast<std::size_t>(y - bounds.min.y)) * nx;
+        std::fill_n(raster.begin() + static_cast<std::ptrdiff_t>(row + static_cast<std::size_t>(b.min.x - bounds.min.x)),
+                    b.max.x - b.min.x + 1, value);
+      }
+  });
+  std::ofstream file(path, std::ios::binary);
+  file.write(reinterpret_cast<const char*>(raster.data()), static_cast<std::streamsize>(raster.size()));
+  if (!file) throw std::runtime_error("cannot write " + path);
+  return raster.size();
+}
+
 void runDataset(const Dataset& data, const Options& opts, std::vector<Result>& out, std::ostream& log) {
   for (const double res : opts.resolutions) {
     auto methods = methodsFor(data, res, opts);
@@ -447,7 +471,7 @@ void runDataset(const Dataset& data, const Options& opts, std::vector<Result>& o
         for (std::size_t k = 0; k < methods.size(); ++k) {
           std::vector<double>& t = build_times[k];
           if (methods[k]->heavy() != heavy_phase || !wantsAnotherBuild(opts, t)) continue;
-          malloc_trim(0);
+          if (round == 0) malloc_trim(0);  // for the RSS growth; later builds reuse the heap, as a long run does
           const double rss0 = residentBytes();
           t.push_back(methods[k]->build(data));
           if (round == 0) rss_growth[k] = residentBytes() - rss0;
@@ -456,6 +480,18 @@ void runDataset(const Dataset& data, const Options& opts, std::vector<Result>& o
         if (!built) break;
       }
     }
+
+    if (!opts.raster_dir.empty())
+      for (const auto& m : methods)
+        if (m->rtogMap()) {
+          std::string name = data.name + "_" + std::to_string(res);
+          for (char& c : name)
+            if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
+          const std::string path = opts.raster_dir + "/" + name + ".i8";
+          const std::size_t cells = writeLogOddsRaster(*m->rtogMap(), path);
+          log << "  raster of " << m->name() << ": " << path << ", " << cells << " bytes\n";
+          break;
+        }
 
     const octomap::OcTree* plain_octomap = nullptr;
     std::vector<std::size_t> rtog_rows;

@@ -9,6 +9,10 @@
 
 #include <Eigen/Core>
 
+namespace rtog {
+class OccupancyMap;
+}
+
 namespace rtog::bench {
 
 /// One scan in the map frame.
@@ -46,7 +50,13 @@ struct Options {
   std::size_t query_count = 200000;         ///< random point queries per map (Default: 200000)
   double max_range = -1;                    ///< beams cut here (<= 0: none) (Default: -1)
   std::vector<std::string> methods;         ///< run only methods whose name contains one of these (Default: all)
+  std::string raster_dir;                   ///< if set, each dataset's first rtog map as a byte raster here (Default: "")
 };
+
+/// Writes the map as one signed byte per cell over its key bounds, x fastest, then y, then z:
+/// 0 unknown, else the log-odds in steps of 0.05 (clamped to +-127, a known 0 as 1). A
+/// compression yardstick for the map's information content. Returns the cell count.
+std::size_t writeLogOddsRaster(const OccupancyMap& map, const std::string& path);
 
 Dataset loadTum(const std::string& dir);
 /// 3D scans of an MRPT rawlog (Velodyne, rotating scans, point clouds), robot at the origin.

@@ -24,6 +24,8 @@ int main(int argc, char** argv) {
   app.add_option("--json", json, "JSON output")->capture_default_str();
   app.add_option("--markdown", markdown, "Markdown report")->capture_default_str();
   app.add_option("--img-dir", img_dir, "Directory for PNG plots")->capture_default_str()->check(CLI::ExistingDirectory);
+  app.add_option("--raster-dir", opts.raster_dir, "Write each dataset's first rtog map as a byte-per-cell raster here")
+      ->check(CLI::ExistingDirectory);
   CLI11_PARSE(app, argc, argv);
   try {
     std::vector<rtog::bench::Result> results;
