@@ -435,9 +435,10 @@ std::size_t writeLogOddsRaster(const OccupancyMap& map, const std::string& path)
     const auto value = static_cast<signed char>(step == 0 ? 1 : std::clamp<long>(step, -127, 127));
     for (std::int32_t z = b.min.z; z <= b.max.z; ++z)
       for (std::int32_t y = b.min.y; y <= b.max.y; ++y) {
-        const std::size_t row = (static_cast<std::size_t>(z - bounds.min.z) * ny + static_cast<std::size_t>(y - bounds.min.y)) * nx;
-        std::fill_n(raster.begin() + static_cast<std::ptrdiff_t>(row + static_cast<std::size_t>(b.min.x - bounds.min.x)),
-                    b.max.x - b.min.x + 1, value);
+        const auto offset = [&](int a) { return static_cast<std::size_t>(std::int64_t{b.min[a]} - bounds.min[a]); };
+        const std::size_t first = ((offset(2) + static_cast<std::size_t>(z - b.min.z)) * ny + offset(1) +
+                                   static_cast<std::size_t>(y - b.min.y)) * nx + offset(0);
+        std::fill_n(raster.begin() + static_cast<std::ptrdiff_t>(first), b.max.x - b.min.x + 1, value);
       }
   });
   std::ofstream file(path, std::ios::binary);

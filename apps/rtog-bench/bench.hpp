@@ -50,7 +50,7 @@ struct Options {
   std::size_t query_count = 200000;         ///< random point queries per map (Default: 200000)
   double max_range = -1;                    ///< beams cut here (<= 0: none) (Default: -1)
   std::vector<std::string> methods;         ///< run only methods whose name contains one of these (Default: all)
-  std::string raster_dir;                   ///< if set, each dataset's first rtog map as a byte raster here (Default: "")
+  std::string raster_dir;                   ///< each dataset's first rtog map as a raster here (Default: "", none)
 };
 
 /// Writes the map as one signed byte per cell over its key bounds, x fastest, then y, then z:

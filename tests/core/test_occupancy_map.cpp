@@ -386,9 +386,9 @@ TEST(OccupancyMap, CoverOfOneLayerEqualsTheGeneralCover) {
     for (int c = 0; c < kLayerCells; ++c) {
       // Blocky layers copy the cell to the left or below most of the time.
       const bool copy = c > 0 && u(rng) < blockiness;
-      values[static_cast<std::size_t>(c)] =
-          copy ? values[static_cast<std::size_t>(c % kBrickSize > 0 && u(rng) < 0.5 ? c - 1 : std::max(c - kBrickSize, 0))]
-               : palette[static_cast<std::size_t>(static_cast<int>(u(rng) * distinct))];
+      const int source = c % kBrickSize > 0 && u(rng) < 0.5 ? c - 1 : std::max(c - kBrickSize, 0);
+      values[static_cast<std::size_t>(c)] = copy ? values[static_cast<std::size_t>(source)]
+                                                 : palette[static_cast<std::size_t>(static_cast<int>(u(rng) * distinct))];
       if (u(rng) < density) known[static_cast<std::size_t>(c >> 6)] |= std::uint64_t{1} << (c & 63);
     }
     const auto mergeable = [policy](float v) { return policy == 0 || (policy == 1 && v > 0.5f); };
@@ -401,9 +401,10 @@ TEST(OccupancyMap, CoverOfOneLayerEqualsTheGeneralCover) {
         [&](const std::uint8_t lo[3], const std::uint8_t hi[3], int start) {
           general.push_back(Box{{lo[0], lo[1], lo[2]}, {hi[0], hi[1], hi[2]}, valueAt(start)});
         });
-    detail::coverLayer(known, values.data(), z, mergeable, [&](const std::uint8_t lo[3], const std::uint8_t hi[3], float v) {
-      layer.push_back(Box{{lo[0], lo[1], lo[2]}, {hi[0], hi[1], hi[2]}, v});
-    });
+    detail::coverLayer(known, values.data(), z, mergeable,
+                       [&](const std::uint8_t lo[3], const std::uint8_t hi[3], float v) {
+                         layer.push_back(Box{{lo[0], lo[1], lo[2]}, {hi[0], hi[1], hi[2]}, v});
+                       });
     ASSERT_TRUE(layer == general) << "trial " << trial << ": " << layer.size() << " boxes against " << general.size();
     for (const Box& b : general) merged += b.lo[0] != b.hi[0] || b.lo[1] != b.hi[1];
   }

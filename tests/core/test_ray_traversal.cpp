@@ -207,8 +207,8 @@ TEST(RayTraversal, PlanarBatchWalkMarksWalkRaysCells) {
     // The batch spans the segment's cells, as the scan's bounding box does in insertPointCloud.
     batch.reset(Key{std::min(ka.x, kb.x), std::min(ka.y, kb.y), 3}, Key{std::max(ka.x, kb.x), std::max(ka.y, kb.y), 3});
     batch.markRayFree(a, b, ka, kb);
-    ASSERT_EQ(markedFree(batch, 3), expected) << "trial " << trial << " from (" << a.x() << ", " << a.y() << ") to (" << b.x()
-                                << ", " << b.y() << ")";
+    ASSERT_EQ(markedFree(batch, 3), expected)
+        << "trial " << trial << " from (" << a.x() << ", " << a.y() << ") to (" << b.x() << ", " << b.y() << ")";
   }
 }
 
@@ -255,8 +255,9 @@ TEST(RayTraversal, FanSkipsMarkTheUnionOfTheWholeWalks) {
     Eigen::Vector3d origin(-20.0 + 40.0 * u(rng), -20.0 + 40.0 * u(rng), 2.5);
     if (trial % 5 == 0) origin = Eigen::Vector3d(std::floor(origin.x()), std::floor(origin.y()), 2.5);
     const int count = 20 + static_cast<int>(u(rng) * 400);
-    const double step = (trial % 7 == 0 ? 6.283185307179586 / count : 0.001 + 0.05 * u(rng) * u(rng)) * (trial % 2 ? 1 : -1);
-    const double start = 6.283185307179586 * u(rng), reach = 5.0 + 150.0 * u(rng);
+    const double full_turn = 6.283185307179586;
+    const double step = (trial % 7 == 0 ? full_turn / count : 0.001 + 0.05 * u(rng) * u(rng)) * (trial % 2 ? 1 : -1);
+    const double start = full_turn * u(rng), reach = 5.0 + 150.0 * u(rng);
     const Key ka = floorKey(origin);
     std::vector<PlanarBeam> beams(static_cast<std::size_t>(count));
     std::vector<Eigen::Vector3d> ends(beams.size());

@@ -236,7 +236,9 @@ void fanSkipRuns(PlanarBeam* beams, std::size_t count) {
     constexpr double sure = 1e-9;
     const double ab_sure = sure * a.length * b.length, ac_sure = sure * a.length * c.length,
                  cb_sure = sure * c.length * b.length;
-    if (!((ab > ab_sure && ac > ac_sure && cb > cb_sure) || (ab < -ab_sure && ac < -ac_sure && cb < -cb_sure))) continue;
+    const bool counter_clockwise = ab > ab_sure && ac > ac_sure && cb > cb_sure;
+    const bool clockwise = ab < -ab_sure && ac < -ac_sure && cb < -cb_sure;
+    if (!counter_clockwise && !clockwise) continue;
     // A unit cell inside the wedge of angle t holds a disc of radius 1/2 whose centre is at
     // least 1 / (2 sin(t/2)) from the apex; a cell nearer crosses a side, inside that side's
     // segment if the segment reaches 2 cells further (its end cell is not free).
