@@ -1,7 +1,6 @@
 // Construction, queries and the invariant checker of the R-tree occupancy grid.
 #include "rtog/core/occupancy_map.hpp"
 
-#include <algorithm>
 #include <cmath>
 #include <sstream>
 
@@ -114,7 +113,7 @@ void OccupancyMap::clear() {
   leaf_count_ = 0;
   planar_layers_.clear();
   planar_index_.clear();
-  std::fill(recent_layers_.begin(), recent_layers_.end(), RecentLayer{});
+  recent_layers_.clear();
   cover_pending_.store(false, std::memory_order_release);
 }
 

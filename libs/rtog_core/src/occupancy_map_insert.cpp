@@ -70,7 +70,6 @@ std::uint64_t updateLayerWord(float* values, std::uint64_t occupied, std::uint64
 #endif
 }
 
-
 enum class BeamEnd { Hit, Truncated, NonFinite, ZeroLength, OutOfRange };
 
 // Where a beam from `origin` to `p` ends (cut at max_range) and its end cell.
@@ -91,10 +90,6 @@ inline BeamEnd endOfBeam(const Lattice& lattice, const Eigen::Vector3d& origin, 
   if (!lattice.tryKey(end, end_key)) return BeamEnd::OutOfRange;
   return returned ? BeamEnd::Hit : BeamEnd::Truncated;
 }
-
-}  // namespace
-
-namespace detail {
 
 #if defined(RTOG_AVX2_DISPATCH)
 // updateLayerWord eight cells a step, for CPUs that have AVX2 (chosen at run time: the default
@@ -126,7 +121,7 @@ __attribute__((target("avx2"))) std::uint64_t updateLayerWordAvx2(float* values,
 // Counted with the POPCNT instruction, which every AVX2 CPU has.
 __attribute__((target("avx2,popcnt"))) void updateLayerAvx2(float* values, std::uint64_t* known,
                                                              const std::uint64_t* occupied, const std::uint64_t* free,
-                                                             const float deltas[4], LayerCounts& counts) {
+                                                             const float deltas[4], detail::LayerCounts& counts) {
   for (std::size_t w = 0; w < kLayerWords; ++w) {
     const std::uint64_t o = occupied[w], f = free[w] & ~o;
     if ((o | f) == 0) continue;
@@ -140,7 +135,7 @@ __attribute__((target("avx2,popcnt"))) void updateLayerAvx2(float* values, std::
 #endif
 
 void updateLayer(float* values, std::uint64_t* known, const std::uint64_t* occupied, const std::uint64_t* free,
-                 const float deltas[4], LayerCounts& counts) {
+                 const float deltas[4], detail::LayerCounts& counts) {
   for (std::size_t w = 0; w < kLayerWords; ++w) {
     const std::uint64_t o = occupied[w], f = free[w] & ~o;
     if ((o | f) == 0) continue;
@@ -151,6 +146,10 @@ void updateLayer(float* values, std::uint64_t* known, const std::uint64_t* occup
     known[w] |= o | f;
   }
 }
+
+}  // namespace
+
+namespace detail {
 
 std::array<UpdateLayerFn, 2> layerUpdateKernels() {
 #if defined(RTOG_AVX2_DISPATCH)
@@ -164,14 +163,9 @@ std::array<UpdateLayerFn, 2> layerUpdateKernels() {
 InsertStats OccupancyMap::insertPointCloud(const Eigen::Vector3d& origin, const Eigen::Vector3f* points,
                                            std::size_t count, const InsertParams& ip, const std::uint8_t* is_hit) {
   if (ip.threads < 1) throw std::invalid_argument("InsertParams: threads must be >= 1");
-  // A planar batch of more than this many bricks (16 MiB: a scan 400 m wide at 5 cm) takes
-  // the general path instead.
-  constexpr std::size_t kMaxPlanarTiles = std::size_t{1} << 18;
   Key lo, hi;
   InsertStats stats;
-  const bool planar = ip.planar_cache && preparePlanarBeams(origin, points, count, ip, is_hit, lo, hi, stats) &&
-                      PlanarBatch::tilesFor(lo, hi) <= kMaxPlanarTiles;
-  if (!planar) stats = InsertStats{};  // the general path counts the beams
+  const bool planar = ip.planar_cache && preparePlanarBeams(origin, points, count, ip, is_hit, lo, hi, stats);
   if (!planar && hasPendingCover()) flush();
   // Below a few thousand beams a thread costs more than it saves.
   const std::size_t threads = std::min<std::size_t>(static_cast<std::size_t>(ip.threads), 1 + count / 4096);
@@ -243,6 +237,9 @@ InsertStats OccupancyMap::insertPointCloud(const Eigen::Vector3d& origin, const 
 bool OccupancyMap::preparePlanarBeams(const Eigen::Vector3d& origin, const Eigen::Vector3f* points, std::size_t count,
                                       const InsertParams& ip, const std::uint8_t* is_hit, Key& lo, Key& hi,
                                       InsertStats& stats) {
+  // A planar batch of more than this many bricks (16 MiB: a scan 400 m wide at 5 cm) takes
+  // the general path instead.
+  constexpr std::size_t kMaxPlanarTiles = std::size_t{1} << 18;
   Key origin_key;
   if (!lattice_.tryKey(origin, origin_key)) return false;
   const Eigen::Vector3d origin_l = lattice_.toLattice(origin);
@@ -250,6 +247,7 @@ bool OccupancyMap::preparePlanarBeams(const Eigen::Vector3d& origin, const Eigen
   // Grown beam by beam: a volumetric scan usually leaves the layer within its first beams, and
   // sizing for all of them (a depth image: 307,200) cost more than its whole planar test.
   planar_beams_.clear();
+  InsertStats counts;  // into `stats` only if the scan is planar: else the general path counts
   Eigen::Vector3d end;
   for (std::size_t i = 0; i < count; ++i) {
     PlanarBeam& beam = planar_beams_.emplace_back();
@@ -258,9 +256,9 @@ bool OccupancyMap::preparePlanarBeams(const Eigen::Vector3d& origin, const Eigen
     beam.traced = false;
     beam.skip_runs = 0;
     switch (kind) {
-      case BeamEnd::NonFinite: ++stats.skipped_non_finite; continue;
-      case BeamEnd::ZeroLength: ++stats.skipped_zero_length; continue;
-      case BeamEnd::OutOfRange: ++stats.skipped_out_of_range; continue;
+      case BeamEnd::NonFinite: ++counts.skipped_non_finite; continue;
+      case BeamEnd::ZeroLength: ++counts.skipped_zero_length; continue;
+      case BeamEnd::OutOfRange: ++counts.skipped_out_of_range; continue;
       default: break;
     }
     if (beam.end.z != origin_key.z) return false;
@@ -268,13 +266,15 @@ bool OccupancyMap::preparePlanarBeams(const Eigen::Vector3d& origin, const Eigen
     hi = Key{std::max(hi.x, beam.end.x), std::max(hi.y, beam.end.y), hi.z};
     beam.traced = true;
     beam.hit = kind == BeamEnd::Hit;
-    ++(beam.hit ? stats.rays_hit : stats.rays_truncated);
+    ++(beam.hit ? counts.rays_hit : counts.rays_truncated);
     const Eigen::Vector3d end_l = ip.discretize ? Eigen::Vector3d(beam.end.x + 0.5, beam.end.y + 0.5, beam.end.z + 0.5)
                                                 : lattice_.toLattice(end);
     beam.seg = planarSegment(origin_l, end_l, origin_key, beam.end);
   }
+  if (PlanarBatch::tilesFor(lo, hi) > kMaxPlanarTiles) return false;
   // Discretized beams are traced once per end cell, which a skip could not rely on.
   if (ip.model == SensorModel::BeamBased && !ip.discretize) fanSkipRuns(planar_beams_.data(), count);
+  stats += counts;
   return true;
 }
 
@@ -284,9 +284,8 @@ void OccupancyMap::computeUpdate(const Eigen::Vector3d& origin, const Eigen::Vec
   traceBeams(origin, points, count, ip, is_hit, batch, stats);
 }
 
-template <class Batch>
 void OccupancyMap::traceBeams(const Eigen::Vector3d& origin, const Eigen::Vector3f* points, std::size_t count,
-                              const InsertParams& ip, const std::uint8_t* is_hit, Batch& batch,
+                              const InsertParams& ip, const std::uint8_t* is_hit, UpdateBatch& batch,
                               InsertStats& stats) const {
   const Key origin_key = lattice_.key(origin);  // throws for a bad origin
   const Eigen::Vector3d origin_l = lattice_.toLattice(origin);
@@ -838,13 +837,11 @@ void OccupancyMap::applyPlanar(std::size_t batches, int z, InsertStats& stats) {
   const PlanarBatch& b0 = planar_batches_[0];
   const float deltas[4] = {model_.hitDelta(), model_.missDelta(), model_.clampMin(), model_.clampMax()};
   const int local_z = z & (kBrickSize - 1);
-  // Unknown cells hold the prior, so a first update is an update like any other.
   static const detail::UpdateLayerFn update_layer = [] {
     const auto kernels = detail::layerUpdateKernels();
     return kernels[1] ? kernels[1] : kernels[0];
   }();
   detail::LayerCounts counts;
-  if (recent_layers_.empty()) recent_layers_.resize(std::size_t{1} << kRecentLayerBits);
   for (std::size_t t = 0; t < b0.tiles().size(); ++t) {
     // The union over the threads' batches, occupied winning.
     PlanarBatch::Tile tile = b0.tiles()[t];
@@ -859,12 +856,12 @@ void OccupancyMap::applyPlanar(std::size_t batches, int z, InsertStats& stats) {
     const auto width = static_cast<std::size_t>(b0.width());
     const Key brick{b0.brickX0() + static_cast<int>(t % width), b0.brickY0() + static_cast<int>(t / width),
                     z >> kBrickBits};
-    // Most of a scan's tiles were layers of the scans before: a direct-mapped table of recent
-    // layers in front of the two hash lookups.
-    const std::uint64_t packed = packKey(Key{brick.x, brick.y, z});
-    RecentLayer& recent = recent_layers_[(packed * 0x9E3779B97F4A7C15ull) >> (64 - kRecentLayerBits)];
-    if (recent.key != packed) recent = RecentLayer{packed, planarLayer(brickSlot(brick), local_z)};
-    PlanarLayer& layer = planar_layers_[recent.layer];
+    // Most of a scan's tiles were layers of the scans before: recent ones skip the brick and
+    // layer hash lookups.
+    PlanarLayer& layer = planar_layers_[recent_layers_.get(packKey(Key{brick.x, brick.y, z}), [&] {
+      return planarLayer(brickSlot(brick), local_z);
+    })];
+    // Unknown cells hold the prior, so a first update is an update like any other.
     update_layer(layer.value.data(), layer.known.data(), tile.occupied.data(), tile.free.data(), deltas, counts);
   }
   stats.cells_unchanged += counts.unchanged;
@@ -949,7 +946,7 @@ InsertStats OccupancyMap::coverPlanarLayers() {
   // Keep room for the layers of a scan or two (a 2D scan at 5 cm touches about 200), not for
   // those of a whole log: the pool counts in memoryBytes().
   constexpr std::size_t kKeptLayers = 512;
-  std::fill(recent_layers_.begin(), recent_layers_.end(), RecentLayer{});
+  recent_layers_.clear();
   if (planar_layers_.capacity() > kKeptLayers) {
     planar_layers_.release();
     planar_index_ = detail::FlatHashMap64();

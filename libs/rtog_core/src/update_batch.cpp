@@ -13,7 +13,7 @@ void UpdateBatch::clear() {
   sorted_.clear();
   sorted_keys_.clear();
   cached_ = nullptr;
-  recent_.fill(Recent{});
+  recent_.clear();
 }
 
 std::uint32_t UpdateBatch::brickSlot(const Key& b) {

@@ -118,12 +118,7 @@ void CRTreeOccupancyGridMap::localPointsCached(const mrpt::obs::CObservation& ob
 bool CRTreeOccupancyGridMap::extractBeams(const mrpt::obs::CObservation& obs, const CPose3D& robotPose,
                                           ObservationBeams& out, bool forInsertion) const {
   using namespace mrpt::obs;
-  // Cleared, not replaced: callers reuse `out` and keep its capacity.
-  out.origin.setZero();
-  out.points.clear();
-  out.is_hit.clear();
-  out.ranges.clear();
-  out.invalid = 0;
+  out.clear();  // not replaced: callers reuse `out` and its capacity
   // Scratch for the sensor-frame points, kept per thread from call to call.
   thread_local std::vector<Eigen::Vector3f> local;
   std::size_t dec = insertionOptions.decimation;

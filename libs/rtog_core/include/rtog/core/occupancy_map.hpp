@@ -301,14 +301,14 @@ class OccupancyMap {
     std::array<std::uint64_t, kLayerWords> known;
     std::array<float, kLayerCells> value;  // the prior where unknown
   };
-  /// True if every traced beam of the scan stays in the origin's z-layer: then the beams in
-  /// exact planar form, with the runs each can skip (fanSkipRuns), are in planar_beams_, [lo, hi]
-  /// bounds their cells in x and y, and `stats` counts them.
+  /// True if every traced beam of the scan stays in the origin's z-layer and the scan is not too
+  /// wide for a planar batch: then the beams in exact planar form, with the runs each can skip
+  /// (fanSkipRuns), are in planar_beams_, [lo, hi] bounds their cells in x and y, and `stats`
+  /// counts them.
   bool preparePlanarBeams(const Eigen::Vector3d& origin, const Eigen::Vector3f* points, std::size_t count,
                           const InsertParams& ip, const std::uint8_t* is_hit, Key& lo, Key& hi, InsertStats& stats);
-  template <class Batch>
   void traceBeams(const Eigen::Vector3d& origin, const Eigen::Vector3f* points, std::size_t count,
-                  const InsertParams& ip, const std::uint8_t* is_hit, Batch& batch, InsertStats& stats) const;
+                  const InsertParams& ip, const std::uint8_t* is_hit, UpdateBatch& batch, InsertStats& stats) const;
   /// Applies the union of planar_batches_[0 .. batches) of a scan in z-layer `z` to the cache.
   void applyPlanar(std::size_t batches, int z, InsertStats& stats);
   /// The index in planar_layers_ of brick `slot`'s layer z, made from its leaves if new.
@@ -349,12 +349,7 @@ class OccupancyMap {
   std::vector<PlanarBeam> planar_beams_;     // scratch: a planar scan's beams
   detail::ChunkedVector<PlanarLayer, 64> planar_layers_;
   detail::FlatHashMap64 planar_index_;  // brick slot * kBrickSize + z -> index in planar_layers_
-  struct RecentLayer {
-    std::uint64_t key = ~std::uint64_t{0};  // packKey of (brick x, brick y, cell z); never all ones
-    std::uint32_t layer = 0;
-  };
-  static constexpr int kRecentLayerBits = 10;
-  std::vector<RecentLayer> recent_layers_;  // direct-mapped, in front of planar_index_
+  detail::RecentLookups<10> recent_layers_;  // packKey(brick x, y, cell z) -> planar_layers_ index
   std::mutex cover_mutex_;
   std::atomic<bool> cover_pending_{false};
 };

@@ -102,12 +102,8 @@ class alignas(64) UpdateBatch {
   BrickUpdates& brickFor(const Key& k) {
     const Key b = brickOf(k);
     if (cached_ == nullptr || b != cached_->brick) {
-      // Neighbouring beams cross the same bricks: a small direct-mapped table in front of the
-      // hash, which outgrows the cache on a long-range scan.
-      const std::uint64_t packed = packKey(b);
-      Recent& r = recent_[(packed * 0x9E3779B97F4A7C15ull) >> (64 - kRecentBits)];
-      if (r.key != packed) r = Recent{packed, brickSlot(b)};
-      cached_ = &brickAt(r.slot);
+      // The hash outgrows the cache on a long-range scan.
+      cached_ = &brickAt(recent_.get(packKey(b), [&] { return brickSlot(b); }));
     }
     return *cached_;
   }
@@ -126,19 +122,11 @@ class alignas(64) UpdateBatch {
   std::size_t count_ = 0;
   detail::FlatHashMap64 index_;
   BrickUpdates* cached_ = nullptr;
-  struct Recent {
-    std::uint64_t key = ~std::uint64_t{0};  // no packed key has all 64 bits set
-    std::uint32_t slot = 0;
-  };
-  static constexpr int kRecentBits = 9;
-  static constexpr std::size_t kRecent = std::size_t{1} << kRecentBits;
-  std::array<Recent, kRecent> recent_{};
+  detail::RecentLookups<9> recent_;  // packed brick key -> slot
   std::vector<const BrickUpdates*> sorted_;
   std::vector<Key> sorted_keys_;
 };
 
-/// The update set of a planar scan, whose cells all lie in one z-layer: the layer masks of the
-/// bricks under the scan's bounding box in a dense grid, found by arithmetic instead of a hash.
 /// A beam of a planar scan in the exact form a PlanarBatch walks.
 struct PlanarBeam {
   PlanarSegment seg;
@@ -157,6 +145,8 @@ struct PlanarBeam {
 /// the cells they leave out are marked by others. Beams out of sweep order are walked whole.
 void fanSkipRuns(PlanarBeam* beams, std::size_t count);
 
+/// The update set of a planar scan, whose cells all lie in one z-layer: the layer masks of the
+/// bricks under the scan's bounding box in a dense grid, found by arithmetic instead of a hash.
 class PlanarBatch {
  public:
   struct Tile {

@@ -33,6 +33,14 @@ struct ObservationBeams {
   std::vector<std::uint8_t> is_hit;                  ///< 1: return, 0: no-return beam
   std::vector<float> ranges;                         ///< measured range of each beam [m]
   std::size_t invalid = 0;                           ///< beams dropped as invalid (no range)
+  /// Empties, keeping the buffers' capacity for the next observation.
+  void clear() {
+    origin.setZero();
+    points.clear();
+    is_hit.clear();
+    ranges.clear();
+    invalid = 0;
+  }
 };
 
 class CRTreeOccupancyGridMap : public mrpt::maps::CMetricMap {

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <algorithm>
+#include <array>
 #include <cstdint>
 #include <limits>
 #include <vector>
@@ -74,6 +75,32 @@ class FlatHashMap64 {
   std::vector<Slot> slots_;
   std::size_t mask_ = 0;
   std::size_t size_ = 0;
+};
+
+/// A direct-mapped table of recent lookups in front of a slower map (packed key -> 32-bit
+/// value): neighbouring beams and scans ask for the same bricks again and again. The index is a
+/// multiplicative hash; the bricks of one plane share low bits of x ^ y ^ z and would collide.
+/// Its 2^kBits entries are allocated at the first lookup.
+template <int kBits>
+class RecentLookups {
+ public:
+  /// The value for `key`: from the table, or lookup() on a miss (kept, replacing the entry).
+  template <class Lookup>
+  std::uint32_t get(std::uint64_t key, Lookup&& lookup) {
+    if (entries_.empty()) entries_.resize(std::size_t{1} << kBits);
+    Entry& e = entries_[(key * 0x9E3779B97F4A7C15ull) >> (64 - kBits)];
+    if (e.key != key) e = Entry{key, lookup()};
+    return e.value;
+  }
+  /// Forgets every entry (their values are no longer valid).
+  void clear() { std::fill(entries_.begin(), entries_.end(), Entry{}); }
+
+ private:
+  struct Entry {
+    std::uint64_t key = ~std::uint64_t{0};  // no packed key has all 64 bits set
+    std::uint32_t value = 0;
+  };
+  std::vector<Entry> entries_;
 };
 
 }  // namespace rtog::detail
