@@ -3,15 +3,14 @@
 #include <malloc.h>
 
 #include <algorithm>
-#include <cctype>
 #include <chrono>
 #include <cmath>
-#include <numeric>
 #include <cstdio>
 #include <fstream>
 #include <functional>
 #include <iomanip>
 #include <memory>
+#include <numeric>
 #include <random>
 #include <sstream>
 
@@ -433,11 +432,10 @@ std::size_t writeLogOddsRaster(const OccupancyMap& map, const std::string& path)
   map.forEachLeaf([&](const Box& b, float log_odds) {
     const long step = std::lround(log_odds * 20.0f);
     const auto value = static_cast<signed char>(step == 0 ? 1 : std::clamp<long>(step, -127, 127));
+    const auto from = [&](std::int32_t c, int a) { return static_cast<std::size_t>(std::int64_t{c} - bounds.min[a]); };
     for (std::int32_t z = b.min.z; z <= b.max.z; ++z)
       for (std::int32_t y = b.min.y; y <= b.max.y; ++y) {
-        const auto offset = [&](int a) { return static_cast<std::size_t>(std::int64_t{b.min[a]} - bounds.min[a]); };
-        const std::size_t first = ((offset(2) + static_cast<std::size_t>(z - b.min.z)) * ny + offset(1) +
-                                   static_cast<std::size_t>(y - b.min.y)) * nx + offset(0);
+        const std::size_t first = (from(z, 2) * ny + from(y, 1)) * nx + from(b.min.x, 0);
         std::fill_n(raster.begin() + static_cast<std::ptrdiff_t>(first), b.max.x - b.min.x + 1, value);
       }
   });
@@ -485,10 +483,7 @@ void runDataset(const Dataset& data, const Options& opts, std::vector<Result>& o
     if (!opts.raster_dir.empty())
       for (const auto& m : methods)
         if (m->rtogMap()) {
-          std::string name = data.name + "_" + std::to_string(res);
-          for (char& c : name)
-            if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
-          const std::string path = opts.raster_dir + "/" + name + ".i8";
+          const std::string path = opts.raster_dir + "/" + slug(data.name + "_" + std::to_string(res)) + ".i8";
           const std::size_t cells = writeLogOddsRaster(*m->rtogMap(), path);
           log << "  raster of " << m->name() << ": " << path << ", " << cells << " bytes\n";
           break;

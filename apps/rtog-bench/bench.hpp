@@ -53,6 +53,9 @@ struct Options {
   std::string raster_dir;                   ///< each dataset's first rtog map as a raster here (Default: "", none)
 };
 
+/// `s` with every character but letters and digits made '_', for file names.
+std::string slug(std::string s);
+
 /// Writes the map as one signed byte per cell over its key bounds, x fastest, then y, then z:
 /// 0 unknown, else the log-odds in steps of 0.05 (clamped to +-127, a known 0 as 1). A
 /// compression yardstick for the map's information content. Returns the cell count.

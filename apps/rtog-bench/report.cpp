@@ -1,5 +1,6 @@
 // Writes benchmark results: JSON for machines, Markdown + PNG plots for people.
 #include <array>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -75,13 +76,13 @@ void barChart(const std::vector<std::pair<std::string, double>>& bars, const std
   if (!cv::imwrite(path, img)) throw std::runtime_error("cannot write " + path);
 }
 
+}  // namespace
+
 std::string slug(std::string s) {
   for (char& c : s)
     if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
   return s;
 }
-
-}  // namespace
 
 void writeJson(const std::vector<Result>& results, const std::string& path) {
   nlohmann::json j;
