@@ -259,7 +259,7 @@ void PlanarBatch::markRayFree(const PlanarSegment& seg, const Key& from_key, std
   // (or column) of the other are one run, whose end follows from the exact crossing times by
   // an integer division carried from run to run (as in run-slice line drawing).
   if (seg.nx + seg.ny == 0) return;
-  const std::size_t at = static_cast<std::size_t>(&tileOf(from_key.x, from_key.y) - tiles_.data());
+  const std::size_t at = tileIndex(from_key.x, from_key.y);
   Tile* tile = &tiles_[at];
   ColumnTile* column = &columns_[at];
   // One loop per orientation and direction: the directions are constants in the loop.

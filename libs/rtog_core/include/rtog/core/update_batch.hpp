@@ -188,9 +188,10 @@ class PlanarBatch {
 
  private:
   static int bitOf(int x, int y) { return (x & (kBrickSize - 1)) | ((y & (kBrickSize - 1)) << kBrickBits); }
-  Tile& tileOf(int x, int y) {
-    return tiles_[static_cast<std::size_t>(((y >> kBrickBits) - by0_) * width_ + ((x >> kBrickBits) - bx0_))];
+  std::size_t tileIndex(int x, int y) const {
+    return static_cast<std::size_t>(((y >> kBrickBits) - by0_) * width_ + ((x >> kBrickBits) - bx0_));
   }
+  Tile& tileOf(int x, int y) { return tiles_[tileIndex(x, y)]; }
   int bx0_ = 0, by0_ = 0, width_ = 0;
   std::vector<Tile> tiles_;
   std::vector<ColumnTile> columns_;  // indexed as tiles_
