@@ -10,7 +10,6 @@
 #include <functional>
 #include <iomanip>
 #include <memory>
-#include <numeric>
 #include <random>
 #include <sstream>
 
@@ -35,19 +34,30 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-// At least opts.repeats builds; fast ones go on until min_seconds have been timed, so that
-// their medians are not at the mercy of one scheduler hiccup (at most kMaxRepeats builds).
-constexpr int kMaxRepeats = 60;
-
-bool wantsAnotherBuild(const Options& opts, const std::vector<double>& times) {
-  const auto n = static_cast<int>(times.size());
-  return n < opts.repeats ||
-         (n < kMaxRepeats && std::accumulate(times.begin(), times.end(), 0.0) < opts.min_seconds);
-}
-
-
 double seconds(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double>(b - a).count(); }
 
+// Builds go in opts.repeats rounds, every method once or more in each: within a round a fast
+// method builds again until min_seconds / repeats of its builds have been timed (at most
+// kMaxRepeats builds in all). So every method's builds sample the same spells of the machine
+// (on a shared 2-vCPU VM one build in four may run at half speed, for seconds at a time) and
+// the ratios of the medians hold. build(k) builds method k once and returns its seconds; only
+// methods with include(k) take part.
+constexpr int kMaxRepeats = 60;
+
+template <class Include, class Build>
+void buildInRounds(const Options& opts, std::vector<std::vector<double>>& times, Include&& include, Build&& build) {
+  const double per_round = opts.min_seconds / opts.repeats;
+  const auto most_per_round = static_cast<std::size_t>(std::max(1, kMaxRepeats / opts.repeats));
+  for (int round = 0; round < opts.repeats; ++round)
+    for (std::size_t k = 0; k < times.size(); ++k) {
+      if (!include(k)) continue;
+      double spent = 0;
+      for (std::size_t n = 0; n == 0 || (spent < per_round && n < most_per_round); ++n) {
+        times[k].push_back(build(k));
+        spent += times[k].back();
+      }
+    }
+}
 double median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
   return v.empty() ? 0.0 : v[v.size() / 2];
@@ -381,26 +391,24 @@ void run2D(const std::string& rawlog, const Options& opts, std::vector<Result>& 
     methods.erase(std::remove_if(methods.begin(), methods.end(),
                                  [&](const Method2D& m) { return !selected(opts, m.name); }),
                   methods.end());
-    // Builds go in rounds, as for the 3D data: a slow spell of the machine hits all methods alike.
-    for (bool built = true; built;) {
-      built = false;
-      for (Method2D& m : methods) {
-        if (!wantsAnotherBuild(opts, m.times)) continue;
-        built = true;
-        m.map = m.make();
-        const auto t0 = Clock::now();
-        for (const auto& [pose, scan] : scans) m.map->insertObservation(*scan, pose);
-        // Until the map can be read: rtog covers the scans of its planar cache with leaves.
-        if (auto* rtog_map = dynamic_cast<CRTreeOccupancyGridMap*>(m.map.get())) rtog_map->map().flush();
-        m.times.push_back(seconds(t0, Clock::now()));
-      }
-    }
+    std::vector<std::vector<double>> times(methods.size());
+    buildInRounds(opts, times, [](std::size_t) { return true; }, [&](std::size_t k) {
+      Method2D& m = methods[k];
+      m.map = m.make();
+      const auto t0 = Clock::now();
+      for (const auto& [pose, scan] : scans) m.map->insertObservation(*scan, pose);
+      // Until the map can be read: rtog covers the scans of its planar cache with leaves.
+      if (auto* rtog_map = dynamic_cast<CRTreeOccupancyGridMap*>(m.map.get())) rtog_map->map().flush();
+      return seconds(t0, Clock::now());
+    });
+    for (std::size_t k = 0; k < methods.size(); ++k) methods[k].times = std::move(times[k]);
     for (Method2D& m : methods) {
       Result r;
       r.dataset = name;
       r.method = m.name;
       r.resolution = res;
       r.insert_seconds = median(m.times);
+      r.build_seconds = m.times;
       r.extra["repeats"] = double(m.times.size());
       r.points_per_second = double(beams) / r.insert_seconds;
       r.structure_bytes = m.bytes(*m.map);
@@ -457,28 +465,22 @@ void runDataset(const Dataset& data, const Options& opts, std::vector<Result>& o
     for (auto& q : queries)
       for (int a = 0; a < 3; ++a) q[a] = std::uniform_real_distribution<double>(lo[a], hi[a])(rng);
 
-    // Builds go in rounds, every method once per round, so that a slow spell of the machine
-    // hits all methods alike and their ratios hold; fast methods go on for more rounds until
-    // min_seconds of their builds have been timed. Heavy methods go in rounds of their own
-    // afterwards: interleaved, the dense grid's page faults and frees slowed the builds after
-    // it (rtog's 2-thread scaling on rot_scan measured 1.45x with it, 2.13x without).
+    // Heavy methods go in rounds of their own after the others: interleaved, the dense grid's
+    // page faults and frees slowed the builds after it (rtog's 2-thread scaling on rot_scan
+    // measured 1.45x with it, 2.13x without).
     std::vector<std::vector<double>> build_times(methods.size());
     std::vector<double> rss_growth(methods.size(), 0.0);
-    for (const bool heavy_phase : {false, true}) {
-      for (int round = 0;; ++round) {
-        bool built = false;
-        for (std::size_t k = 0; k < methods.size(); ++k) {
-          std::vector<double>& t = build_times[k];
-          if (methods[k]->heavy() != heavy_phase || !wantsAnotherBuild(opts, t)) continue;
-          if (round == 0) malloc_trim(0);  // for the RSS growth; later builds reuse the heap, as a long run does
-          const double rss0 = residentBytes();
-          t.push_back(methods[k]->build(data));
-          if (round == 0) rss_growth[k] = residentBytes() - rss0;
-          built = true;
-        }
-        if (!built) break;
-      }
-    }
+    for (const bool heavy_phase : {false, true})
+      buildInRounds(
+          opts, build_times, [&](std::size_t k) { return methods[k]->heavy() == heavy_phase; },
+          [&](std::size_t k) {
+            const bool first = build_times[k].empty();
+            if (first) malloc_trim(0);  // for the RSS growth; later builds reuse the heap, as a long run does
+            const double rss0 = residentBytes();
+            const double s = methods[k]->build(data);
+            if (first) rss_growth[k] = residentBytes() - rss0;
+            return s;
+          });
 
     if (!opts.raster_dir.empty())
       for (const auto& m : methods)
@@ -500,6 +502,7 @@ void runDataset(const Dataset& data, const Options& opts, std::vector<Result>& o
       const std::vector<double>& times = build_times[k];
       r.rss_growth_bytes = rss_growth[k];
       r.insert_seconds = median(times);
+      r.build_seconds = times;
       r.extra["repeats"] = double(times.size());
       r.points_per_second = double(data.points()) / r.insert_seconds;
       r.structure_bytes = m->structureBytes();

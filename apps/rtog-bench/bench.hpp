@@ -33,6 +33,7 @@ struct Result {
   std::string dataset, method;
   double resolution = 0;
   double insert_seconds = 0;      ///< median over the repeats
+  std::vector<double> build_seconds;  ///< every timed build, in the order built
   double points_per_second = 0;
   std::size_t structure_bytes = 0;
   double rss_growth_bytes = 0;    ///< resident set growth while building one map
@@ -44,8 +45,8 @@ struct Result {
 };
 
 struct Options {
-  int repeats = 5;                          ///< builds per method at least (Default: 5)
-  double min_seconds = 1.0;                 ///< and more until this much was timed (Default: 1.0)
+  int repeats = 5;                          ///< rounds of builds, every method in each (Default: 5)
+  double min_seconds = 1.0;                 ///< a fast method's builds timed over all rounds (Default: 1.0)
   std::vector<double> resolutions{0.05, 0.1};
   std::size_t query_count = 200000;         ///< random point queries per map (Default: 200000)
   double max_range = -1;                    ///< beams cut here (<= 0: none) (Default: -1)

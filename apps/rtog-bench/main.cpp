@@ -16,8 +16,11 @@ int main(int argc, char** argv) {
   app.add_option("--mrpt-datasets", datasets_dir, "Debian mrpt-common datasets directory")->capture_default_str();
   app.add_option("--only", only, "Run only these datasets: tum, vlp16, rotscan, sena");
   app.add_option("--methods", opts.methods, "Run only methods whose name contains one of these (profiling)");
-  app.add_option("--repeats", opts.repeats, "Builds per method at least (median reported)")->capture_default_str()->check(CLI::PositiveNumber);
-  app.add_option("--min-seconds", opts.min_seconds, "Repeat fast builds until this much time was measured")
+  app.add_option("--repeats", opts.repeats, "Rounds of builds, every method in each (median reported)")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  app.add_option("--min-seconds", opts.min_seconds,
+                 "A fast method builds again in a round until its share of this much was timed")
       ->capture_default_str()
       ->check(CLI::NonNegativeNumber);
   app.add_option("--resolutions", opts.resolutions, "Cell sizes [m]")->capture_default_str();

@@ -92,6 +92,7 @@ void writeJson(const std::vector<Result>& results, const std::string& path) {
                             {"method", r.method},
                             {"resolution", r.resolution},
                             {"insert_seconds_median", r.insert_seconds},
+                            {"build_seconds", r.build_seconds},
                             {"points_per_second", r.points_per_second},
                             {"structure_bytes", r.structure_bytes},
                             {"rss_growth_bytes", r.rss_growth_bytes},
@@ -109,10 +110,11 @@ void writeMarkdown(const std::vector<Result>& results, const std::string& path, 
   std::ostringstream md;
   const nlohmann::json m = machine();
   md << "# Benchmarks\n\nMeasured by `rtog-bench` (Release build), every method in one process on the same scans,\n"
-     << "resolution and sensor model (OctoMap's defaults). Insertion time is the median of at least 5 builds,\n"
-     << "repeated until 1 s of building was timed (at most 60 builds; the count is in the JSON). Methods build\n"
-     << "in rounds, each once per round, so that the machine's slow spells hit them alike; the dense 3D\n"
-     << "grid (up to 1.7 GB a build) in rounds of its own after the others, as its paging slowed the builds\n"
+     << "resolution and sensor model (OctoMap's defaults). Insertion time is the median of the builds of 5\n"
+     << "rounds. Every method builds in every round, a fast one again until 0.2 s of its builds were timed in\n"
+     << "that round (at most 60 builds; the count is in the JSON), so that all methods' builds sample the same\n"
+     << "slow spells of the machine and their ratios hold. The dense 3D grid (up to 1.7 GB a build) goes in\n"
+     << "rounds of its own after the others, as its paging slowed the builds\n"
      << "that followed it. The heap is trimmed before each method's first 3D build only, for its RSS growth;\n"
      << "later builds reuse it, as a long-running process does. A build ends\n"
      << "when the map can be read: rtog's timed build includes covering its planar cache (2D scans). The 2D\n"

@@ -182,6 +182,10 @@ TEST_P(RTreeBulkLoad, BuildsAValidPackedTree) {
       items.push_back({Box{Key{x, y, z}, Key{x + 1, y + 1, z}}, static_cast<int>(i)});
     }
     std::shuffle(items.begin(), items.end(), rng);
+    // AsGiven packs runs in the order given, which its callers keep spatial.
+    if (GetParam() == RTree<int>::Packing::AsGiven)
+      std::sort(items.begin(), items.end(),
+                [](const auto& a, const auto& b) { return mortonCode(a.first.min) < mortonCode(b.first.min); });
     RTree<int> tree;
     tree.bulkLoad(items, GetParam());
     ASSERT_EQ(tree.size(), n);
@@ -204,10 +208,34 @@ TEST_P(RTreeBulkLoad, BuildsAValidPackedTree) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Packings, RTreeBulkLoad,
-                         ::testing::Values(RTree<int>::Packing::SortTileRecursive, RTree<int>::Packing::Morton),
+                         ::testing::Values(RTree<int>::Packing::SortTileRecursive, RTree<int>::Packing::Morton,
+                                           RTree<int>::Packing::AsGiven),
                          [](const ::testing::TestParamInfo<RTree<int>::Packing>& info) {
-                           return std::string(info.param == RTree<int>::Packing::Morton ? "Morton" : "STR");
+                           switch (info.param) {
+                             case RTree<int>::Packing::Morton: return std::string("Morton");
+                             case RTree<int>::Packing::AsGiven: return std::string("AsGiven");
+                             default: return std::string("STR");
+                           }
                          });
+
+TEST(Key, MortonCodeInterleavesTheCoordinateBits) {
+  std::mt19937 rng(7);
+  std::uniform_int_distribution<std::int32_t> coord(kKeyMin, kKeyMax);
+  std::vector<Key> keys = {Key{kKeyMin, kKeyMin, kKeyMin}, Key{kKeyMax, kKeyMax, kKeyMax}, Key{0, 0, 0},
+                           Key{-1, 0, 1}};
+  for (int i = 0; i < 1000; ++i) keys.push_back(Key{coord(rng), coord(rng), coord(rng)});
+  for (const Key& k : keys) {
+    std::uint64_t expected = 0;
+    for (int bit = 0; bit < kKeyBits; ++bit)
+      for (int a = 0; a < 3; ++a)
+        expected |= ((static_cast<std::uint64_t>(k[a] - kKeyMin) >> bit) & 1u) << (3 * bit + a);
+    ASSERT_EQ(mortonCode(k), expected) << k.x << " " << k.y << " " << k.z;
+  }
+  // Z-order: the eight cells of an aligned 2x2x2 block come together, x fastest.
+  EXPECT_LT(mortonCode(Key{0, 0, 0}), mortonCode(Key{1, 0, 0}));
+  EXPECT_LT(mortonCode(Key{1, 0, 0}), mortonCode(Key{0, 1, 0}));
+  EXPECT_LT(mortonCode(Key{1, 1, 1}), mortonCode(Key{2, 0, 0}));
+}
 
 TEST(RTree, InvariantCheckerDetectsOverlap) {
   RTree<int> tree;

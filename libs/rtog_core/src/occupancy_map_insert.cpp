@@ -421,32 +421,44 @@ void OccupancyMap::refreshUpperTree(int threads) {
 }
 
 void OccupancyMap::rebuildUpperTree(int threads) {
-  // The leaf nodes' boxes read every leaf of the map: bricks split across the threads.
+  // Leaf nodes go to the bulk load in Morton order of their bricks, and a brick's nodes follow
+  // its leaves, which are in Morton order of their first cells when packed: close to the order
+  // of the nodes' own Morton codes without sorting the nodes (a first scan of a long-range LiDAR
+  // brings ~10^5 of them, twice as many as bricks, and the load runs on one thread).
   const auto slots = static_cast<std::uint32_t>(bricks_.size());
+  std::vector<std::pair<std::uint64_t, std::uint32_t>> order(slots);
+  for (std::uint32_t slot = 0; slot < slots; ++slot) order[slot] = {mortonCode(bricks_[slot].brick), slot};
+  std::sort(order.begin(), order.end());
+  // Handles are the nodes' positions in the load, so each brick knows its own before the load.
+  std::vector<std::uint32_t> first_node(slots + 1, 0);
+  for (std::uint32_t i = 0; i < slots; ++i) {
+    const std::size_t n = (bricks_[order[i].second].leaves.size() + leafNodeSize() - 1) / leafNodeSize();
+    first_node[i + 1] = first_node[i] + static_cast<std::uint32_t>(n);
+  }
+  std::vector<std::pair<Box, LeafNodeRef>> nodes(first_node[slots]);
+  // The leaf nodes' boxes read every leaf of the map: parts of equal node counts, one a thread.
   const std::uint32_t parts = std::max<std::uint32_t>(1, std::min<std::uint32_t>(threads, 1 + slots / 1024));
-  std::vector<std::vector<std::pair<Box, LeafNodeRef>>> part(parts);
   const auto collect = [&](std::uint32_t p) {
-    for (std::uint32_t slot = slots / parts * p; slot < (p + 1 == parts ? slots : slots / parts * (p + 1)); ++slot) {
+    const auto bound = [&](std::uint32_t q) {
+      const std::uint64_t target = std::uint64_t{first_node[slots]} * q / parts;
+      return static_cast<std::uint32_t>(std::lower_bound(first_node.begin(), first_node.end() - 1, target) -
+                                        first_node.begin());
+    };
+    for (std::uint32_t i = bound(p), end = p + 1 == parts ? slots : bound(p + 1); i < end; ++i) {
+      const std::uint32_t slot = order[i].second;
       Brick& br = bricks_[slot];
-      br.nodes.clear();
-      const std::size_t n = (br.leaves.size() + leafNodeSize() - 1) / leafNodeSize();
-      for (std::size_t k = 0; k < n; ++k)
-        part[p].push_back({leafNodeBox(br, k), LeafNodeRef{slot, static_cast<std::uint32_t>(k)}});
+      br.nodes.resize(first_node[i + 1] - first_node[i]);
+      for (std::uint32_t k = 0; k < br.nodes.size(); ++k) {
+        br.nodes[k] = first_node[i] + k;
+        nodes[br.nodes[k]] = {leafNodeBox(br, k), LeafNodeRef{slot, k}};
+      }
     }
   };
   std::vector<std::thread> workers;
   for (std::uint32_t p = 1; p < parts; ++p) workers.emplace_back(collect, p);
   collect(0);
   for (auto& w : workers) w.join();
-  std::vector<std::pair<Box, LeafNodeRef>> nodes = std::move(part[0]);
-  for (std::uint32_t p = 1; p < parts; ++p) nodes.insert(nodes.end(), part[p].begin(), part[p].end());
-  // Morton packing: one sort instead of STR's three nested ones (a first scan of a long-range
-  // LiDAR brings ~10^5 leaf nodes, and the sort runs on one thread). Handles 0..n-1 follow
-  // `nodes`, and a brick's nodes come in order.
-  std::vector<std::uint32_t> owner(nodes.size());
-  for (std::size_t h = 0; h < nodes.size(); ++h) owner[h] = nodes[h].second.brick;
-  upper_.bulkLoad(std::move(nodes), RTree<LeafNodeRef>::Packing::Morton);
-  for (std::size_t h = 0; h < owner.size(); ++h) bricks_[owner[h]].nodes.push_back(static_cast<Handle>(h));
+  upper_.bulkLoad(std::move(nodes), RTree<LeafNodeRef>::Packing::AsGiven);
 }
 
 namespace {

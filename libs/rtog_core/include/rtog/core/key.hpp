@@ -52,6 +52,22 @@ constexpr Key unpackKey(std::uint64_t p) {
              static_cast<std::int32_t>((p >> (2 * kKeyBits)) & mask) + kKeyMin};
 }
 
+/// Morton (Z-order) code of an in-range key: the bits of its unsigned coordinates interleaved,
+/// x lowest. Keys close in space mostly get codes close in order.
+constexpr std::uint64_t mortonCode(const Key& k) {
+  const auto spread = [](std::uint64_t v) {  // 21 bits -> every third bit of 63
+    v &= 0x1FFFFF;
+    v = (v | v << 32) & 0x1F00000000FFFFull;
+    v = (v | v << 16) & 0x1F0000FF0000FFull;
+    v = (v | v << 8) & 0x100F00F00F00F00Full;
+    v = (v | v << 4) & 0x10C30C30C30C30C3ull;
+    v = (v | v << 2) & 0x1249249249249249ull;
+    return v;
+  };
+  return spread(static_cast<std::uint64_t>(k.x - kKeyMin)) | spread(static_cast<std::uint64_t>(k.y - kKeyMin)) << 1 |
+         spread(static_cast<std::uint64_t>(k.z - kKeyMin)) << 2;
+}
+
 struct KeyHash {
   std::size_t operator()(const Key& k) const noexcept {
     std::uint64_t h = packKey(k) * 0x9E3779B97F4A7C15ull;

@@ -149,6 +149,7 @@ class RTree {
   enum class Packing {
     SortTileRecursive,  ///< three nested sorts per level: the better tree
     Morton,             ///< one sort by the Morton code of box centres, then runs of M: cheaper
+    AsGiven,            ///< runs of M in the order given, for entries already in spatial order
   };
 
   /// Replaces the contents by a packed tree. Handles are 0..n-1 in the order of `items`.
@@ -169,9 +170,9 @@ class RTree {
     std::uint16_t lvl = 0;
     if (packing == Packing::Morton) mortonSort(level);
     for (;;) {
-      // Morton order survives packing: each level's nodes are already in order.
+      // The order survives packing: each level's nodes come in the order of their entries.
       std::vector<std::vector<Entry>> groups =
-          packing == Packing::Morton ? runPack(std::move(level)) : strPack(std::move(level));
+          packing == Packing::SortTileRecursive ? strPack(std::move(level)) : runPack(std::move(level));
       level.clear();
       for (auto& g : groups) {
         const std::uint32_t n = allocNode(lvl);
@@ -626,24 +627,12 @@ class RTree {
 
   /// Orders entries by the Morton code of their box centres.
   static void mortonSort(std::vector<Entry>& es) {
-    const auto spread = [](std::uint64_t v) {  // 21 bits -> every third bit of 63
-      v &= 0x1FFFFF;
-      v = (v | v << 32) & 0x1F00000000FFFFull;
-      v = (v | v << 16) & 0x1F0000FF0000FFull;
-      v = (v | v << 8) & 0x100F00F00F00F00Full;
-      v = (v | v << 4) & 0x10C30C30C30C30C3ull;
-      v = (v | v << 2) & 0x1249249249249249ull;
-      return v;
-    };
     std::vector<std::pair<std::uint64_t, std::uint32_t>> order(es.size());
     for (std::size_t i = 0; i < es.size(); ++i) {
-      std::uint64_t code = 0;
-      for (int a = 0; a < 3; ++a) {
-        // Centre on the lattice, shifted to unsigned: (min + max) / 2 - kKeyMin.
-        const std::int64_t c = (std::int64_t{es[i].box.min[a]} + es[i].box.max[a]) / 2 - kKeyMin;
-        code |= spread(static_cast<std::uint64_t>(c)) << a;
-      }
-      order[i] = {code, static_cast<std::uint32_t>(i)};
+      const Box& b = es[i].box;
+      // Centre on the lattice, rounded down.
+      const auto mid = [&](int a) { return static_cast<std::int32_t>((std::int64_t{b.min[a]} + b.max[a]) >> 1); };
+      order[i] = {mortonCode(Key{mid(0), mid(1), mid(2)}), static_cast<std::uint32_t>(i)};
     }
     std::sort(order.begin(), order.end());
     std::vector<Entry> sorted;
