@@ -575,7 +575,11 @@ void OccupancyMap::applyBrick(const UpdateBatch::BrickUpdates& upd, std::uint32_
   // (measured on the TUM frames). Only equal-value merging churns so: clamped cuboids absorb
   // most updates unchanged.
   constexpr std::size_t kRebuildUpdates = 128;
-  if (params_.merge == MergePolicy::Equal && updates_occupied + updates_free >= kRebuildUpdates && !leaves.empty()) {
+  if (params_.merge == MergePolicy::Equal && leaves.empty()) {
+    coverFreshBrick(upd, slot, ctx);
+    return;
+  }
+  if (params_.merge == MergePolicy::Equal && updates_occupied + updates_free >= kRebuildUpdates) {
     rebuildBrick(upd, slot, ctx);
     return;
   }
@@ -676,6 +680,24 @@ void OccupancyMap::applyBrick(const UpdateBatch::BrickUpdates& upd, std::uint32_
   ctx.leaf_delta += static_cast<std::int64_t>(leaves.size()) - static_cast<std::int64_t>(leaves_before);
   // Leave the scratch table empty for the next brick; only painted cells need it.
   for (const LeafEntry& e : leaves) forEachLocal(e.lo, e.hi, [&](int idx) { local[idx] = -1; });
+}
+
+void OccupancyMap::coverFreshBrick(const UpdateBatch::BrickUpdates& upd, std::uint32_t slot, ApplyContext& ctx) {
+  std::vector<LeafEntry>& out = ctx.rebuilt;
+  out.clear();
+  for (const bool occupied : {true, false}) {
+    const float v = model_.first(occupied ? model_.hitDelta() : model_.missDelta());
+    coverGreedily(
+        occupied ? upd.occupied : upd.free, [](int, int) { return true; },
+        [&](const std::uint8_t lo[3], const std::uint8_t hi[3], int) {
+          out.push_back(LeafEntry{{lo[0], lo[1], lo[2]}, {hi[0], hi[1], hi[2]}, v});
+        });
+  }
+  sortByFirstCell(out);
+  ctx.stats.leaves_created += out.size();
+  ctx.leaf_delta += static_cast<std::int64_t>(out.size());
+  bricks_[slot].leaves.assign(out.begin(), out.end());
+  ctx.reshaped.push_back(slot);
 }
 
 void OccupancyMap::rebuildBrick(const UpdateBatch::BrickUpdates& upd, std::uint32_t slot, ApplyContext& ctx) {

@@ -268,6 +268,10 @@ class OccupancyMap {
     InsertStats stats;
   };
   void applyBrick(const UpdateBatch::BrickUpdates& upd, std::uint32_t slot, ApplyContext& ctx);
+  /// applyBrick()'s way for a brick without leaves under equal-value merging: each class of
+  /// fresh cells has one value, so the greedy cover of each class's mask gives the leaves, the
+  /// same boxes as rebuildBrick()'s cover (which never joins cells of different values).
+  void coverFreshBrick(const UpdateBatch::BrickUpdates& upd, std::uint32_t slot, ApplyContext& ctx);
   /// applyBrick()'s way for a brick with many updates: values into a dense table, updated
   /// there, and the brick covered anew with boxes of equal (mergeable) value. Costs O(4096)
   /// instead of a split and merges per updated cell.
