@@ -524,28 +524,26 @@ static const std::array<std::uint16_t, kBrickCells>& mortonRank() {
   return rank;
 }
 
-// Orders a brick's leaves by the Morton rank of their first cell, which keeps the leaf nodes cut
-// from the array compact. Disjoint boxes have distinct first cells, so a bit per rank sorts them
-// in O(n + 64 words).
-template <class Leaves>
-static void sortByFirstCell(Leaves& leaves) {
-  if (leaves.size() < 2) return;
+// Replaces `to` by the leaves of `from` in Morton order of their first cells, which keeps the
+// leaf nodes cut from the array compact. Disjoint boxes have distinct first cells, so a bit per
+// rank sorts them in O(n + 64 words). Scratch on the stack: thread_local would cost a TLS call
+// per brick in a shared library.
+template <class Leaves, class Out>
+static void assignByFirstCell(const Leaves& from, Out& to) {
   const auto& rank = mortonRank();
-  thread_local std::array<std::uint64_t, kBrickWords> present;
-  thread_local std::array<std::uint32_t, kBrickCells> index_at;
-  thread_local Leaves sorted;
-  present.fill(0);
-  for (std::size_t i = 0; i < leaves.size(); ++i) {
-    const auto& e = leaves[i];
+  std::array<std::uint64_t, kBrickWords> present{};
+  std::array<std::uint32_t, kBrickCells> index_at;  // read only where `present` is set
+  for (std::size_t i = 0; i < from.size(); ++i) {
+    const auto& e = from[i];
     const std::uint16_t r = rank[static_cast<std::size_t>(localIdx(e.lo[0], e.lo[1], e.lo[2]))];
     present[r >> 6] |= std::uint64_t{1} << (r & 63);
     index_at[r] = static_cast<std::uint32_t>(i);
   }
-  sorted.clear();
+  to.clear();
+  to.reserve(from.size());
   for (std::size_t w = 0; w < kBrickWords; ++w)
     for (std::uint64_t bits = present[w]; bits; bits &= bits - 1)
-      sorted.push_back(leaves[index_at[w * 64 + static_cast<std::size_t>(__builtin_ctzll(bits))]]);
-  std::copy(sorted.begin(), sorted.end(), leaves.begin());
+      to.push_back(from[index_at[w * 64 + static_cast<std::size_t>(__builtin_ctzll(bits))]]);
 }
 
 namespace {
@@ -693,10 +691,9 @@ void OccupancyMap::coverFreshBrick(const UpdateBatch::BrickUpdates& upd, std::ui
           out.push_back(LeafEntry{{lo[0], lo[1], lo[2]}, {hi[0], hi[1], hi[2]}, v});
         });
   }
-  sortByFirstCell(out);
   ctx.stats.leaves_created += out.size();
   ctx.leaf_delta += static_cast<std::int64_t>(out.size());
-  bricks_[slot].leaves.assign(out.begin(), out.end());
+  assignByFirstCell(out, bricks_[slot].leaves);
   ctx.reshaped.push_back(slot);
 }
 
@@ -760,11 +757,10 @@ void OccupancyMap::rebuildBrick(const UpdateBatch::BrickUpdates& upd, std::uint3
       [&](const std::uint8_t lo[3], const std::uint8_t hi[3], int start) {
         out.push_back(LeafEntry{{lo[0], lo[1], lo[2]}, {hi[0], hi[1], hi[2]}, value[static_cast<std::size_t>(start)]});
       });
-  sortByFirstCell(out);
   stats.leaves_created += out.size();
   stats.leaves_merged += leaves.size();
   ctx.leaf_delta += static_cast<std::int64_t>(out.size()) - static_cast<std::int64_t>(leaves.size());
-  leaves.assign(out.begin(), out.end());
+  assignByFirstCell(out, leaves);
   ctx.reshaped.push_back(slot);
 }
 
@@ -806,24 +802,26 @@ std::size_t OccupancyMap::mergeInBrick(std::vector<LeafEntry>& leaves, std::vect
 
 void OccupancyMap::packLeaves(std::uint32_t slot) {
   Brick& br = bricks_[slot];
-  // The scratch table names each live leaf at its first cell; dead leaves were repainted.
-  std::vector<LeafEntry>& packed = pack_scratch_;
-  packed.clear();
+  std::vector<LeafEntry>& live = pack_scratch_;
+  live.clear();
+  std::vector<LeafEntry> packed;  // exact capacity
   if (br.leaves.size() * 16 >= static_cast<std::size_t>(kBrickCells)) {
-    // Dense brick: one pass over the cells in Morton order.
+    // Dense brick: one pass over the cells in Morton order. The scratch table names each live
+    // leaf at its first cell; dead leaves were repainted.
     for (const std::uint16_t idx : mortonOrder()) {
       const std::int32_t i = local_[idx];
       if (i < 0) continue;
       const LeafEntry& e = br.leaves[static_cast<std::size_t>(i)];
-      if (localIdx(e.lo[0], e.lo[1], e.lo[2]) == idx) packed.push_back(e);
+      if (localIdx(e.lo[0], e.lo[1], e.lo[2]) == idx) live.push_back(e);
     }
+    packed.assign(live.begin(), live.end());
   } else {
-    // Sparse brick: sort the few live leaves by the Morton rank of their first cell.
+    // Sparse brick: the few live leaves by the Morton rank of their first cell.
     for (const LeafEntry& e : br.leaves)
-      if (e.lo[0] != kDead) packed.push_back(e);
-    sortByFirstCell(packed);
+      if (e.lo[0] != kDead) live.push_back(e);
+    assignByFirstCell(live, packed);
   }
-  br.leaves = std::vector<LeafEntry>(packed.begin(), packed.end());  // exact capacity
+  br.leaves.swap(packed);
 }
 
 void OccupancyMap::syncLeafNodes(std::uint32_t slot) {
@@ -971,9 +969,8 @@ InsertStats OccupancyMap::coverPlanarLayers() {
           });
     }
     stats.leaves_created += out.size() - kept;
-    sortByFirstCell(out);
     leaf_count_ = leaf_count_ + out.size() - leaves.size();
-    leaves.assign(out.begin(), out.end());
+    assignByFirstCell(out, leaves);
     reshaped_bricks_.push_back(slot);
   }
   refreshUpperTree();
