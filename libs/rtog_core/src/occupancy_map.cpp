@@ -130,11 +130,16 @@ const OccupancyMap::Brick* OccupancyMap::findBrick(const Key& brick) const {
 }
 
 Box OccupancyMap::leafNodeBox(const Brick& b, std::size_t node) const {
-  const Key o = brickOrigin(b.brick);
-  Box box = Box::empty();
   const std::size_t first = node * leafNodeSize(), last = std::min(b.leaves.size(), first + leafNodeSize());
-  for (std::size_t i = first; i < last; ++i) box = box.united(globalBox(o, b.leaves[i]));
-  return box;
+  if (first >= last) return Box::empty();
+  // In brick-local bytes, one conversion at the end.
+  LeafEntry united = b.leaves[first];
+  for (std::size_t i = first + 1; i < last; ++i)
+    for (int a = 0; a < 3; ++a) {
+      united.lo[a] = std::min(united.lo[a], b.leaves[i].lo[a]);
+      united.hi[a] = std::max(united.hi[a], b.leaves[i].hi[a]);
+    }
+  return globalBox(brickOrigin(b.brick), united);
 }
 
 const OccupancyMap::LeafEntry* OccupancyMap::findLeaf(const Key& k) const {

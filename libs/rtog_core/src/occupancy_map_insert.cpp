@@ -370,6 +370,9 @@ void OccupancyMap::applyUpdate(const std::vector<const UpdateBatch*>& batches, I
   groupByBrick(batches, sources, first, brick_keys);
   const std::size_t groups = first.size() - 1;
   std::vector<std::uint32_t> slots(groups);
+  // Room for every brick being new (a first scan), still growing geometrically.
+  if (bricks_.capacity() < bricks_.size() + groups)
+    bricks_.reserve(std::max(bricks_.size() + groups, 2 * bricks_.capacity()));
   for (std::size_t g = 0; g < groups; ++g) slots[g] = brickSlot(brick_keys[g]);
   // Bricks are independent: threads take runs of them as they go (bricks near the sensor cost
   // far more than distant ones), each with its own scratch. The results do not depend on who

@@ -169,16 +169,25 @@ class RTree {
     freeNode(root_);
     std::uint16_t lvl = 0;
     if (packing == Packing::Morton) mortonSort(level);
+    std::vector<Entry> next;
     for (;;) {
-      // The order survives packing: each level's nodes come in the order of their entries.
-      std::vector<std::vector<Entry>> groups =
-          packing == Packing::SortTileRecursive ? strPack(std::move(level)) : runPack(std::move(level));
-      level.clear();
-      for (auto& g : groups) {
+      next.clear();
+      const auto pack = [&](const Entry* first, const Entry* last) {
         const std::uint32_t n = allocNode(lvl);
-        for (const Entry& e : g) appendSlot(n, e.box, e.id);
-        level.push_back(Entry{computeNodeBox(n), n});
+        for (const Entry* e = first; e != last; ++e) appendSlot(n, e->box, e->id);
+        next.push_back(Entry{computeNodeBox(n), n});
+      };
+      if (packing == Packing::SortTileRecursive) {
+        for (const auto& g : strPack(std::move(level))) pack(g.data(), g.data() + g.size());
+      } else {
+        // The order survives packing: each level's nodes come in the order of their entries.
+        std::size_t begin = 0;
+        for (const std::size_t end : runEnds(level.size())) {
+          pack(level.data() + begin, level.data() + end);
+          begin = end;
+        }
       }
+      level.swap(next);
       if (level.size() == 1) {
         root_ = level.front().id;
         parent_[root_] = kNoNode;
@@ -641,13 +650,17 @@ class RTree {
     es.swap(sorted);
   }
 
-  // Consecutive runs of M entries, fill fixed as in strPack().
-  std::vector<std::vector<Entry>> runPack(std::vector<Entry> es) const {
-    const std::size_t M = params_.max_entries;
-    std::vector<std::vector<Entry>> out;
-    for (std::size_t k = 0; k < es.size(); k += M) out.emplace_back(es.begin() + k, es.begin() + std::min(es.size(), k + M));
-    fixFill(out);
-    return out;
+  // Where consecutive runs of M of n entries end; a short last run takes entries from the one
+  // before up to the minimum fill (as fixFill() would: M >= 2m leaves that one full enough).
+  std::vector<std::size_t> runEnds(std::size_t n) const {
+    const std::size_t M = params_.max_entries, m = params_.min_entries;
+    std::vector<std::size_t> ends;
+    for (std::size_t k = M; k < n + M; k += M) ends.push_back(std::min(n, k));
+    if (ends.size() > 1) {
+      const std::size_t last = n - ends[ends.size() - 2];
+      if (last < m) ends[ends.size() - 2] -= m - last;
+    }
+    return ends;
   }
 
   /// Sort-Tile-Recursive grouping of entries into nodes of at most M entries.
