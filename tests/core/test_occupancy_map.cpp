@@ -8,6 +8,7 @@
 #include <cstring>
 #include <random>
 #include <sstream>
+#include <thread>
 
 #include "rtog/core/detail/cover.hpp"
 #include "rtog/core/detail/layer_update.hpp"
@@ -270,6 +271,60 @@ TEST(OccupancyMapTum, ThreadCountDoesNotChangeTheMap) {
   bad.threads = 0;
   OccupancyMap map;
   EXPECT_THROW(map.insertPointCloud(Eigen::Vector3d::Zero(), tumScans()[0].points, bad), std::invalid_argument);
+}
+
+// Insertion buffers come from a pool shared by all maps: maps inserting at the same time, a
+// planar one among them, and a map whose insertion threw, must each still build their own map.
+TEST(OccupancyMapTum, MapsInsertingAtOnceGetTheirOwnBuffers) {
+  std::vector<Eigen::Vector3f> ring;  // a 2D scan: every beam in the origin's z-layer
+  for (int i = 0; i < 720; ++i) {
+    const double a = i * M_PI / 360.0, r = 2.0 + 3.0 * std::abs(std::sin(3.0 * a));
+    ring.emplace_back(static_cast<float>(r * std::cos(a)), static_cast<float>(r * std::sin(a)), 0.01f);
+  }
+  const auto buildVolumetric = [&] {
+    InsertParams ip;
+    ip.threads = 2;
+    OccupancyMap map;
+    for (const auto& s : tumScans()) map.insertPointCloud(s.origin, s.points, ip);
+    std::ostringstream os;
+    map.write(os);
+    return os.str();
+  };
+  const auto buildPlanar = [&] {
+    OccupancyMap map;
+    for (int k = 0; k < 40; ++k) {
+      const Eigen::Vector3d origin(0.013 * k, -0.007 * k, 0.02);
+      std::vector<Eigen::Vector3f> pts;
+      for (const auto& q : ring) pts.push_back(q + origin.cast<float>());
+      map.insertPointCloud(origin, pts, InsertParams{});
+    }
+    std::ostringstream os;
+    map.write(os);
+    return os.str();
+  };
+  const std::string volumetric = buildVolumetric(), planar = buildPlanar();
+  for (int round = 0; round < 3; ++round) {
+    std::string at_once[3];
+    std::thread a([&] { at_once[0] = buildVolumetric(); });
+    std::thread b([&] { at_once[1] = buildPlanar(); });
+    at_once[2] = buildVolumetric();
+    a.join();
+    b.join();
+    EXPECT_TRUE(at_once[0] == volumetric && at_once[2] == volumetric) << "round " << round;
+    EXPECT_TRUE(at_once[1] == planar) << "round " << round;
+  }
+  // A throwing insertion gives its buffers back; the next one starts clean, and so does one
+  // after the pool was emptied.
+  OccupancyMap::releaseInsertBuffers();
+  OccupancyMap map;
+  const Eigen::Vector3d bad_origin(std::nan(""), 0, 0);
+  EXPECT_THROW(map.insertPointCloud(bad_origin, tumScans()[0].points, InsertParams{}), std::exception);
+  InsertParams ip;
+  ip.threads = 2;
+  for (const auto& s : tumScans()) map.insertPointCloud(s.origin, s.points, ip);
+  std::ostringstream os;
+  map.write(os);
+  EXPECT_TRUE(os.str() == volumetric);
 }
 
 TEST(OccupancyMap, BadInputIsCountedNotCrashed) {

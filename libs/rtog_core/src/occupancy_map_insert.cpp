@@ -2,6 +2,8 @@
 #include <algorithm>
 #include <atomic>
 #include <exception>
+#include <memory>
+#include <mutex>
 #include <thread>
 #include <array>
 #if defined(__SSE2__)
@@ -160,17 +162,60 @@ std::array<UpdateLayerFn, 2> layerUpdateKernels() {
 
 }  // namespace detail
 
+// Idle insertion buffers: as many as maps insert at one time, up to kKeep.
+struct OccupancyMap::ScratchPool {
+  static constexpr std::size_t kKeep = 4;
+  std::mutex mutex;
+  std::vector<std::unique_ptr<InsertScratch>> idle;
+  static ScratchPool& instance() {
+    static ScratchPool pool;
+    return pool;
+  }
+};
+
+OccupancyMap::ScratchScope::ScratchScope(OccupancyMap& map) : map_(map), owner_(map.scratch_ == nullptr) {
+  if (!owner_) return;
+  ScratchPool& pool = ScratchPool::instance();
+  {
+    const std::lock_guard<std::mutex> lock(pool.mutex);
+    if (!pool.idle.empty()) {
+      map_.scratch_ = std::move(pool.idle.back());
+      pool.idle.pop_back();
+    }
+  }
+  if (!map_.scratch_) map_.scratch_ = std::make_unique<InsertScratch>();
+}
+
+OccupancyMap::ScratchScope::~ScratchScope() {
+  if (!owner_) return;
+  ScratchPool& pool = ScratchPool::instance();
+  const std::lock_guard<std::mutex> lock(pool.mutex);
+  if (pool.idle.size() < ScratchPool::kKeep) pool.idle.push_back(std::move(map_.scratch_));
+  map_.scratch_.reset();
+}
+
+void OccupancyMap::releaseInsertBuffers() {
+  std::vector<std::unique_ptr<InsertScratch>> idle;
+  {
+    ScratchPool& pool = ScratchPool::instance();
+    const std::lock_guard<std::mutex> lock(pool.mutex);
+    idle.swap(pool.idle);
+  }
+}  // freed here, outside the lock
+
 InsertStats OccupancyMap::insertPointCloud(const Eigen::Vector3d& origin, const Eigen::Vector3f* points,
                                            std::size_t count, const InsertParams& ip, const std::uint8_t* is_hit) {
   if (ip.threads < 1) throw std::invalid_argument("InsertParams: threads must be >= 1");
+  const ScratchScope scope(*this);
+  InsertScratch& scratch = *scratch_;
   Key lo, hi;
   InsertStats stats;
   const bool planar = ip.planar_cache && preparePlanarBeams(origin, points, count, ip, is_hit, lo, hi, stats);
   if (!planar && hasPendingCover()) flush();
   // Below a few thousand beams a thread costs more than it saves.
   const std::size_t threads = std::min<std::size_t>(static_cast<std::size_t>(ip.threads), 1 + count / 4096);
-  if (batches_.size() < threads) batches_.resize(threads);
-  if (planar && planar_batches_.size() < threads) planar_batches_.resize(threads);
+  if (scratch.batches.size() < threads) scratch.batches.resize(threads);
+  if (planar && scratch.planar_batches.size() < threads) scratch.planar_batches.resize(threads);
   std::vector<InsertStats> part(threads);
   std::vector<std::exception_ptr> errors(threads);
   // Chunks taken as threads become free, traced independently; their union does not depend on
@@ -187,30 +232,30 @@ InsertStats OccupancyMap::insertPointCloud(const Eigen::Vector3d& origin, const 
     try {
       InsertStats own;  // counted locally: neighbouring entries of `part` share a cache line
       if (planar) {
-        planar_batches_[t].reset(lo, hi);
+        scratch.planar_batches[t].reset(lo, hi);
       } else {
-        batches_[t].clear();
+        scratch.batches[t].clear();
       }
       for (std::size_t first; (first = next_chunk.fetch_add(chunk, std::memory_order_relaxed)) < count;) {
         const std::size_t n = std::min(chunk, count - first);
         const std::uint8_t* hits = is_hit ? is_hit + first : nullptr;
         if (planar) {
-          PlanarBatch& batch = planar_batches_[t];
+          PlanarBatch& batch = scratch.planar_batches[t];
           for (std::size_t i = first; i < first + n; ++i) {
-            const PlanarBeam& beam = planar_beams_[i];
+            const PlanarBeam& beam = scratch.planar_beams[i];
             if (!beam.traced) continue;
             // With discretized ends, a beam to a cell already traced to in this batch adds nothing.
             if (beam.hit && !batch.markOccupied(beam.end) && ip.discretize) continue;
             if (trace_free) batch.markRayFree(beam.seg, origin_key, beam.skip_runs);
           }
         } else {
-          traceBeams(origin, points + first, n, ip, hits, batches_[t], own);
+          traceBeams(origin, points + first, n, ip, hits, scratch.batches[t], own);
         }
       }
       if (planar) {
-        planar_batches_[t].finalize();
+        scratch.planar_batches[t].finalize();
       } else {
-        batches_[t].finalize();
+        scratch.batches[t].finalize();
       }
       part[t] = own;
     } catch (...) {
@@ -228,7 +273,7 @@ InsertStats OccupancyMap::insertPointCloud(const Eigen::Vector3d& origin, const 
     applyPlanar(threads, lo.z, stats);
   } else {
     std::vector<const UpdateBatch*> batches;
-    for (std::size_t t = 0; t < threads; ++t) batches.push_back(&batches_[t]);
+    for (std::size_t t = 0; t < threads; ++t) batches.push_back(&scratch.batches[t]);
     applyUpdate(batches, stats, static_cast<int>(threads));
   }
   return stats;
@@ -246,11 +291,12 @@ bool OccupancyMap::preparePlanarBeams(const Eigen::Vector3d& origin, const Eigen
   lo = hi = origin_key;
   // Grown beam by beam: a volumetric scan usually leaves the layer within its first beams, and
   // sizing for all of them (a depth image: 307,200) cost more than its whole planar test.
-  planar_beams_.clear();
+  std::vector<PlanarBeam>& beams = scratch_->planar_beams;
+  beams.clear();
   InsertStats counts;  // into `stats` only if the scan is planar: else the general path counts
   Eigen::Vector3d end;
   for (std::size_t i = 0; i < count; ++i) {
-    PlanarBeam& beam = planar_beams_.emplace_back();
+    PlanarBeam& beam = beams.emplace_back();
     const BeamEnd kind = endOfBeam(lattice_, origin, points[i].cast<double>(), is_hit == nullptr || is_hit[i] != 0,
                                    ip.max_range, end, beam.end);
     beam.traced = false;
@@ -273,7 +319,7 @@ bool OccupancyMap::preparePlanarBeams(const Eigen::Vector3d& origin, const Eigen
   }
   if (PlanarBatch::tilesFor(lo, hi) > kMaxPlanarTiles) return false;
   // Discretized beams are traced once per end cell, which a skip could not rely on.
-  if (ip.model == SensorModel::BeamBased && !ip.discretize) fanSkipRuns(planar_beams_.data(), count);
+  if (ip.model == SensorModel::BeamBased && !ip.discretize) fanSkipRuns(beams.data(), count);
   stats += counts;
   return true;
 }
@@ -363,6 +409,8 @@ const UpdateBatch::BrickUpdates* OccupancyMap::unionOf(const UpdateBatch::BrickU
 
 void OccupancyMap::applyUpdate(const std::vector<const UpdateBatch*>& batches, InsertStats& stats, int threads) {
   if (threads < 1) throw std::invalid_argument("applyUpdate: threads must be >= 1");
+  const ScratchScope scope(*this);
+  std::vector<ApplyContext>& contexts = scratch_->apply_ctx;
   if (hasPendingCover()) flush();
   std::vector<const UpdateBatch::BrickUpdates*> sources;
   std::vector<std::uint32_t> first;
@@ -378,11 +426,11 @@ void OccupancyMap::applyUpdate(const std::vector<const UpdateBatch*>& batches, I
   // far more than distant ones), each with its own scratch. The results do not depend on who
   // applied which brick: statistics are sums and the reshaped bricks are sorted afterwards.
   const std::size_t n = std::min<std::size_t>(static_cast<std::size_t>(threads), 1 + groups / 64);
-  if (apply_ctx_.size() < n) apply_ctx_.resize(n);
+  if (contexts.size() < n) contexts.resize(n);
   constexpr std::size_t kGrain = 16;
   std::atomic<std::size_t> next_group{0};
   const auto work = [&](std::size_t t) {
-    ApplyContext& ctx = apply_ctx_[t];
+    ApplyContext& ctx = contexts[t];
     ctx.local.assign(kBrickCells, -1);
     ctx.reshaped.clear();
     ctx.leaf_delta = 0;
@@ -402,9 +450,9 @@ void OccupancyMap::applyUpdate(const std::vector<const UpdateBatch*>& batches, I
   for (auto& w : workers) w.join();
   reshaped_bricks_.clear();
   for (std::size_t t = 0; t < n; ++t) {
-    stats += apply_ctx_[t].stats;
-    leaf_count_ = static_cast<std::size_t>(static_cast<std::int64_t>(leaf_count_) + apply_ctx_[t].leaf_delta);
-    reshaped_bricks_.insert(reshaped_bricks_.end(), apply_ctx_[t].reshaped.begin(), apply_ctx_[t].reshaped.end());
+    stats += contexts[t].stats;
+    leaf_count_ = static_cast<std::size_t>(static_cast<std::int64_t>(leaf_count_) + contexts[t].leaf_delta);
+    reshaped_bricks_.insert(reshaped_bricks_.end(), contexts[t].reshaped.begin(), contexts[t].reshaped.end());
   }
   std::sort(reshaped_bricks_.begin(), reshaped_bricks_.end());
   refreshUpperTree(static_cast<int>(n));
@@ -869,7 +917,8 @@ std::uint32_t OccupancyMap::planarLayer(std::uint32_t slot, int z) {
 }
 
 void OccupancyMap::applyPlanar(std::size_t batches, int z, InsertStats& stats) {
-  const PlanarBatch& b0 = planar_batches_[0];
+  const std::vector<PlanarBatch>& planar_batches = scratch_->planar_batches;
+  const PlanarBatch& b0 = planar_batches[0];
   const float deltas[4] = {model_.hitDelta(), model_.missDelta(), model_.clampMin(), model_.clampMax()};
   const int local_z = z & (kBrickSize - 1);
   static const detail::UpdateLayerFn update_layer = [] {
@@ -882,8 +931,8 @@ void OccupancyMap::applyPlanar(std::size_t batches, int z, InsertStats& stats) {
     PlanarBatch::Tile tile = b0.tiles()[t];
     for (std::size_t k = 1; k < batches; ++k)
       for (int w = 0; w < kLayerWords; ++w) {
-        tile.occupied[static_cast<std::size_t>(w)] |= planar_batches_[k].tiles()[t].occupied[static_cast<std::size_t>(w)];
-        tile.free[static_cast<std::size_t>(w)] |= planar_batches_[k].tiles()[t].free[static_cast<std::size_t>(w)];
+        tile.occupied[static_cast<std::size_t>(w)] |= planar_batches[k].tiles()[t].occupied[static_cast<std::size_t>(w)];
+        tile.free[static_cast<std::size_t>(w)] |= planar_batches[k].tiles()[t].free[static_cast<std::size_t>(w)];
       }
     std::uint64_t any = 0;
     for (int w = 0; w < kLayerWords; ++w) any |= tile.occupied[static_cast<std::size_t>(w)] | tile.free[static_cast<std::size_t>(w)];
@@ -915,8 +964,9 @@ InsertStats OccupancyMap::coverPlanarLayers() {
     const PlanarLayer &la = planar_layers_[a], &lb = planar_layers_[b];
     return la.slot != lb.slot ? la.slot < lb.slot : la.z < lb.z;
   });
-  if (apply_ctx_.empty()) apply_ctx_.resize(1);
-  std::vector<LeafEntry>& out = apply_ctx_[0].rebuilt;
+  const ScratchScope scope(*this);
+  if (scratch_->apply_ctx.empty()) scratch_->apply_ctx.resize(1);
+  std::vector<LeafEntry>& out = scratch_->apply_ctx[0].rebuilt;
   reshaped_bricks_.clear();
   for (std::size_t i = 0; i < order.size();) {
     const std::uint32_t slot = planar_layers_[order[i]].slot;

@@ -7,6 +7,7 @@
 #include <atomic>
 #include <cstdint>
 #include <iosfwd>
+#include <memory>
 #include <mutex>
 #include <optional>
 #include <string>
@@ -154,6 +155,10 @@ class OccupancyMap {
   /// Step 2 for several finalized batches at once: applies their union (occupied winning over
   /// free across batches too), so that per-thread batches need no serial merge.
   void applyUpdate(const std::vector<const UpdateBatch*>& batches, InsertStats& stats, int threads = 1);
+  /// Insertion works in buffers that all maps of the process share through a pool: an idle one
+  /// keeps the size of the largest insertion it served, and up to four are kept (one for each
+  /// map inserting at the same time). This frees the idle ones.
+  static void releaseInsertBuffers();
 
   // ---- queries ----------------------------------------------------------------------
   std::optional<float> logOdds(const Key& k) const;
@@ -267,6 +272,30 @@ class OccupancyMap {
     std::int64_t leaf_delta = 0;
     InsertStats stats;
   };
+  /// Buffers of one insertion: per-thread update batches and apply contexts, a planar scan's
+  /// beams and batches. A map holds them only while it inserts: they come from a process-wide
+  /// pool and go back to it, so maps do not each keep buffers the size of their largest scan
+  /// (a particle filter keeps a map per particle; one VLP-16 scan's batch is 20 MB), and a new
+  /// map starts with buffers already faulted in.
+  struct InsertScratch {
+    std::vector<UpdateBatch> batches;  // per thread
+    std::vector<ApplyContext> apply_ctx;
+    std::vector<PlanarBatch> planar_batches;  // per thread
+    std::vector<PlanarBeam> planar_beams;
+  };
+  struct ScratchPool;
+  /// Holds scratch_ for its lifetime, from the pool unless an enclosing scope holds it already.
+  class ScratchScope {
+   public:
+    explicit ScratchScope(OccupancyMap& map);
+    ~ScratchScope();
+    ScratchScope(const ScratchScope&) = delete;
+    ScratchScope& operator=(const ScratchScope&) = delete;
+
+   private:
+    OccupancyMap& map_;
+    bool owner_;
+  };
   void applyBrick(const UpdateBatch::BrickUpdates& upd, std::uint32_t slot, ApplyContext& ctx);
   /// applyBrick()'s way for a brick without leaves under equal-value merging: each class of
   /// fresh cells has one value, so the greedy cover of each class's mask gives the leaves, the
@@ -307,13 +336,13 @@ class OccupancyMap {
   };
   /// True if every traced beam of the scan stays in the origin's z-layer and the scan is not too
   /// wide for a planar batch: then the beams in exact planar form, with the runs each can skip
-  /// (fanSkipRuns), are in planar_beams_, [lo, hi] bounds their cells in x and y, and `stats`
+  /// (fanSkipRuns), are in scratch_->planar_beams, [lo, hi] bounds their cells in x and y, and `stats`
   /// counts them.
   bool preparePlanarBeams(const Eigen::Vector3d& origin, const Eigen::Vector3f* points, std::size_t count,
                           const InsertParams& ip, const std::uint8_t* is_hit, Key& lo, Key& hi, InsertStats& stats);
   void traceBeams(const Eigen::Vector3d& origin, const Eigen::Vector3f* points, std::size_t count,
                   const InsertParams& ip, const std::uint8_t* is_hit, UpdateBatch& batch, InsertStats& stats) const;
-  /// Applies the union of planar_batches_[0 .. batches) of a scan in z-layer `z` to the cache.
+  /// Applies the union of scratch_->planar_batches[0 .. batches) of a scan in z-layer `z` to the cache.
   void applyPlanar(std::size_t batches, int z, InsertStats& stats);
   /// The index in planar_layers_ of brick `slot`'s layer z, made from its leaves if new.
   std::uint32_t planarLayer(std::uint32_t slot, int z);
@@ -346,11 +375,8 @@ class OccupancyMap {
   std::size_t leaf_count_ = 0;
   std::vector<std::int32_t> local_;  // scratch: brick-local cell -> leaf index, -1 when none
   std::vector<LeafEntry> pack_scratch_;
-  std::vector<UpdateBatch> batches_;  // per-thread scratch, reused across insertions
-  std::vector<ApplyContext> apply_ctx_;
+  std::unique_ptr<InsertScratch> scratch_;  // while inserting (ScratchScope)
   std::vector<std::uint32_t> reshaped_bricks_;  // bricks whose leaf nodes changed in this batch
-  std::vector<PlanarBatch> planar_batches_;  // per-thread scratch
-  std::vector<PlanarBeam> planar_beams_;     // scratch: a planar scan's beams
   detail::ChunkedVector<PlanarLayer, 64> planar_layers_;
   detail::FlatHashMap64 planar_index_;  // brick slot * kBrickSize + z -> index in planar_layers_
   detail::RecentLookups<10> recent_layers_;  // packKey(brick x, y, cell z) -> planar_layers_ index
