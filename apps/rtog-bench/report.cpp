@@ -166,8 +166,11 @@ void writeMarkdown(const std::vector<Result>& results, const std::string& path, 
       if (c && c->insert_seconds < fastest->insert_seconds) fastest = c;
     row("insertion ≥ 20× faster than OctoMap's best (" + oct->method + "), best rtog mode (" + fastest->method + ")",
         oct->insert_seconds / fastest->insert_seconds, oct->insert_seconds / fastest->insert_seconds >= 20.0, "×");
-    row("insertion, exact beam model, 1 thread, vs OctoMap's best", oct->insert_seconds / beam->insert_seconds,
-        oct->insert_seconds / beam->insert_seconds >= 20.0, "×");
+    // The same target on one thread, OctoMap having only one.
+    const Result* disc = find(results, ds, res, "rtog beam discretize, merge equal");
+    const Result* fastest1 = disc && disc->insert_seconds < beam->insert_seconds ? disc : beam;
+    row("insertion ≥ 20× faster than OctoMap's best, on one thread (" + fastest1->method + ")",
+        oct->insert_seconds / fastest1->insert_seconds, oct->insert_seconds / fastest1->insert_seconds >= 20.0, "×");
     if (octplain)
       row("memory ≤ 0.5× OctoMap memoryUsage()", double(beam->structure_bytes) / double(octplain->structure_bytes),
           double(beam->structure_bytes) <= 0.5 * double(octplain->structure_bytes), "×");
