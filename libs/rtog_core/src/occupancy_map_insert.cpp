@@ -16,6 +16,7 @@
 
 #include "rtog/core/detail/cover.hpp"
 #include "rtog/core/detail/layer_update.hpp"
+#include "rtog/core/detail/radix_sort.hpp"
 #include "rtog/core/occupancy_map.hpp"
 #include "rtog/core/ray_traversal.hpp"
 
@@ -479,7 +480,7 @@ void OccupancyMap::rebuildUpperTree(int threads) {
   const auto slots = static_cast<std::uint32_t>(bricks_.size());
   std::vector<std::pair<std::uint64_t, std::uint32_t>> order(slots);
   for (std::uint32_t slot = 0; slot < slots; ++slot) order[slot] = {mortonCode(bricks_[slot].brick), slot};
-  std::sort(order.begin(), order.end());
+  detail::radixSortByKey(order);
   // Handles are the nodes' positions in the load, so each brick knows its own before the load.
   std::vector<std::uint32_t> first_node(slots + 1, 0);
   for (std::uint32_t i = 0; i < slots; ++i) {

@@ -20,6 +20,7 @@
 
 #include <Eigen/Core>
 
+#include "rtog/core/detail/radix_sort.hpp"
 #include "rtog/core/key.hpp"
 
 namespace rtog {
@@ -160,6 +161,10 @@ class RTree {
     level.reserve(items.size());
     payload_.reserve(items.size());
     loc_.reserve(items.size());
+    // The nodes of a packed tree: about n / (M - 1) (fewer than that with full nodes).
+    const std::size_t nodes = level_.size() + items.size() / (params_.max_entries - 1) + 8;
+    level_.reserve(nodes), count_.reserve(nodes), parent_.reserve(nodes);
+    boxes_.reserve(nodes * (params_.max_entries + 1)), ids_.reserve(nodes * (params_.max_entries + 1));
     for (auto& it : items) {
       if (it.first.isEmpty()) throw std::invalid_argument("RTree::bulkLoad: empty box");
       const Handle h = allocHandle(std::move(it.second));
@@ -643,7 +648,7 @@ class RTree {
       const auto mid = [&](int a) { return static_cast<std::int32_t>((std::int64_t{b.min[a]} + b.max[a]) >> 1); };
       order[i] = {mortonCode(Key{mid(0), mid(1), mid(2)}), static_cast<std::uint32_t>(i)};
     }
-    std::sort(order.begin(), order.end());
+    detail::radixSortByKey(order);
     std::vector<Entry> sorted;
     sorted.reserve(es.size());
     for (const auto& o : order) sorted.push_back(es[o.second]);
