@@ -455,7 +455,6 @@ void OccupancyMap::applyUpdate(const std::vector<const UpdateBatch*>& batches, I
     leaf_count_ = static_cast<std::size_t>(static_cast<std::int64_t>(leaf_count_) + contexts[t].leaf_delta);
     reshaped_bricks_.insert(reshaped_bricks_.end(), contexts[t].reshaped.begin(), contexts[t].reshaped.end());
   }
-  std::sort(reshaped_bricks_.begin(), reshaped_bricks_.end());
   refreshUpperTree(static_cast<int>(n));
 }
 
@@ -468,6 +467,8 @@ void OccupancyMap::refreshUpperTree(int threads) {
   if (touched_nodes * 2 > upper_.size()) {
     rebuildUpperTree(threads);
   } else {
+    // In slot order: the tree must not depend on which thread applied which brick.
+    std::sort(reshaped_bricks_.begin(), reshaped_bricks_.end());
     for (const std::uint32_t slot : reshaped_bricks_) syncLeafNodes(slot);
   }
 }
@@ -488,16 +489,14 @@ void OccupancyMap::rebuildUpperTree(int threads) {
     first_node[i + 1] = first_node[i] + static_cast<std::uint32_t>(n);
   }
   std::vector<std::pair<Box, LeafNodeRef>> nodes(first_node[slots]);
-  // The leaf nodes' boxes read every leaf of the map: parts of equal node counts, one a thread.
+  std::vector<std::uint32_t> rank(slots);  // of each slot in `order`
+  for (std::uint32_t i = 0; i < slots; ++i) rank[order[i].second] = i;
+  // The leaf nodes' boxes read every leaf of the map: the threads take ranges of slots, not of
+  // `order`, whose neighbours' bricks (56 bytes, written here) would share cache lines.
   const std::uint32_t parts = std::max<std::uint32_t>(1, std::min<std::uint32_t>(threads, 1 + slots / 1024));
   const auto collect = [&](std::uint32_t p) {
-    const auto bound = [&](std::uint32_t q) {
-      const std::uint64_t target = std::uint64_t{first_node[slots]} * q / parts;
-      return static_cast<std::uint32_t>(std::lower_bound(first_node.begin(), first_node.end() - 1, target) -
-                                        first_node.begin());
-    };
-    for (std::uint32_t i = bound(p), end = p + 1 == parts ? slots : bound(p + 1); i < end; ++i) {
-      const std::uint32_t slot = order[i].second;
+    for (std::uint32_t slot = slots / parts * p; slot < (p + 1 == parts ? slots : slots / parts * (p + 1)); ++slot) {
+      const std::uint32_t i = rank[slot];
       Brick& br = bricks_[slot];
       br.nodes.resize(first_node[i + 1] - first_node[i]);
       for (std::uint32_t k = 0; k < br.nodes.size(); ++k) {
