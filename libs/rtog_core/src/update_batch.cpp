@@ -1,5 +1,7 @@
 #include "rtog/core/update_batch.hpp"
 
+#include "rtog/core/detail/radix_sort.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <type_traits>
@@ -9,6 +11,7 @@ namespace rtog {
 
 void UpdateBatch::clear() {
   count_ = 0;
+  packed_keys_.clear();
   index_.clear();
   sorted_.clear();
   sorted_keys_.clear();
@@ -18,14 +21,17 @@ void UpdateBatch::clear() {
 
 std::uint32_t UpdateBatch::brickSlot(const Key& b) {
   const auto next = static_cast<std::uint32_t>(count_);
-  const std::uint32_t slot = index_.findOrInsert(packKey(b), next);
+  const std::uint64_t packed = packKey(b);
+  const std::uint32_t slot = index_.findOrInsert(packed, next);
   if (slot == next) {
+    packed_keys_.push_back(packed);
     if (count_ == chunks_.size() * kChunkBricks) chunks_.push_back(std::make_unique<Chunk>());
     ++count_;
     BrickUpdates& u = brickAt(slot);
     u.brick = b;
     u.occupied.fill(0);
     u.free.fill(0);
+    u.any_occupied = false;
   }
   return slot;
 }
@@ -58,14 +64,21 @@ void UpdateBatch::markRayFree(const Eigen::Vector3d& from, const Eigen::Vector3d
 }
 
 void UpdateBatch::finalize() {
+  // Sorted by packed key, whose order is the keys' (z, y, x) order, without reading the bricks
+  // (1 KiB apart: a comparison sort missed the cache on most of its comparisons).
+  std::vector<std::pair<std::uint64_t, std::uint32_t>>& order = order_scratch_;
+  order.clear();
+  for (std::uint32_t slot = 0; slot < packed_keys_.size(); ++slot) order.emplace_back(packed_keys_[slot], slot);
+  detail::radixSortByKey(order);
   sorted_.clear();
-  forEachBrick([&](BrickUpdates& b) {
-    for (std::size_t w = 0; w < kBrickWords; ++w) b.free[w] &= ~b.occupied[w];
-    sorted_.push_back(&b);
-  });
-  std::sort(sorted_.begin(), sorted_.end(), [](const BrickUpdates* a, const BrickUpdates* b) { return a->brick < b->brick; });
   sorted_keys_.clear();
-  for (const BrickUpdates* b : sorted_) sorted_keys_.push_back(b->brick);
+  for (const auto& [key, slot] : order) {
+    BrickUpdates& b = brickAt(slot);
+    if (b.any_occupied)
+      for (std::size_t w = 0; w < kBrickWords; ++w) b.free[w] &= ~b.occupied[w];
+    sorted_.push_back(&b);
+    sorted_keys_.push_back(unpackKey(key));
+  }
 }
 
 void PlanarBatch::reset(const Key& lo, const Key& hi) {

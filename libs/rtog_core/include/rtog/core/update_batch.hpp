@@ -60,6 +60,7 @@ class alignas(64) UpdateBatch {
     Key brick;                                        ///< brick coordinates (key >> kBrickBits)
     std::array<std::uint64_t, kBrickWords> occupied;  ///< bit per local cell index
     std::array<std::uint64_t, kBrickWords> free;
+    bool any_occupied;  ///< some bit of `occupied` is set
   };
 
   UpdateBatch() = default;
@@ -78,10 +79,12 @@ class alignas(64) UpdateBatch {
   /// Returns false if the cell was already marked occupied in this batch.
   bool markOccupied(const Key& k) {
     const int i = localIndex(k);
-    std::uint64_t& w = brickFor(k).occupied[static_cast<std::size_t>(i >> 6)];
+    BrickUpdates& b = brickFor(k);
+    std::uint64_t& w = b.occupied[static_cast<std::size_t>(i >> 6)];
     const std::uint64_t bit = std::uint64_t{1} << (i & 63);
     const bool fresh = (w & bit) == 0;
     w |= bit;
+    b.any_occupied = true;
     return fresh;
   }
 
@@ -95,6 +98,7 @@ class alignas(64) UpdateBatch {
   const std::vector<Key>& brickKeys() const { return sorted_keys_; }
   std::size_t memoryBytes() const {
     return chunks_.size() * sizeof(Chunk) + chunks_.capacity() * sizeof(void*) + index_.memoryBytes() +
+           packed_keys_.capacity() * sizeof(std::uint64_t) +
            sorted_.capacity() * sizeof(void*) + sorted_keys_.capacity() * sizeof(Key);
   }
 
@@ -125,6 +129,8 @@ class alignas(64) UpdateBatch {
   detail::RecentLookups<9> recent_;  // packed brick key -> slot
   std::vector<const BrickUpdates*> sorted_;
   std::vector<Key> sorted_keys_;
+  std::vector<std::uint64_t> packed_keys_;  // of each brick slot, for finalize()'s sort
+  std::vector<std::pair<std::uint64_t, std::uint32_t>> order_scratch_;  // finalize(): packed key, slot
 };
 
 /// A beam of a planar scan in the exact form a PlanarBatch walks.
