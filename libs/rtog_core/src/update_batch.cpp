@@ -10,7 +10,6 @@
 namespace rtog {
 
 void UpdateBatch::clear() {
-  count_ = 0;
   packed_keys_.clear();
   index_.clear();
   sorted_.clear();
@@ -20,13 +19,12 @@ void UpdateBatch::clear() {
 }
 
 std::uint32_t UpdateBatch::brickSlot(const Key& b) {
-  const auto next = static_cast<std::uint32_t>(count_);
+  const auto next = static_cast<std::uint32_t>(packed_keys_.size());
   const std::uint64_t packed = packKey(b);
   const std::uint32_t slot = index_.findOrInsert(packed, next);
   if (slot == next) {
+    if (next == chunks_.size() * kChunkBricks) chunks_.push_back(std::make_unique<Chunk>());
     packed_keys_.push_back(packed);
-    if (count_ == chunks_.size() * kChunkBricks) chunks_.push_back(std::make_unique<Chunk>());
-    ++count_;
     BrickUpdates& u = brickAt(slot);
     u.brick = b;
     u.occupied.fill(0);

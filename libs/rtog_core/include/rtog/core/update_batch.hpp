@@ -99,6 +99,7 @@ class alignas(64) UpdateBatch {
   std::size_t memoryBytes() const {
     return chunks_.size() * sizeof(Chunk) + chunks_.capacity() * sizeof(void*) + index_.memoryBytes() +
            packed_keys_.capacity() * sizeof(std::uint64_t) +
+           order_scratch_.capacity() * sizeof(std::pair<std::uint64_t, std::uint32_t>) +
            sorted_.capacity() * sizeof(void*) + sorted_keys_.capacity() * sizeof(Key);
   }
 
@@ -113,23 +114,17 @@ class alignas(64) UpdateBatch {
   }
   std::uint32_t brickSlot(const Key& b);
   BrickUpdates& brickAt(std::uint32_t slot) { return (*chunks_[slot / kChunkBricks])[slot % kChunkBricks]; }
-  template <class Fn>
-  void forEachBrick(Fn&& fn) {
-    for (std::size_t i = 0; i < count_; ++i) fn(brickAt(static_cast<std::uint32_t>(i)));
-  }
-
   // Bricks live in fixed chunks kept from batch to batch: no copying as a batch grows, stable
   // addresses, and a new scan does not fault its memory in again.
   static constexpr std::size_t kChunkBricks = 256;
   using Chunk = std::array<BrickUpdates, kChunkBricks>;
   std::vector<std::unique_ptr<Chunk>> chunks_;
-  std::size_t count_ = 0;
   detail::FlatHashMap64 index_;
   BrickUpdates* cached_ = nullptr;
   detail::RecentLookups<9> recent_;  // packed brick key -> slot
   std::vector<const BrickUpdates*> sorted_;
   std::vector<Key> sorted_keys_;
-  std::vector<std::uint64_t> packed_keys_;  // of each brick slot, for finalize()'s sort
+  std::vector<std::uint64_t> packed_keys_;  // of each brick slot; its size is the brick count
   std::vector<std::pair<std::uint64_t, std::uint32_t>> order_scratch_;  // finalize(): packed key, slot
 };
 
