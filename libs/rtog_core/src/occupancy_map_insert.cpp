@@ -367,15 +367,43 @@ void OccupancyMap::applyUpdate(const UpdateBatch& batch, InsertStats& stats, int
   applyUpdate(std::vector<const UpdateBatch*>{&batch}, stats, threads);
 }
 
-void OccupancyMap::groupByBrick(const std::vector<const UpdateBatch*>& batches,
-                                std::vector<const UpdateBatch::BrickUpdates*>& sources, std::vector<std::uint32_t>& first,
-                                std::vector<Key>& keys) {
-  // A merge of the batches' sorted brick lists.
-  sources.clear();
-  first.clear();
-  keys.clear();
-  // Keys from the batches' key lists: reading them through the pointers would miss the cache
-  // once per brick, on data another thread wrote.
+// Group g has the updates sources[first[g] .. first[g + 1]) of brick slots[g]. The arrays are
+// sized before grouping starts and never move: appliers read the groups published while later
+// ones are written.
+struct OccupancyMap::BrickGroups {
+  static constexpr std::size_t kPublishEvery = 16;
+  std::vector<const UpdateBatch::BrickUpdates*> sources;
+  std::vector<std::uint32_t> first, slots;
+  std::atomic<std::size_t> published{0};  // groups an applier may take
+  std::atomic<bool> done{false};          // `count` is final
+  std::size_t count = 0;
+
+  BrickGroups(std::size_t bricks, std::size_t updates) : sources(updates), first(bricks + 1, 0), slots(bricks) {}
+  /// How many of groups [0, want) can be taken, waiting while they are being grouped; fewer
+  /// only once grouping is done.
+  std::size_t available(std::size_t want) const {
+    for (unsigned spins = 0;; ++spins) {
+      if (published.load(std::memory_order_acquire) >= want) return want;
+      if (done.load(std::memory_order_acquire)) return std::min(want, count);
+#if defined(__SSE2__)
+      if (spins < 256) {
+        _mm_pause();
+        continue;
+      }
+#endif
+      std::this_thread::yield();
+    }
+  }
+};
+
+namespace {
+
+// A merge of finalized batches' sorted brick lists: for each brick, in order, calls
+// source(update) for every batch holding it, then group(brick). Keys come from the batches' key
+// lists: reading them through the pointers would miss the cache once per brick, on data
+// another thread wrote.
+template <class Source, class Group>
+void mergeBrickLists(const std::vector<const UpdateBatch*>& batches, Source&& source, Group&& group) {
   std::vector<std::size_t> pos(batches.size(), 0);
   for (;;) {
     const Key* next = nullptr;
@@ -384,15 +412,37 @@ void OccupancyMap::groupByBrick(const std::vector<const UpdateBatch*>& batches,
         const Key& k = batches[b]->brickKeys()[pos[b]];
         if (next == nullptr || k < *next) next = &k;
       }
-    if (next == nullptr) break;
+    if (next == nullptr) return;
     const Key brick = *next;
-    keys.push_back(brick);
-    first.push_back(static_cast<std::uint32_t>(sources.size()));
     for (std::size_t b = 0; b < batches.size(); ++b)
       if (pos[b] < batches[b]->brickKeys().size() && batches[b]->brickKeys()[pos[b]] == brick)
-        sources.push_back(batches[b]->bricks()[pos[b]++]);
+        source(batches[b]->bricks()[pos[b]++]);
+    group(brick);
   }
-  first.push_back(static_cast<std::uint32_t>(sources.size()));
+}
+
+}  // namespace
+
+void OccupancyMap::groupByBrick(const std::vector<const UpdateBatch*>& batches, BrickGroups& groups) {
+  std::uint32_t taken = 0;
+  try {
+    mergeBrickLists(
+        batches, [&](const UpdateBatch::BrickUpdates* u) { groups.sources[taken++] = u; },
+        [&](const Key& brick) {
+          // Slots in brick order, whoever applies the groups: the map does not depend on the threads.
+          groups.slots[groups.count] = brickSlot(brick);
+          groups.first[++groups.count] = taken;
+          if (groups.count % BrickGroups::kPublishEvery == 0)
+            groups.published.store(groups.count, std::memory_order_release);
+        });
+  } catch (...) {
+    // Appliers finish what was published; the caller rethrows after joining them.
+    groups.count = groups.published.load(std::memory_order_relaxed);
+    groups.done.store(true, std::memory_order_release);
+    throw;
+  }
+  groups.published.store(groups.count, std::memory_order_release);
+  groups.done.store(true, std::memory_order_release);
 }
 
 const UpdateBatch::BrickUpdates* OccupancyMap::unionOf(const UpdateBatch::BrickUpdates* const* sources, std::size_t n,
@@ -413,21 +463,28 @@ void OccupancyMap::applyUpdate(const std::vector<const UpdateBatch*>& batches, I
   const ScratchScope scope(*this);
   std::vector<ApplyContext>& contexts = scratch_->apply_ctx;
   if (hasPendingCover()) flush();
-  std::vector<const UpdateBatch::BrickUpdates*> sources;
-  std::vector<std::uint32_t> first;
-  std::vector<Key> brick_keys;
-  groupByBrick(batches, sources, first, brick_keys);
-  const std::size_t groups = first.size() - 1;
-  std::vector<std::uint32_t> slots(groups);
+  // Distinct bricks, counted ahead (a cheap pass over the key lists) for the room bricks_ needs:
+  // it must not move while appliers hold bricks.
+  std::size_t distinct = 0, updates = 0, largest = 0;
+  for (const UpdateBatch* b : batches) {
+    updates += b->bricks().size();
+    largest = std::max(largest, b->bricks().size());
+  }
+  if (batches.size() == 1) {
+    distinct = updates;
+  } else {
+    mergeBrickLists(batches, [](const UpdateBatch::BrickUpdates*) {}, [&](const Key&) { ++distinct; });
+  }
+  BrickGroups groups(distinct, updates);
   // Room for every brick being new (a first scan), still growing geometrically.
-  if (bricks_.capacity() < bricks_.size() + groups)
-    bricks_.reserve(std::max(bricks_.size() + groups, 2 * bricks_.capacity()));
-  for (std::size_t g = 0; g < groups; ++g) slots[g] = brickSlot(brick_keys[g]);
+  if (bricks_.capacity() < bricks_.size() + distinct)
+    bricks_.reserve(std::max(bricks_.size() + distinct, 2 * bricks_.capacity()));
   // Bricks are independent: threads take runs of them as they go (bricks near the sensor cost
-  // far more than distant ones), each with its own scratch. The results do not depend on who
+  // far more than distant ones), each with its own scratch, while this thread still groups the
+  // batches (serial: brick slots are given in brick order). The results do not depend on who
   // applied which brick: statistics are sums and refreshUpperTree() puts the reshaped bricks in
   // slot order where their order matters.
-  const std::size_t n = std::min<std::size_t>(static_cast<std::size_t>(threads), 1 + groups / 64);
+  const std::size_t n = std::min<std::size_t>(static_cast<std::size_t>(threads), 1 + largest / 64);
   if (contexts.size() < n) contexts.resize(n);
   constexpr std::size_t kGrain = 16;
   std::atomic<std::size_t> next_group{0};
@@ -440,14 +497,21 @@ void OccupancyMap::applyUpdate(const std::vector<const UpdateBatch*>& batches, I
     for (std::size_t g = 0, e = 0;; ++g) {
       if (g == e) {
         g = next_group.fetch_add(kGrain, std::memory_order_relaxed);
-        if (g >= groups) break;
-        e = std::min(groups, g + kGrain);
+        e = groups.available(g + kGrain);
+        if (g >= e) break;
       }
-      applyBrick(*unionOf(&sources[first[g]], first[g + 1] - first[g], ctx.merged), slots[g], ctx);
+      const std::uint32_t* first = &groups.first[g];
+      applyBrick(*unionOf(&groups.sources[first[0]], first[1] - first[0], ctx.merged), groups.slots[g], ctx);
     }
   };
   std::vector<std::thread> workers;
   for (std::size_t t = 1; t < n; ++t) workers.emplace_back(work, t);
+  try {
+    groupByBrick(batches, groups);
+  } catch (...) {
+    for (auto& w : workers) w.join();
+    throw;
+  }
   work(0);
   for (auto& w : workers) w.join();
   reshaped_bricks_.clear();

@@ -316,11 +316,11 @@ class OccupancyMap {
   void rebuildUpperTree(int threads = 1);
   /// Brings the upper tree up to date with the leaf nodes of reshaped_bricks_ (sorted).
   void refreshUpperTree(int threads = 1);
-  /// Groups the bricks of several finalized batches: group g is brick keys[g], its updates are
-  /// sources[first[g] .. first[g + 1]), groups in brick order.
-  static void groupByBrick(const std::vector<const UpdateBatch*>& batches,
-                           std::vector<const UpdateBatch::BrickUpdates*>& sources, std::vector<std::uint32_t>& first,
-                           std::vector<Key>& keys);
+  /// The bricks of several finalized batches in groups of one brick, published as they come.
+  struct BrickGroups;
+  /// Fills `groups` in brick order, each group's brick found or made (its slot), publishing
+  /// the groups done every few: appliers take them while the rest are grouped.
+  void groupByBrick(const std::vector<const UpdateBatch*>& batches, BrickGroups& groups);
   /// The union of a group's updates (occupied winning), in `scratch` if there are several.
   static const UpdateBatch::BrickUpdates* unionOf(const UpdateBatch::BrickUpdates* const* sources, std::size_t n,
                                                   UpdateBatch::BrickUpdates& scratch);
