@@ -150,6 +150,46 @@ void updateLayer(float* values, std::uint64_t* known, const std::uint64_t* occup
   }
 }
 
+// Chunks of a scan's beams for threads to claim. A pair of threads shares a range of chunks,
+// one taking chunks from its front and the other from its back: each traces neighbouring beams,
+// which touch the same bricks (a scan's beams come in sweep order), so the two batches share
+// few bricks, and they meet wherever their work balances. A thread whose range is used up
+// helps with the others' from their front (or back).
+class ChunkClaims {
+ public:
+  static constexpr std::size_t kNone = ~std::size_t{0};
+  ChunkClaims(std::size_t chunks, std::size_t threads) : ranges_((threads + 1) / 2) {
+    for (std::size_t r = 0; r < ranges_.size(); ++r)
+      ranges_[r].ends.store(pack(chunks * r / ranges_.size(), chunks * (r + 1) / ranges_.size()),
+                            std::memory_order_relaxed);
+  }
+  std::size_t next(std::size_t thread) {
+    const bool from_back = thread % 2 == 1;
+    for (std::size_t k = 0; k < ranges_.size(); ++k) {
+      std::atomic<std::uint64_t>& ends = ranges_[(thread / 2 + k) % ranges_.size()].ends;
+      std::uint64_t v = ends.load(std::memory_order_relaxed);
+      for (;;) {
+        const std::uint64_t front = v >> 32, back = v & 0xFFFFFFFFu;
+        if (front >= back) break;
+        const std::uint64_t claimed = from_back ? pack(front, back - 1) : pack(front + 1, back);
+        if (ends.compare_exchange_weak(v, claimed, std::memory_order_relaxed))
+          return static_cast<std::size_t>(from_back ? back - 1 : front);
+      }
+    }
+    return kNone;
+  }
+
+ private:
+  // Chunk indices in 32 bits: a chunk is at least 256 beams.
+  static std::uint64_t pack(std::size_t front, std::size_t back) {
+    return (static_cast<std::uint64_t>(front) << 32) | static_cast<std::uint64_t>(back);
+  }
+  struct alignas(64) Range {
+    std::atomic<std::uint64_t> ends;  // [front, back) in the high and low 32 bits
+  };
+  std::vector<Range> ranges_;
+};
+
 }  // namespace
 
 namespace detail {
@@ -226,7 +266,7 @@ InsertStats OccupancyMap::insertPointCloud(const Eigen::Vector3d& origin, const 
   // (two fixed halves were too uneven, a depth image's rows differing in cost).
   const std::size_t chunk = ip.discretize ? std::max<std::size_t>(2048, (count + 4 * threads - 1) / (4 * threads))
                                           : std::clamp<std::size_t>(count / (16 * threads), 256, 2048);
-  std::atomic<std::size_t> next_chunk{0};
+  ChunkClaims claims((count + chunk - 1) / chunk, threads);
   const Key origin_key = planar ? lattice_.key(origin) : Key{};
   const bool trace_free = ip.model == SensorModel::BeamBased;
   const auto trace = [&](std::size_t t) {
@@ -237,8 +277,8 @@ InsertStats OccupancyMap::insertPointCloud(const Eigen::Vector3d& origin, const 
       } else {
         scratch.batches[t].clear();
       }
-      for (std::size_t first; (first = next_chunk.fetch_add(chunk, std::memory_order_relaxed)) < count;) {
-        const std::size_t n = std::min(chunk, count - first);
+      for (std::size_t c; (c = claims.next(t)) != ChunkClaims::kNone;) {
+        const std::size_t first = c * chunk, n = std::min(chunk, count - first);
         const std::uint8_t* hits = is_hit ? is_hit + first : nullptr;
         if (planar) {
           PlanarBatch& batch = scratch.planar_batches[t];
