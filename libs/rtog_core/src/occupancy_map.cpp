@@ -130,16 +130,20 @@ const OccupancyMap::Brick* OccupancyMap::findBrick(const Key& brick) const {
 }
 
 Box OccupancyMap::leafNodeBox(const Brick& b, std::size_t node) const {
-  const std::size_t first = node * leafNodeSize(), last = std::min(b.leaves.size(), first + leafNodeSize());
-  if (first >= last) return Box::empty();
+  if (node * leafNodeSize() >= b.leaves.size()) return Box::empty();
+  return globalBox(brickOrigin(b.brick), localNodeBox(b.leaves, node));
+}
+
+OccupancyMap::LeafEntry OccupancyMap::localNodeBox(const std::vector<LeafEntry>& leaves, std::size_t node) const {
   // In brick-local bytes, one conversion at the end.
-  LeafEntry united = b.leaves[first];
+  const std::size_t first = node * leafNodeSize(), last = std::min(leaves.size(), first + leafNodeSize());
+  LeafEntry united = leaves[first];
   for (std::size_t i = first + 1; i < last; ++i)
     for (int a = 0; a < 3; ++a) {
-      united.lo[a] = std::min(united.lo[a], b.leaves[i].lo[a]);
-      united.hi[a] = std::max(united.hi[a], b.leaves[i].hi[a]);
+      united.lo[a] = std::min(united.lo[a], leaves[i].lo[a]);
+      united.hi[a] = std::max(united.hi[a], leaves[i].hi[a]);
     }
-  return globalBox(brickOrigin(b.brick), united);
+  return united;
 }
 
 const OccupancyMap::LeafEntry* OccupancyMap::findLeaf(const Key& k) const {
@@ -272,7 +276,7 @@ std::int64_t OccupancyMap::cellCount() const {
 std::size_t OccupancyMap::memoryBytes() const {
   std::size_t bytes = sizeof(*this) + upper_.memoryBytes() + brick_index_.memoryBytes() +
                       bricks_.capacity() * sizeof(Brick) + local_.capacity() * sizeof(std::int32_t);
-  for (const Brick& b : bricks_) bytes += b.leaves.capacity() * sizeof(LeafEntry) + b.nodes.capacity() * sizeof(Handle);
+  for (const Brick& b : bricks_) bytes += b.leaves.capacity() * sizeof(LeafEntry) + b.nodes.heapBytes();
   return bytes + planar_layers_.capacity() * sizeof(PlanarLayer) + planar_index_.memoryBytes();
 }
 

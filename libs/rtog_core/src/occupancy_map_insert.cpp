@@ -532,6 +532,8 @@ void OccupancyMap::applyUpdate(const std::vector<const UpdateBatch*>& batches, I
     ApplyContext& ctx = contexts[t];
     ctx.local.assign(kBrickCells, -1);
     ctx.reshaped.clear();
+    ctx.node_boxes.clear();
+    ctx.reshaped_boxes.clear();
     ctx.leaf_delta = 0;
     ctx.stats = InsertStats{};
     for (std::size_t g = 0, e = 0;; ++g) {
@@ -560,17 +562,24 @@ void OccupancyMap::applyUpdate(const std::vector<const UpdateBatch*>& batches, I
     leaf_count_ = static_cast<std::size_t>(static_cast<std::int64_t>(leaf_count_) + contexts[t].leaf_delta);
     reshaped_bricks_.insert(reshaped_bricks_.end(), contexts[t].reshaped.begin(), contexts[t].reshaped.end());
   }
-  refreshUpperTree(static_cast<int>(n));
+  refreshUpperTree(static_cast<int>(n), contexts.data(), n);
 }
 
-void OccupancyMap::refreshUpperTree(int threads) {
+void OccupancyMap::noteReshaped(std::uint32_t slot, ApplyContext& ctx) const {
+  const std::vector<LeafEntry>& leaves = bricks_[slot].leaves;
+  ctx.reshaped.push_back(slot);
+  ctx.reshaped_boxes.push_back(static_cast<std::uint32_t>(ctx.node_boxes.size()));
+  for (std::size_t k = 0; k * leafNodeSize() < leaves.size(); ++k) ctx.node_boxes.push_back(localNodeBox(leaves, k));
+}
+
+void OccupancyMap::refreshUpperTree(int threads, const ApplyContext* contexts, std::size_t context_count) {
   // Leaf nodes whose boxes changed go into the upper tree one by one, unless they are many
   // compared with the tree (a first scan, a new area): then one bulk load is cheaper.
   std::size_t touched_nodes = 0;
   for (const std::uint32_t slot : reshaped_bricks_)
     touched_nodes += (bricks_[slot].leaves.size() + leafNodeSize() - 1) / leafNodeSize();
   if (touched_nodes * 2 > upper_.size()) {
-    rebuildUpperTree(threads);
+    rebuildUpperTree(threads, contexts, context_count);
   } else {
     // In slot order: the tree must not depend on which thread applied which brick.
     std::sort(reshaped_bricks_.begin(), reshaped_bricks_.end());
@@ -578,7 +587,7 @@ void OccupancyMap::refreshUpperTree(int threads) {
   }
 }
 
-void OccupancyMap::rebuildUpperTree(int threads) {
+void OccupancyMap::rebuildUpperTree(int threads, const ApplyContext* contexts, std::size_t context_count) {
   // Leaf nodes go to the bulk load in Morton order of their bricks, and a brick's nodes follow
   // its leaves, which are in Morton order of their first cells when packed: close to the order
   // of the nodes' own Morton codes without sorting the nodes (one VLP-16 scan at 5 cm brings
@@ -593,6 +602,10 @@ void OccupancyMap::rebuildUpperTree(int threads) {
     const std::size_t n = (bricks_[order[i].second].leaves.size() + leafNodeSize() - 1) / leafNodeSize();
     first_node[i + 1] = first_node[i] + static_cast<std::uint32_t>(n);
   }
+  std::vector<const LeafEntry*> boxes_of(context_count > 0 ? slots : 0, nullptr);  // taken when applied
+  for (std::size_t c = 0; c < context_count; ++c)
+    for (std::size_t i = 0; i < contexts[c].reshaped.size(); ++i)
+      boxes_of[contexts[c].reshaped[i]] = contexts[c].node_boxes.data() + contexts[c].reshaped_boxes[i];
   std::vector<std::pair<Box, LeafNodeRef>> nodes(first_node[slots]);
   std::vector<std::uint32_t> rank(slots);  // of each slot in `order`
   for (std::uint32_t i = 0; i < slots; ++i) rank[order[i].second] = i;
@@ -604,9 +617,11 @@ void OccupancyMap::rebuildUpperTree(int threads) {
       const std::uint32_t i = rank[slot];
       Brick& br = bricks_[slot];
       br.nodes.resize(first_node[i + 1] - first_node[i]);
+      const LeafEntry* boxes = boxes_of.empty() ? nullptr : boxes_of[slot];
+      const Key origin = brickOrigin(br.brick);
       for (std::uint32_t k = 0; k < br.nodes.size(); ++k) {
         br.nodes[k] = first_node[i] + k;
-        nodes[br.nodes[k]] = {leafNodeBox(br, k), LeafNodeRef{slot, k}};
+        nodes[br.nodes[k]] = {boxes ? globalBox(origin, boxes[k]) : leafNodeBox(br, k), LeafNodeRef{slot, k}};
       }
     }
   };
@@ -829,7 +844,7 @@ void OccupancyMap::applyBrick(const UpdateBatch::BrickUpdates& upd, std::uint32_
       }
     }
     if (leaves.capacity() > 2 * leaves.size() + 16) leaves.shrink_to_fit();
-    ctx.reshaped.push_back(slot);
+    noteReshaped(slot, ctx);
   }
   ctx.leaf_delta += static_cast<std::int64_t>(leaves.size()) - static_cast<std::int64_t>(leaves_before);
   // Leave the scratch table empty for the next brick; only painted cells need it.
@@ -850,7 +865,7 @@ void OccupancyMap::coverFreshBrick(const UpdateBatch::BrickUpdates& upd, std::ui
   ctx.stats.leaves_created += out.size();
   ctx.leaf_delta += static_cast<std::int64_t>(out.size());
   assignByFirstCell(out, bricks_[slot].leaves);
-  ctx.reshaped.push_back(slot);
+  noteReshaped(slot, ctx);
 }
 
 void OccupancyMap::rebuildBrick(const UpdateBatch::BrickUpdates& upd, std::uint32_t slot, ApplyContext& ctx) {
@@ -917,7 +932,7 @@ void OccupancyMap::rebuildBrick(const UpdateBatch::BrickUpdates& upd, std::uint3
   stats.leaves_merged += leaves.size();
   ctx.leaf_delta += static_cast<std::int64_t>(out.size()) - static_cast<std::int64_t>(leaves.size());
   assignByFirstCell(out, leaves);
-  ctx.reshaped.push_back(slot);
+  noteReshaped(slot, ctx);
 }
 
 std::size_t OccupancyMap::mergeInBrick(std::vector<LeafEntry>& leaves, std::vector<std::int32_t>& local,

@@ -17,6 +17,7 @@
 
 #include "rtog/core/detail/chunked_vector.hpp"
 #include "rtog/core/detail/flat_hash_map.hpp"
+#include "rtog/core/detail/small_vector.hpp"
 #include "rtog/core/key.hpp"
 #include "rtog/core/log_odds.hpp"
 #include "rtog/core/rtree.hpp"
@@ -247,7 +248,7 @@ class OccupancyMap {
   struct Brick {
     Key brick;
     std::vector<LeafEntry> leaves;
-    std::vector<Handle> nodes;  // upper-tree handle of each leaf node
+    detail::SmallVector<Handle, 4> nodes;  // upper-tree handle of each leaf node
   };
   static constexpr std::uint8_t kDead = 0xFF;
 
@@ -260,6 +261,8 @@ class OccupancyMap {
   const LeafEntry* findLeaf(const Key& k) const;
   std::size_t leafNodeSize() const { return params_.rtree.max_entries; }
   Box leafNodeBox(const Brick& b, std::size_t node) const;
+  /// The union of a leaf node's entries in brick-local cells (value unused).
+  LeafEntry localNodeBox(const std::vector<LeafEntry>& leaves, std::size_t node) const;
   bool mergeable(float v) const;
   /// Per-thread state of applyUpdate().
   struct alignas(64) ApplyContext {
@@ -269,6 +272,10 @@ class OccupancyMap {
     UpdateBatch::BrickUpdates merged;     // union of one brick's updates from several batches
     std::vector<float> values;            // brick-local cell -> log-odds, for rebuildBrick()
     std::vector<LeafEntry> rebuilt;
+    // The reshaped bricks' leaf-node boxes (brick-local; value unused), taken while their leaves
+    // are in the cache: a rebuild of the upper tree reads them instead of every leaf again.
+    std::vector<LeafEntry> node_boxes;
+    std::vector<std::uint32_t> reshaped_boxes;  // first of each reshaped brick's boxes
     std::int64_t leaf_delta = 0;
     InsertStats stats;
   };
@@ -312,10 +319,13 @@ class OccupancyMap {
   void packLeaves(std::uint32_t slot);
   /// Brings the brick's leaf nodes in the upper tree up to date with its leaves.
   void syncLeafNodes(std::uint32_t slot);
-  /// Packs every brick's leaf nodes into a fresh upper tree (Morton-order bulk load).
-  void rebuildUpperTree(int threads = 1);
+  /// Packs every brick's leaf nodes into a fresh upper tree (Morton-order bulk load); the boxes
+  /// of bricks the contexts reshaped come from them.
+  void rebuildUpperTree(int threads = 1, const ApplyContext* contexts = nullptr, std::size_t context_count = 0);
   /// Brings the upper tree up to date with the leaf nodes of reshaped_bricks_ (sorted).
-  void refreshUpperTree(int threads = 1);
+  void refreshUpperTree(int threads = 1, const ApplyContext* contexts = nullptr, std::size_t context_count = 0);
+  /// Records a brick applyBrick() reshaped, with its leaf-node boxes.
+  void noteReshaped(std::uint32_t slot, ApplyContext& ctx) const;
   /// The bricks of several finalized batches in groups of one brick, published as they come.
   struct BrickGroups;
   /// Fills `groups` in brick order, each group's brick found or made (its slot), publishing
