@@ -438,24 +438,24 @@ struct OccupancyMap::BrickGroups {
 
 namespace {
 
-// A merge of finalized batches' sorted brick lists: for each brick, in order, calls
-// source(update) for every batch holding it, then group(brick). Keys come from the batches' key
-// lists: reading them through the pointers would miss the cache once per brick, on data
-// another thread wrote.
+// A merge of finalized batches' brick lists (in Morton order): for each brick, in order, calls
+// source(update) for every batch holding it, then group(brick). Codes and keys come from the
+// batches' lists: reading them through the pointers would miss the cache once per brick, on
+// data another thread wrote.
 template <class Source, class Group>
 void mergeBrickLists(const std::vector<const UpdateBatch*>& batches, Source&& source, Group&& group) {
   std::vector<std::size_t> pos(batches.size(), 0);
   for (;;) {
-    const Key* next = nullptr;
+    std::size_t from = batches.size();
     for (std::size_t b = 0; b < batches.size(); ++b)
-      if (pos[b] < batches[b]->brickKeys().size()) {
-        const Key& k = batches[b]->brickKeys()[pos[b]];
-        if (next == nullptr || k < *next) next = &k;
-      }
-    if (next == nullptr) return;
-    const Key brick = *next;
+      if (pos[b] < batches[b]->brickCodes().size() &&
+          (from == batches.size() || batches[b]->brickCodes()[pos[b]] < batches[from]->brickCodes()[pos[from]]))
+        from = b;
+    if (from == batches.size()) return;
+    const std::uint64_t code = batches[from]->brickCodes()[pos[from]];
+    const Key brick = batches[from]->brickKeys()[pos[from]];
     for (std::size_t b = 0; b < batches.size(); ++b)
-      if (pos[b] < batches[b]->brickKeys().size() && batches[b]->brickKeys()[pos[b]] == brick)
+      if (pos[b] < batches[b]->brickCodes().size() && batches[b]->brickCodes()[pos[b]] == code)
         source(batches[b]->bricks()[pos[b]++]);
     group(brick);
   }
@@ -595,7 +595,8 @@ void OccupancyMap::rebuildUpperTree(int threads, const ApplyContext* contexts, s
   const auto slots = static_cast<std::uint32_t>(bricks_.size());
   std::vector<std::pair<std::uint64_t, std::uint32_t>> order(slots);
   for (std::uint32_t slot = 0; slot < slots; ++slot) order[slot] = {mortonCode(bricks_[slot].brick), slot};
-  detail::radixSortByKey(order);
+  // A first scan's bricks got their slots in this order already (update batches are in it).
+  if (!std::is_sorted(order.begin(), order.end())) detail::radixSortByKey(order);
   // Handles are the nodes' positions in the load, so each brick knows its own before the load.
   std::vector<std::uint32_t> first_node(slots + 1, 0);
   for (std::uint32_t i = 0; i < slots; ++i) {
@@ -629,7 +630,7 @@ void OccupancyMap::rebuildUpperTree(int threads, const ApplyContext* contexts, s
   for (std::uint32_t p = 1; p < parts; ++p) workers.emplace_back(collect, p);
   collect(0);
   for (auto& w : workers) w.join();
-  upper_.bulkLoad(std::move(nodes), RTree<LeafNodeRef>::Packing::AsGiven);
+  upper_.bulkLoad(std::move(nodes), RTree<LeafNodeRef>::Packing::AsGiven, threads);
 }
 
 namespace {

@@ -14,6 +14,7 @@ void UpdateBatch::clear() {
   index_.clear();
   sorted_.clear();
   sorted_keys_.clear();
+  sorted_codes_.clear();
   cached_ = nullptr;
   recent_.clear();
 }
@@ -62,20 +63,23 @@ void UpdateBatch::markRayFree(const Eigen::Vector3d& from, const Eigen::Vector3d
 }
 
 void UpdateBatch::finalize() {
-  // Sorted by packed key, whose order is the keys' (z, y, x) order, without reading the bricks
-  // (1 KiB apart: a comparison sort missed the cache on most of its comparisons).
+  // Sorted by a radix sort of the codes, computed from the packed keys kept beside the bricks:
+  // reading the bricks (1 KiB apart) missed the cache on most of a comparison sort's comparisons.
   std::vector<std::pair<std::uint64_t, std::uint32_t>>& order = order_scratch_;
   order.clear();
-  for (std::uint32_t slot = 0; slot < packed_keys_.size(); ++slot) order.emplace_back(packed_keys_[slot], slot);
+  for (std::uint32_t slot = 0; slot < packed_keys_.size(); ++slot)
+    order.emplace_back(mortonCode(unpackKey(packed_keys_[slot])), slot);
   detail::radixSortByKey(order);
   sorted_.clear();
   sorted_keys_.clear();
-  for (const auto& [key, slot] : order) {
+  sorted_codes_.clear();
+  for (const auto& [code, slot] : order) {
     BrickUpdates& b = brickAt(slot);
     if (b.any_occupied)
       for (std::size_t w = 0; w < kBrickWords; ++w) b.free[w] &= ~b.occupied[w];
     sorted_.push_back(&b);
-    sorted_keys_.push_back(unpackKey(key));
+    sorted_keys_.push_back(unpackKey(packed_keys_[slot]));
+    sorted_codes_.push_back(code);
   }
 }
 

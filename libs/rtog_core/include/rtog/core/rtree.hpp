@@ -14,6 +14,7 @@
 #include <sstream>
 #include <stdexcept>
 #include <string>
+#include <thread>
 #include <type_traits>
 #include <utility>
 #include <vector>
@@ -154,28 +155,33 @@ class RTree {
   };
 
   /// Replaces the contents by a packed tree. Handles are 0..n-1 in the order of `items`.
-  void bulkLoad(std::vector<std::pair<Box, Payload>> items, Packing packing = Packing::SortTileRecursive) {
+  /// With Packing::AsGiven, `threads` threads fill the leaf level (the tree is the same).
+  void bulkLoad(std::vector<std::pair<Box, Payload>> items, Packing packing = Packing::SortTileRecursive,
+                int threads = 1) {
+    for (const auto& it : items)
+      if (it.first.isEmpty()) throw std::invalid_argument("RTree::bulkLoad: empty box");
     clear();
     if (items.empty()) return;
     std::vector<Entry> level;
-    level.reserve(items.size());
-    payload_.reserve(items.size());
-    loc_.reserve(items.size());
     // The nodes of a packed tree: about n / (M - 1) (fewer than that with full nodes).
     const std::size_t nodes = level_.size() + items.size() / (params_.max_entries - 1) + 8;
     level_.reserve(nodes), count_.reserve(nodes), parent_.reserve(nodes);
     boxes_.reserve(nodes * (params_.max_entries + 1)), ids_.reserve(nodes * (params_.max_entries + 1));
-    for (auto& it : items) {
-      if (it.first.isEmpty()) throw std::invalid_argument("RTree::bulkLoad: empty box");
-      const Handle h = allocHandle(std::move(it.second));
-      level.push_back(Entry{it.first, h});
-    }
     size_ = items.size();
     freeNode(root_);
     std::uint16_t lvl = 0;
-    if (packing == Packing::Morton) mortonSort(level);
+    if (packing == Packing::AsGiven) {
+      packLeafLevel(items, std::max(threads, 1), level);
+      lvl = 1;
+    } else {
+      level.reserve(items.size());
+      payload_.reserve(items.size());
+      loc_.reserve(items.size());
+      for (auto& it : items) level.push_back(Entry{it.first, allocHandle(std::move(it.second))});
+      if (packing == Packing::Morton) mortonSort(level);
+    }
     std::vector<Entry> next;
-    for (;;) {
+    while (level.size() > 1 || lvl == 0) {
       next.clear();
       const auto pack = [&](const Entry* first, const Entry* last) {
         const std::uint32_t n = allocNode(lvl);
@@ -193,13 +199,10 @@ class RTree {
         }
       }
       level.swap(next);
-      if (level.size() == 1) {
-        root_ = level.front().id;
-        parent_[root_] = kNoNode;
-        break;
-      }
       ++lvl;
     }
+    root_ = level.front().id;
+    parent_[root_] = kNoNode;
     hint_leaf_ = kNoNode;
   }
 
@@ -657,6 +660,34 @@ class RTree {
 
   // Where consecutive runs of M of n entries end; a short last run takes entries from the one
   // before up to the minimum fill (as fixFill() would: M >= 2m leaves that one full enough).
+  // bulkLoad()'s leaf level for entries in the given order: the nodes are allocated first, then
+  // threads fill ranges of them (the items, the handles' locations, the node boxes).
+  void packLeafLevel(std::vector<std::pair<Box, Payload>>& items, int threads, std::vector<Entry>& level) {
+    if (items.size() >= kNoHandle) throw std::length_error("RTree: too many entries");
+    const std::vector<std::size_t> ends = runEnds(items.size());
+    level.resize(ends.size());
+    for (Entry& e : level) e.id = allocNode(0);
+    loc_.resize(items.size());
+    payload_.resize(items.size());
+    const auto fill = [&](std::size_t first_run, std::size_t last_run) {
+      for (std::size_t r = first_run; r < last_run; ++r) {
+        const std::uint32_t n = level[r].id;
+        for (std::size_t i = r == 0 ? 0 : ends[r - 1]; i < ends[r]; ++i) {
+          payload_[i] = std::move(items[i].second);
+          appendSlot(n, items[i].first, static_cast<std::uint32_t>(i));
+        }
+        level[r].box = computeNodeBox(n);
+      }
+    };
+    // Below some thousand nodes a thread costs more than it saves.
+    const std::size_t parts = std::min<std::size_t>(static_cast<std::size_t>(threads), 1 + ends.size() / 1024);
+    std::vector<std::thread> workers;
+    for (std::size_t p = 1; p < parts; ++p)
+      workers.emplace_back(fill, ends.size() * p / parts, ends.size() * (p + 1) / parts);
+    fill(0, ends.size() / parts);
+    for (auto& w : workers) w.join();
+  }
+
   std::vector<std::size_t> runEnds(std::size_t n) const {
     const std::size_t M = params_.max_entries, m = params_.min_entries;
     std::vector<std::size_t> ends;

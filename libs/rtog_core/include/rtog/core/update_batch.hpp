@@ -88,19 +88,24 @@ class alignas(64) UpdateBatch {
     return fresh;
   }
 
-  /// Drops free marks of cells also marked occupied and orders bricks by (z, y, x) so that
-  /// applying the batch is deterministic. Ends marking; clear() starts a new batch.
+  /// Drops free marks of cells also marked occupied and orders bricks by the Morton code of
+  /// their keys, so that applying the batch is deterministic and the bricks a first scan brings
+  /// get their map slots in the order the upper tree is packed in. Ends marking; clear() starts
+  /// a new batch.
   void finalize();
 
-  /// The touched bricks in (z, y, x) order, after finalize().
+  /// The touched bricks in Morton order, after finalize().
   const std::vector<const BrickUpdates*>& bricks() const { return sorted_; }
   /// Their keys, in the same order.
   const std::vector<Key>& brickKeys() const { return sorted_keys_; }
+  /// Their keys' Morton codes, ascending.
+  const std::vector<std::uint64_t>& brickCodes() const { return sorted_codes_; }
   std::size_t memoryBytes() const {
     return chunks_.size() * sizeof(Chunk) + chunks_.capacity() * sizeof(void*) + index_.memoryBytes() +
            packed_keys_.capacity() * sizeof(std::uint64_t) +
            order_scratch_.capacity() * sizeof(std::pair<std::uint64_t, std::uint32_t>) +
-           sorted_.capacity() * sizeof(void*) + sorted_keys_.capacity() * sizeof(Key);
+           sorted_.capacity() * sizeof(void*) + sorted_keys_.capacity() * sizeof(Key) +
+           sorted_codes_.capacity() * sizeof(std::uint64_t);
   }
 
  private:
@@ -124,8 +129,9 @@ class alignas(64) UpdateBatch {
   detail::RecentLookups<9> recent_;  // packed brick key -> slot
   std::vector<const BrickUpdates*> sorted_;
   std::vector<Key> sorted_keys_;
+  std::vector<std::uint64_t> sorted_codes_;
   std::vector<std::uint64_t> packed_keys_;  // of each brick slot; its size is the brick count
-  std::vector<std::pair<std::uint64_t, std::uint32_t>> order_scratch_;  // finalize(): packed key, slot
+  std::vector<std::pair<std::uint64_t, std::uint32_t>> order_scratch_;  // finalize(): Morton code, slot
 };
 
 /// A beam of a planar scan in the exact form a PlanarBatch walks.
