@@ -38,25 +38,29 @@ double seconds(Clock::time_point a, Clock::time_point b) { return std::chrono::d
 
 // Builds go in opts.repeats rounds, every method once or more in each: within a round a fast
 // method builds again until min_seconds / repeats of its builds have been timed (at most
-// kMaxRepeats builds in all). So every method's builds sample the same spells of the machine
-// (on a shared 2-vCPU VM one build in four may run at half speed, for seconds at a time) and
-// the ratios of the medians hold. build(k) builds method k once and returns its seconds; only
-// methods with include(k) take part.
-constexpr int kMaxRepeats = 60;
-
+// kMaxBuilds in all), the fast methods taking turns build by build. So every method's
+// builds sample the same spells of the machine (on a shared 2-vCPU VM one build in four may run
+// at half speed, for seconds at a time), two fast methods' builds lie a few milliseconds apart,
+// and the ratios of the medians hold. build(k) builds method k once and returns its seconds;
+// only methods with include(k) take part.
 template <class Include, class Build>
 void buildInRounds(const Options& opts, std::vector<std::vector<double>>& times, Include&& include, Build&& build) {
   const double per_round = opts.min_seconds / opts.repeats;
-  const auto most_per_round = static_cast<std::size_t>(std::max(1, kMaxRepeats / opts.repeats));
-  for (int round = 0; round < opts.repeats; ++round)
-    for (std::size_t k = 0; k < times.size(); ++k) {
-      if (!include(k)) continue;
-      double spent = 0;
-      for (std::size_t n = 0; n == 0 || (spent < per_round && n < most_per_round); ++n) {
+  const auto most_per_round = static_cast<std::size_t>(std::max(1, kMaxBuilds / opts.repeats));
+  for (int round = 0; round < opts.repeats; ++round) {
+    std::vector<double> spent(times.size(), 0.0);
+    std::vector<std::size_t> built(times.size(), 0);
+    for (bool any = true; any;) {
+      any = false;
+      for (std::size_t k = 0; k < times.size(); ++k) {
+        if (!include(k) || (built[k] > 0 && (spent[k] >= per_round || built[k] >= most_per_round))) continue;
         times[k].push_back(build(k));
-        spent += times[k].back();
+        spent[k] += times[k].back();
+        ++built[k];
+        any = true;
       }
     }
+  }
 }
 double median(std::vector<double> v) {
   std::sort(v.begin(), v.end());

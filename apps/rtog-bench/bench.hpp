@@ -44,6 +44,9 @@ struct Result {
   std::map<std::string, double> extra;
 };
 
+/// Builds of one method at most, over all rounds.
+constexpr int kMaxBuilds = 60;
+
 struct Options {
   int repeats = 5;                          ///< rounds of builds, every method in each (Default: 5)
   double min_seconds = 1.0;                 ///< a fast method's builds timed over all rounds (Default: 1.0)
@@ -76,6 +79,7 @@ void runDataset(const Dataset& data, const Options& opts, std::vector<Result>& o
 
 /// JSON with machine/version info; a Markdown report with target ratios and PASS/FAIL.
 void writeJson(const std::vector<Result>& results, const std::string& path);
-void writeMarkdown(const std::vector<Result>& results, const std::string& path, const std::string& img_dir);
+void writeMarkdown(const std::vector<Result>& results, const Options& opts, const std::string& path,
+                   const std::string& img_dir);
 
 }  // namespace rtog::bench

@@ -46,7 +46,7 @@ int main(int argc, char** argv) {
       rtog::bench::runDataset(data, opts, results, std::cout);
     }
     rtog::bench::writeJson(results, json);
-    rtog::bench::writeMarkdown(results, markdown, img_dir);
+    rtog::bench::writeMarkdown(results, opts, markdown, img_dir);
     std::cout << "wrote " << json << ", " << markdown << "\n";
   } catch (const std::exception& e) {
     std::cerr << "rtog-bench: error: " << e.what() << "\n";

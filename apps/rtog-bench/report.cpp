@@ -106,14 +106,17 @@ void writeJson(const std::vector<Result>& results, const std::string& path) {
   if (!out) throw std::runtime_error("cannot write " + path);
 }
 
-void writeMarkdown(const std::vector<Result>& results, const std::string& path, const std::string& img_dir) {
+void writeMarkdown(const std::vector<Result>& results, const Options& opts, const std::string& path,
+                   const std::string& img_dir) {
   std::ostringstream md;
   const nlohmann::json m = machine();
   md << "# Benchmarks\n\nMeasured by `rtog-bench` (Release build), every method in one process on the same scans,\n"
-     << "resolution and sensor model (OctoMap's defaults). Insertion time is the median of the builds of 5\n"
-     << "rounds. Every method builds in every round, a fast one again until 0.2 s of its builds were timed in\n"
-     << "that round (at most 60 builds; the count is in the JSON), so that all methods' builds sample the same\n"
-     << "slow spells of the machine and their ratios hold. The dense 3D grid (up to 1.7 GB a build) goes in\n"
+     << "resolution and sensor model (OctoMap's defaults). Insertion time is the median of the builds of "
+     << opts.repeats << "\nrounds. Every method builds in every round, a fast one again until "
+     << opts.min_seconds / opts.repeats << " s of its builds were timed\nin that round (at most "
+     << std::max(1, kMaxBuilds / opts.repeats) << " builds a round; the count is in the JSON), the fast methods taking "
+        "turns\nbuild by build, so that all methods' builds sample the same slow spells of the machine and their "
+        "ratios\nhold. The dense 3D grid (up to 1.7 GB a build) goes in\n"
      << "rounds of its own after the others, as its paging slowed the builds\n"
      << "that followed it. The heap is trimmed before each method's first 3D build only, for its RSS growth;\n"
      << "later builds reuse it, as a long-running process does. A build ends\n"
