@@ -1,6 +1,8 @@
 #include "bench.hpp"
 
 #include <malloc.h>
+#include <sys/resource.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <chrono>
@@ -12,6 +14,7 @@
 #include <memory>
 #include <random>
 #include <sstream>
+#include <thread>
 
 #include <mrpt/maps/COccupancyGridMap3D.h>
 #include <mrpt/maps/COctoMap.h>
@@ -67,6 +70,24 @@ double median(std::vector<double> v) {
   return v.empty() ? 0.0 : v[v.size() / 2];
 }
 
+/// CPU seconds the hypervisor ran something else while this guest had work (the "steal" of
+/// /proc/stat), summed over the CPUs; 0 where the kernel does not count it.
+double stolenCpuSeconds() {
+  std::ifstream in("/proc/stat");
+  std::string cpu;
+  double user = 0, nice = 0, system = 0, idle = 0, iowait = 0, irq = 0, softirq = 0, steal = 0;
+  in >> cpu >> user >> nice >> system >> idle >> iowait >> irq >> softirq >> steal;
+  static const double ticks_per_second = double(sysconf(_SC_CLK_TCK));
+  return in && cpu == "cpu" ? steal / ticks_per_second : 0.0;
+}
+
+/// Minor page faults of this process so far: first touches of memory the heap got from the kernel.
+double minorFaults() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  return double(usage.ru_minflt);
+}
+
 double residentBytes() {
   std::ifstream in("/proc/self/statm");
   double pages = 0, resident = 0;
@@ -86,6 +107,8 @@ struct Method {
   virtual std::size_t fileBytes() const { return 0; }
   virtual const OccupancyMap* rtogMap() const { return nullptr; }
   virtual const octomap::OcTree* octree() const { return nullptr; }
+  /// Not a map but a yardstick of the machine, built in the same rounds (no map figures).
+  virtual bool calibration() const { return false; }
   /// A build that allocates so much memory (a dense grid: up to 1.7 GB) that the kernel, paging
   /// it in and out, keeps a core busy after it: builds after the other methods' rounds.
   virtual bool heavy() const { return false; }
@@ -258,6 +281,41 @@ class DenseGridMethod : public Method {
   std::unique_ptr<mrpt::maps::COccupancyGridMap3D> map_;
 };
 
+/// The machine's ceiling for two threads on this work, not a map of its own: two independent
+/// one-thread builds at once, one on a second thread. Built turn by turn with the maps, its
+/// throughput over one build's is what the second vCPU gave rtog's work at those moments
+/// (this VM has spells in which two busy vCPUs run slower than one), with nothing shared.
+class RtogPairMethod : public Method {
+ public:
+  RtogPairMethod(double res, MergePolicy merge, InsertParams ip) : ip_(ip) {
+    params_.resolution = res;
+    params_.merge = merge;
+  }
+  std::string name() const override { return "rtog beam, merge equal, two 1-thread builds at once"; }
+  bool calibration() const override { return true; }
+  double build(const Dataset& d) override {
+    OccupancyMap first(params_), second(params_);
+    const auto fill = [&](OccupancyMap& map) {
+      for (const Scan& s : d.scans) map.insertPointCloud(s.origin, s.points, ip_);
+      map.flush();
+    };
+    const auto t0 = Clock::now();
+    std::thread other([&] { fill(second); });
+    fill(first);
+    other.join();
+    const double s = seconds(t0, Clock::now());
+    if (first.leafCount() != second.leafCount()) throw std::logic_error("two builds of the same scans differ");
+    return s;
+  }
+  std::size_t structureBytes() const override { return 0; }
+  std::size_t leaves() const override { return 0; }
+  double queryNs(const std::vector<Eigen::Vector3d>&) const override { return 0; }
+
+ private:
+  MapParams params_;
+  InsertParams ip_;
+};
+
 bool selected(const Options& o, const std::string& method) {
   return o.methods.empty() || std::any_of(o.methods.begin(), o.methods.end(), [&](const std::string& s) {
            return method.find(s) != std::string::npos;
@@ -285,6 +343,7 @@ std::vector<std::unique_ptr<Method>> methodsFor(const Dataset& d, double res, co
       m.push_back(std::make_unique<OctomapMethod>(res, lazy, discretize, o.max_range));
   m.push_back(std::make_unique<MrptOctoMapMethod>(res));
   m.push_back(std::make_unique<DenseGridMethod>(res));
+  m.push_back(std::make_unique<RtogPairMethod>(res, MergePolicy::Equal, beam));
   (void)d;
   m.erase(std::remove_if(m.begin(), m.end(), [&](const auto& method) { return !selected(o, method->name()); }),
           m.end());
@@ -473,7 +532,8 @@ void runDataset(const Dataset& data, const Options& opts, std::vector<Result>& o
     // page faults and frees slowed the builds after it (rtog's 2-thread scaling on rot_scan
     // measured 1.45x with it, 2.13x without).
     std::vector<std::vector<double>> build_times(methods.size());
-    std::vector<double> rss_growth(methods.size(), 0.0);
+    std::vector<double> rss_growth(methods.size(), 0.0), stolen(methods.size(), 0.0),
+        faults(methods.size(), 0.0);
     for (const bool heavy_phase : {false, true})
       buildInRounds(
           opts, build_times, [&](std::size_t k) { return methods[k]->heavy() == heavy_phase; },
@@ -481,7 +541,10 @@ void runDataset(const Dataset& data, const Options& opts, std::vector<Result>& o
             const bool first = build_times[k].empty();
             if (first) malloc_trim(0);  // for the RSS growth; later builds reuse the heap, as a long run does
             const double rss0 = residentBytes();
+            const double steal0 = stolenCpuSeconds(), faults0 = minorFaults();
             const double s = methods[k]->build(data);
+            stolen[k] += stolenCpuSeconds() - steal0;
+            faults[k] += minorFaults() - faults0;
             if (first) rss_growth[k] = residentBytes() - rss0;
             return s;
           });
@@ -508,6 +571,21 @@ void runDataset(const Dataset& data, const Options& opts, std::vector<Result>& o
       r.insert_seconds = median(times);
       r.build_seconds = times;
       r.extra["repeats"] = double(times.size());
+      // Share of the machine's CPU time taken by other guests during these builds (the steal
+      // counter ticks in 10 ms steps: read it over all of a method's builds, not one).
+      double timed = 0;
+      for (const double t : times) timed += t;
+      const double cpus = double(std::max(1u, std::thread::hardware_concurrency()));
+      r.extra["steal_fraction"] = timed > 0 ? stolen[k] / (timed * cpus) : 0.0;
+      r.extra["minor_faults_per_build"] = times.empty() ? 0.0 : faults[k] / double(times.size());
+      if (m->calibration()) {
+        r.extra["calibration"] = 1;
+        log << "  " << std::left << std::setw(48) << r.method << " res " << res << ": " << std::fixed
+            << std::setprecision(4) << r.insert_seconds << " s\n";
+        log.unsetf(std::ios::floatfield);
+        out.push_back(r);
+        continue;
+      }
       r.points_per_second = double(data.points()) / r.insert_seconds;
       r.structure_bytes = m->structureBytes();
       r.leaves = m->leaves();

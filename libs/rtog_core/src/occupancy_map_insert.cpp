@@ -409,14 +409,16 @@ void OccupancyMap::applyUpdate(const UpdateBatch& batch, InsertStats& stats, int
 
 // Group g has the updates sources[first[g] .. first[g + 1]) of brick slots[g]. The arrays are
 // sized before grouping starts and never move: appliers read the groups published while later
-// ones are written.
-struct OccupancyMap::BrickGroups {
+// ones are written. What the grouper writes for every group (count), what the appliers poll
+// (published) and the vectors' headers they read for every group lie on cache lines of their own,
+// whatever the stack's offset: else each group's write would take the pollers' line away.
+struct alignas(64) OccupancyMap::BrickGroups {
   static constexpr std::size_t kPublishEvery = 16;
   std::vector<const UpdateBatch::BrickUpdates*> sources;
   std::vector<std::uint32_t> first, slots;
-  std::atomic<std::size_t> published{0};  // groups an applier may take
-  std::atomic<bool> done{false};          // `count` is final
-  std::size_t count = 0;
+  alignas(64) std::atomic<std::size_t> published{0};  // groups an applier may take
+  std::atomic<bool> done{false};                      // `count` is final
+  alignas(64) std::size_t count = 0;
 
   BrickGroups(std::size_t bricks, std::size_t updates) : sources(updates), first(bricks + 1, 0), slots(bricks) {}
   /// How many of groups [0, want) can be taken, waiting while they are being grouped; fewer
@@ -527,7 +529,7 @@ void OccupancyMap::applyUpdate(const std::vector<const UpdateBatch*>& batches, I
   const std::size_t n = std::min<std::size_t>(static_cast<std::size_t>(threads), 1 + largest / 64);
   if (contexts.size() < n) contexts.resize(n);
   constexpr std::size_t kGrain = 16;
-  std::atomic<std::size_t> next_group{0};
+  alignas(64) std::atomic<std::size_t> next_group{0};  // taken by every applier: a line of its own
   const auto work = [&](std::size_t t) {
     ApplyContext& ctx = contexts[t];
     ctx.local.assign(kBrickCells, -1);
