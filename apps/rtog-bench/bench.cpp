@@ -281,10 +281,11 @@ class DenseGridMethod : public Method {
   std::unique_ptr<mrpt::maps::COccupancyGridMap3D> map_;
 };
 
-/// The machine's ceiling for two threads on this work, not a map of its own: two independent
-/// one-thread builds at once, one on a second thread. Built turn by turn with the maps, its
-/// throughput over one build's is what the second vCPU gave rtog's work at those moments
-/// (this VM has spells in which two busy vCPUs run slower than one), with nothing shared.
+/// Not a map of its own but a yardstick of the machine: two independent one-thread builds at
+/// once, one on a second thread. Built turn by turn with the maps, its throughput over one
+/// build's is what two vCPUs gave rtog's work at those moments, nothing shared (this VM has
+/// spells in which two busy vCPUs each run slower than one). Not a bound: two maps fill twice
+/// the cache that one map built on two threads does.
 class RtogPairMethod : public Method {
  public:
   RtogPairMethod(double res, MergePolicy merge, InsertParams ip) : ip_(ip) {

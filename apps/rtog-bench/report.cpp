@@ -123,10 +123,10 @@ void writeMarkdown(const std::vector<Result>& results, const Options& opts, cons
      << "when the map can be read: rtog's timed build includes covering its planar cache (2D scans). The 2D\n"
      << "likelihood figure is the median of nine passes over all scans, after one pass to fill caches.\n\n"
      << "The machine is a shared 2-vCPU VM with spells in which two busy vCPUs each run slower than one.\n"
-     << "So beside the two-thread scaling stands this machine's ceiling for it, measured in the same\n"
-     << "rounds: the throughput of two independent one-thread builds run at once (nothing shared) over\n"
-     << "that of one build; and the steal, the share of the vCPUs' time the hypervisor gave others\n"
-     << "during the two-thread builds (/proc/stat).\n\n"
+     << "So beside the two-thread scaling stands what the machine gave two threads of the same work in\n"
+     << "the same rounds: the throughput of two independent one-thread builds at once over that of one\n"
+     << "(a yardstick, not a bound: two maps fill twice the cache one shared map does); and the steal,\n"
+     << "the share of the vCPUs' time the hypervisor gave others during the two-thread builds (/proc/stat).\n\n"
      << "Machine: " << m["cpu"].get<std::string>() << ", " << m["cores"].get<std::string>() << " cores, "
      << m["memory"].get<std::string>() << " RAM; " << m["compiler"].get<std::string>() << "; OctoMap "
      << m["octomap"].get<std::string>() << ", MRPT " << m["mrpt"].get<std::string>() << "; "
@@ -191,7 +191,7 @@ void writeMarkdown(const std::vector<Result>& results, const Options& opts, cons
     if (beam2) {
       // What the machine gave two threads of this work in the same rounds (two independent builds
       // at once), and the steal during the two-thread builds: a ratio measured on a shared VM
-      // needs both.
+      // needs both to be read.
       std::ostringstream context;
       if (const Result* pair = find(results, ds, res, "rtog beam, merge equal, two 1-thread builds at once"))
         context << " (two 1-thread builds at once: " << std::setprecision(3)
