@@ -585,7 +585,10 @@ void runDataset(const Dataset& data, const Options& opts, std::vector<Result>& o
       r.point_query_ns = m->queryNs(queries);
       r.file_bytes = m->fileBytes();
       if (m->octree() && r.method == "OctoMap") plain_octomap = m->octree();
-      if (m->rtogMap()) rtog_rows.push_back(out.size());
+      if (m->rtogMap()) {
+        rtog_rows.push_back(out.size());
+        r.extra["class_cover_leaves"] = double(m->rtogMap()->classCover().leaves());
+      }
       log << "  " << std::left << std::setw(48) << r.method << " res " << res << ": " << std::fixed
           << std::setprecision(4) << r.insert_seconds << " s, " << std::setprecision(2)
           << r.structure_bytes / 1048576.0 << " MiB, " << r.leaves << " leaves\n";

@@ -81,12 +81,15 @@ void saveMap(const OccupancyMap& map, const std::string& path) {
 
 void printStatistics(const OccupancyMap& map, std::ostream& out) {
   const MapStatistics s = map.statistics();
+  const ClassCover cover = map.classCover();
   const double res = map.resolution();
   out << "resolution        " << res << " m\n"
       << "merge policy      " << toString(map.params().merge) << "\n"
       << "leaves (cuboids)  " << s.leaves << "  (occupied " << s.occupied_leaves << ", free " << s.free_leaves
       << ")\n"
       << "cells covered     " << s.cells << "  (occupied " << s.occupied_cells << ", free " << s.free_cells << ")\n"
+      << "leaves by class   " << cover.leaves() << "  (occupied " << cover.occupied << ", free " << cover.free
+      << "), if only each cell's class were kept\n"
       << "cells per leaf    " << std::fixed << std::setprecision(2) << (s.leaves ? double(s.cells) / s.leaves : 0.0)
       << "\n"
       << "R-tree            height " << s.tree_height << ", " << s.tree_nodes << " nodes, " << s.bricks
@@ -112,6 +115,7 @@ int info(const std::string& map_path, bool json, std::ostream& out) {
     return 0;
   }
   const MapStatistics s = map.statistics();
+  const ClassCover cover = map.classCover();
   const LogOddsParams& lp = map.params().log_odds;
   nlohmann::json j = {{"resolution", map.resolution()},
                       {"merge", toString(map.params().merge)},
@@ -121,6 +125,7 @@ int info(const std::string& map_path, bool json, std::ostream& out) {
                       {"cells", s.cells},
                       {"occupied_cells", s.occupied_cells},
                       {"free_cells", s.free_cells},
+                      {"class_cover_leaves", {{"occupied", cover.occupied}, {"free", cover.free}}},
                       {"memory_bytes", s.memory_bytes},
                       {"bricks", s.bricks},
                       {"tree_height", s.tree_height},

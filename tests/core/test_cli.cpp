@@ -46,6 +46,9 @@ TEST(Cli, BuildsFromBundledTumDataAndReportsInfo) {
   EXPECT_EQ(loaded.checkInvariants(), "");
   ASSERT_EQ(run("info --json " + map, &out), 0);
   EXPECT_NE(out.find("\"leaves\": " + std::to_string(loaded.leafCount())), std::string::npos) << out;
+  const rtog::ClassCover cover = loaded.classCover();
+  EXPECT_LT(cover.leaves(), loaded.leafCount());
+  EXPECT_NE(out.find("\"occupied\": " + std::to_string(cover.occupied)), std::string::npos) << out;
 }
 
 TEST(Cli, BuildsFromMrptLogsWithAnIniMapDefinition) {

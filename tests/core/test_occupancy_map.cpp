@@ -247,6 +247,27 @@ TEST(OccupancyMap, QueriesMatchBruteForceOverCells) {
   }
 }
 
+TEST(OccupancyMapTum, ClassCoverKeepsEveryCellsClassInFewerLeaves) {
+  const OccupancyMap map = buildMap(MergePolicy::Equal);
+  const auto& m = map.logOddsModel();
+  std::unordered_map<Key, CellState, KeyHash> want;
+  map.forEachLeaf([&](const Box& b, float v) { forEachCell(b, [&](const Key& k) { want[k] = m.classify(v); }); });
+  std::unordered_map<Key, CellState, KeyHash> got;
+  std::size_t boxes = 0, occupied_boxes = 0;
+  const ClassCover cover = map.classCover([&](const Box& b, CellState state) {
+    ++boxes;
+    occupied_boxes += state == CellState::Occupied;
+    ASSERT_EQ(brickOf(b.min), brickOf(b.max)) << toString(b);
+    forEachCell(b, [&](const Key& k) { ASSERT_TRUE(got.emplace(k, state).second) << "overlap at " << toString(k); });
+  });
+  EXPECT_EQ(got, want);
+  EXPECT_EQ(cover.leaves(), boxes);
+  EXPECT_EQ(cover.occupied, occupied_boxes);
+  // Equal-value merging leaves free cells of different log-odds apart; a class cover joins them.
+  EXPECT_LT(cover.leaves(), map.leafCount());
+  EXPECT_EQ(map.classCover().leaves(), cover.leaves());
+}
+
 TEST(OccupancyMapTum, ThreadCountDoesNotChangeTheMap) {
   for (const bool discretize : {false, true}) {
     std::string bytes[2];

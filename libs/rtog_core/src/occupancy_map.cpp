@@ -1,6 +1,8 @@
 // Construction, queries and the invariant checker of the R-tree occupancy grid.
 #include "rtog/core/occupancy_map.hpp"
 
+#include "rtog/core/detail/cover.hpp"
+
 #include <cmath>
 #include <sstream>
 
@@ -296,6 +298,34 @@ MapStatistics OccupancyMap::statistics() const {
   s.memory_bytes = memoryBytes();
   s.bounds = upper_.bounds();
   return s;
+}
+
+ClassCover OccupancyMap::classCover(const std::function<void(const Box&, CellState)>& emit) const {
+  ensureCovered();
+  ClassCover counts;
+  for (const Brick& b : bricks_) {
+    detail::BrickMask by_class[2] = {};  // free, occupied
+    for (const LeafEntry& e : b.leaves) {
+      detail::BrickMask& m = by_class[model_.classify(e.value) == CellState::Occupied ? 1 : 0];
+      const std::uint64_t run = detail::xRun(e.lo[0], e.hi[0]);
+      for (int z = e.lo[2]; z <= e.hi[2]; ++z)
+        for (int y = e.lo[1]; y <= e.hi[1]; ++y) {
+          const int r = y + kBrickSize * z;
+          m[static_cast<std::size_t>(r >> 2)] |= run << ((r & 3) * kBrickSize);
+        }
+    }
+    const Key o = brickOrigin(b.brick);
+    for (const bool occupied : {false, true})
+      detail::coverGreedily(
+          by_class[occupied ? 1 : 0], [](int, int) { return true; },
+          [&](const std::uint8_t* lo, const std::uint8_t* hi, int) {
+            ++(occupied ? counts.occupied : counts.free);
+            if (emit)
+              emit(Box{Key{o.x + lo[0], o.y + lo[1], o.z + lo[2]}, Key{o.x + hi[0], o.y + hi[1], o.z + hi[2]}},
+                   occupied ? CellState::Occupied : CellState::Free);
+          });
+  }
+  return counts;
 }
 
 std::string OccupancyMap::checkInvariants() const {

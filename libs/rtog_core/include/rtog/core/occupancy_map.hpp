@@ -6,6 +6,7 @@
 #include <array>
 #include <atomic>
 #include <cstdint>
+#include <functional>
 #include <iosfwd>
 #include <memory>
 #include <mutex>
@@ -102,6 +103,12 @@ struct MapStatistics {
   std::size_t tree_nodes = 0;
   std::size_t memory_bytes = 0;
   Box bounds = Box::empty();
+};
+
+/// Leaves of a cover that keeps only each cell's class (see OccupancyMap::classCover).
+struct ClassCover {
+  std::size_t occupied = 0, free = 0;
+  std::size_t leaves() const { return occupied + free; }
 };
 
 /// Counts of cells in a box by state.
@@ -221,6 +228,10 @@ class OccupancyMap {
   }
   std::size_t memoryBytes() const;
   MapStatistics statistics() const;
+  /// Covers the known cells again with brick-bounded cuboids, greedily as insertion does, but
+  /// joining cells of one class whatever their log-odds; emit(box, state), if given, gets each
+  /// cuboid. How far a map that kept only classes would shrink (greedy: not a proven minimum).
+  ClassCover classCover(const std::function<void(const Box&, CellState)>& emit = {}) const;
 
   /// Empty if the R-tree (upper levels, leaf nodes, entries) and the brick index are sound
   /// and agree; else the first problem found.
