@@ -77,9 +77,22 @@ void run2D(const std::string& rawlog, const Options& opts, std::vector<Result>& 
 /// Runs every method on `data`; appends to `out`. Progress lines go to `log`.
 void runDataset(const Dataset& data, const Options& opts, std::vector<Result>& out, std::ostream& log);
 
-/// JSON with machine/version info; a Markdown report with target ratios and PASS/FAIL.
-void writeJson(const std::vector<Result>& results, const std::string& path);
-void writeMarkdown(const std::vector<Result>& results, const Options& opts, const std::string& path,
+/// What a report states about the run besides the results: machine, versions, date, rounds.
+struct RunInfo {
+  std::map<std::string, std::string> machine;
+  int repeats = Options{}.repeats;
+  double min_seconds = Options{}.min_seconds;
+};
+/// This machine, now, with the rounds of `opts`.
+RunInfo currentRun(const Options& opts);
+
+/// JSON of the results and the run; a Markdown report with target ratios and PASS/FAIL.
+void writeJson(const std::vector<Result>& results, const RunInfo& run, const std::string& path);
+/// Reads writeJson's file back (for a report re-rendered without measuring again). A file from
+/// before the rounds were recorded gets the default rounds. Throws std::runtime_error naming
+/// what is missing or malformed.
+std::vector<Result> readJson(const std::string& path, RunInfo& run);
+void writeMarkdown(const std::vector<Result>& results, const RunInfo& run, const std::string& path,
                    const std::string& img_dir);
 
 }  // namespace rtog::bench

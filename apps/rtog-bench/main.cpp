@@ -27,10 +27,21 @@ int main(int argc, char** argv) {
   app.add_option("--json", json, "JSON output")->capture_default_str();
   app.add_option("--markdown", markdown, "Markdown report")->capture_default_str();
   app.add_option("--img-dir", img_dir, "Directory for PNG plots")->capture_default_str()->check(CLI::ExistingDirectory);
+  std::string from_json;
+  app.add_option("--from-json", from_json, "Render the Markdown report and plots from this JSON; measure nothing")
+      ->check(CLI::ExistingFile);
   app.add_option("--raster-dir", opts.raster_dir, "Write each dataset's first rtog map as a byte-per-cell raster here")
       ->check(CLI::ExistingDirectory);
   CLI11_PARSE(app, argc, argv);
   try {
+    if (!from_json.empty()) {
+      rtog::bench::RunInfo run;
+      const auto results = rtog::bench::readJson(from_json, run);
+      rtog::bench::writeMarkdown(results, run, markdown, img_dir);
+      std::cout << "wrote " << markdown << " from " << from_json << "\n";
+      return 0;
+    }
+    const rtog::bench::RunInfo run = rtog::bench::currentRun(opts);
     std::vector<rtog::bench::Result> results;
     const auto wanted = [&](const std::string& n) { return only.empty() || std::find(only.begin(), only.end(), n) != only.end(); };
     std::vector<rtog::bench::Dataset> sets;
@@ -45,8 +56,8 @@ int main(int argc, char** argv) {
       std::cout << data.name << ": " << data.points() << " points\n";
       rtog::bench::runDataset(data, opts, results, std::cout);
     }
-    rtog::bench::writeJson(results, json);
-    rtog::bench::writeMarkdown(results, opts, markdown, img_dir);
+    rtog::bench::writeJson(results, run, json);
+    rtog::bench::writeMarkdown(results, run, markdown, img_dir);
     std::cout << "wrote " << json << ", " << markdown << "\n";
   } catch (const std::exception& e) {
     std::cerr << "rtog-bench: error: " << e.what() << "\n";

@@ -19,7 +19,7 @@
 namespace rtog::bench {
 namespace {
 
-std::string run(const char* cmd) {
+std::string shellOutput(const char* cmd) {
   std::array<char, 256> buf{};
   std::string out;
   std::unique_ptr<FILE, int (*)(FILE*)> p(popen(cmd, "r"), pclose);
@@ -29,14 +29,14 @@ std::string run(const char* cmd) {
   return out;
 }
 
-nlohmann::json machine() {
-  return {{"cpu", run("grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //'")},
-          {"cores", run("nproc")},
-          {"memory", run("free -h | awk '/Mem:/{print $2}'")},
-          {"compiler", run("c++ --version | head -1")},
-          {"octomap", run("dpkg-query -W -f='${Version}' liboctomap-dev")},
-          {"mrpt", run("dpkg-query -W -f='${Version}' libmrpt-dev")},
-          {"date", run("date -u +%Y-%m-%dT%H:%MZ")}};
+std::map<std::string, std::string> machine() {
+  return {{"cpu", shellOutput("grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //'")},
+          {"cores", shellOutput("nproc")},
+          {"memory", shellOutput("free -h | awk '/Mem:/{print $2}'")},
+          {"compiler", shellOutput("c++ --version | head -1")},
+          {"octomap", shellOutput("dpkg-query -W -f='${Version}' liboctomap-dev")},
+          {"mrpt", shellOutput("dpkg-query -W -f='${Version}' libmrpt-dev")},
+          {"date", shellOutput("date -u +%Y-%m-%dT%H:%MZ")}};
 }
 
 const Result* find(const std::vector<Result>& rs, const std::string& dataset, double res, const std::string& method) {
@@ -84,9 +84,18 @@ std::string slug(std::string s) {
   return s;
 }
 
-void writeJson(const std::vector<Result>& results, const std::string& path) {
+RunInfo currentRun(const Options& opts) {
+  RunInfo info;
+  info.machine = machine();
+  info.repeats = opts.repeats;
+  info.min_seconds = opts.min_seconds;
+  return info;
+}
+
+void writeJson(const std::vector<Result>& results, const RunInfo& run, const std::string& path) {
   nlohmann::json j;
-  j["machine"] = machine();
+  j["machine"] = run.machine;
+  j["rounds"] = {{"repeats", run.repeats}, {"min_seconds", run.min_seconds}};
   for (const auto& r : results)
     j["results"].push_back({{"dataset", r.dataset},
                             {"method", r.method},
@@ -106,15 +115,53 @@ void writeJson(const std::vector<Result>& results, const std::string& path) {
   if (!out) throw std::runtime_error("cannot write " + path);
 }
 
-void writeMarkdown(const std::vector<Result>& results, const Options& opts, const std::string& path,
+std::vector<Result> readJson(const std::string& path, RunInfo& run) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error("cannot read " + path);
+  std::vector<Result> results;
+  try {
+    const nlohmann::json j = nlohmann::json::parse(in);
+    run = RunInfo{};
+    run.machine = j.at("machine").get<std::map<std::string, std::string>>();
+    if (j.contains("rounds")) {
+      run.repeats = j["rounds"].at("repeats").get<int>();
+      run.min_seconds = j["rounds"].at("min_seconds").get<double>();
+    }
+    for (const auto& e : j.at("results")) {
+      Result r;
+      r.dataset = e.at("dataset").get<std::string>();
+      r.method = e.at("method").get<std::string>();
+      r.resolution = e.at("resolution").get<double>();
+      r.insert_seconds = e.at("insert_seconds_median").get<double>();
+      r.build_seconds = e.at("build_seconds").get<std::vector<double>>();
+      r.points_per_second = e.at("points_per_second").get<double>();
+      r.structure_bytes = e.at("structure_bytes").get<std::size_t>();
+      r.rss_growth_bytes = e.at("rss_growth_bytes").get<double>();
+      r.leaves = e.at("leaves").get<std::size_t>();
+      r.point_query_ns = e.at("point_query_ns").get<double>();
+      r.file_bytes = e.at("file_bytes").get<std::size_t>();
+      r.octomap_agreement = e.at("octomap_class_agreement").get<double>();
+      r.extra = e.at("extra").get<std::map<std::string, double>>();
+      results.push_back(std::move(r));
+    }
+  } catch (const nlohmann::json::exception& e) {
+    throw std::runtime_error(path + ": not a benchmark JSON file (" + e.what() + ")");
+  }
+  return results;
+}
+
+void writeMarkdown(const std::vector<Result>& results, const RunInfo& run, const std::string& path,
                    const std::string& img_dir) {
   std::ostringstream md;
-  const nlohmann::json m = machine();
+  const auto field = [&](const char* key) {
+    const auto it = run.machine.find(key);
+    return it == run.machine.end() ? std::string("?") : it->second;
+  };
   md << "# Benchmarks\n\nMeasured by `rtog-bench` (Release build), every method in one process on the same scans,\n"
      << "resolution and sensor model (OctoMap's defaults). Insertion time is the median of the builds of "
-     << opts.repeats << "\nrounds. Every method builds in every round, a fast one again until "
-     << opts.min_seconds / opts.repeats << " s of its builds were timed\nin that round (at most "
-     << std::max(1, kMaxBuilds / opts.repeats) << " builds a round; the count is in the JSON), the fast methods taking "
+     << run.repeats << "\nrounds. Every method builds in every round, a fast one again until "
+     << run.min_seconds / run.repeats << " s of its builds were timed\nin that round (at most "
+     << std::max(1, kMaxBuilds / run.repeats) << " builds a round; the count is in the JSON), the fast methods taking "
         "turns\nbuild by build, so that all methods' builds sample the same slow spells of the machine and their "
         "ratios\nhold. The dense 3D grid (up to 1.7 GB a build) goes in\n"
      << "rounds of its own after the others, as its paging slowed the builds\n"
@@ -127,12 +174,12 @@ void writeMarkdown(const std::vector<Result>& results, const Options& opts, cons
      << "the same rounds: the throughput of two independent one-thread builds at once over that of one\n"
      << "(a yardstick, not a bound: two maps fill twice the cache one shared map does); and the steal,\n"
      << "the share of the vCPUs' time the hypervisor gave others during the two-thread builds (/proc/stat).\n\n"
-     << "Machine: " << m["cpu"].get<std::string>() << ", " << m["cores"].get<std::string>() << " cores, "
-     << m["memory"].get<std::string>() << " RAM; " << m["compiler"].get<std::string>() << "; OctoMap "
-     << m["octomap"].get<std::string>() << ", MRPT " << m["mrpt"].get<std::string>() << "; "
-     << m["date"].get<std::string>() << ".\n\n"
+     << "Machine: " << field("cpu") << ", " << field("cores") << " cores, " << field("memory") << " RAM; "
+     << field("compiler") << "; OctoMap " << field("octomap") << ", MRPT " << field("mrpt") << "; "
+     << field("date") << ".\n\n"
      << "Reproduce: `./build/apps/rtog-bench/rtog-bench --markdown doc/benchmarks.md --json doc/benchmarks.json "
-        "--img-dir doc/img`\n\n";
+        "--img-dir doc/img`; to render this report again from the JSON without measuring, "
+        "`--from-json doc/benchmarks.json` in place of `--json`.\n\n";
 
   std::set<std::pair<std::string, double>> groups;
   for (const auto& r : results) groups.insert({r.dataset, r.resolution});
@@ -165,20 +212,25 @@ void writeMarkdown(const std::vector<Result>& results, const Options& opts, cons
          << " |\n";
     }
     if (!oct || !beam) continue;
-    const auto row = [&](const std::string& target, double value, bool pass, const std::string& unit) {
+    const auto row = [&](const std::string& target, double value, bool pass, const std::string& unit,
+                         const char* not_a_target = nullptr) {
       md << "| " << ds << " | " << res << " | " << target << " | " << std::setprecision(3) << value << unit << " | "
-         << (pass ? "PASS" : "FAIL") << " |\n";
+         << (not_a_target ? not_a_target : pass ? "PASS" : "FAIL") << " |\n";
     };
+    // The issue sets the insertion-speed target at 0.05 m; other resolutions are shown for reference.
+    const char* speed_scope = std::abs(res - 0.05) < 1e-9 ? nullptr : "– (target set at 0.05 m)";
     const Result* fastest = beam;
     for (const Result* c : {beam2, disc2})
       if (c && c->insert_seconds < fastest->insert_seconds) fastest = c;
     row("insertion ≥ 20× faster than OctoMap's best (" + oct->method + "), best rtog mode (" + fastest->method + ")",
-        oct->insert_seconds / fastest->insert_seconds, oct->insert_seconds / fastest->insert_seconds >= 20.0, "×");
+        oct->insert_seconds / fastest->insert_seconds, oct->insert_seconds / fastest->insert_seconds >= 20.0, "×",
+        speed_scope);
     // The same target on one thread, OctoMap having only one.
     const Result* disc = find(results, ds, res, "rtog beam discretize, merge equal");
     const Result* fastest1 = disc && disc->insert_seconds < beam->insert_seconds ? disc : beam;
     row("insertion ≥ 20× faster than OctoMap's best, on one thread (" + fastest1->method + ")",
-        oct->insert_seconds / fastest1->insert_seconds, oct->insert_seconds / fastest1->insert_seconds >= 20.0, "×");
+        oct->insert_seconds / fastest1->insert_seconds, oct->insert_seconds / fastest1->insert_seconds >= 20.0, "×",
+        speed_scope);
     if (octplain)
       row("memory ≤ 0.5× OctoMap memoryUsage()", double(beam->structure_bytes) / double(octplain->structure_bytes),
           double(beam->structure_bytes) <= 0.5 * double(octplain->structure_bytes), "×");
