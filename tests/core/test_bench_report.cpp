@@ -1,0 +1,96 @@
+// The benchmark's report on the committed run (doc/benchmarks.json): the JSON reads back as it
+// was written, and the Markdown's insertion-speed verdicts follow from the raw build times.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <fstream>
+#include <limits>
+#include <set>
+#include <sstream>
+#include <string>
+
+#include "bench.hpp"
+
+using namespace rtog::bench;
+
+namespace {
+
+const std::string kRun = RTOG_BENCH_JSON;
+
+std::string slurp(const std::string& path) {
+  std::ifstream in(path);
+  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
+TEST(BenchReport, JsonReadsBackAsWritten) {
+  RunInfo run;
+  const std::vector<Result> results = readJson(kRun, run);
+  ASSERT_GT(results.size(), 40u);
+  std::set<std::string> datasets;
+  for (const auto& r : results) datasets.insert(r.dataset);
+  EXPECT_EQ(datasets.size(), 4u);
+  EXPECT_FALSE(run.machine.at("cpu").empty());
+
+  const std::string copy = ::testing::TempDir() + "/bench_copy.json";
+  writeJson(results, run, copy);
+  RunInfo again;
+  const std::vector<Result> back = readJson(copy, again);
+  ASSERT_EQ(back.size(), results.size());
+  EXPECT_EQ(again.machine, run.machine);
+  EXPECT_EQ(again.repeats, run.repeats);
+  for (std::size_t i = 0; i < back.size(); ++i) {
+    EXPECT_EQ(back[i].method, results[i].method);
+    EXPECT_EQ(back[i].insert_seconds, results[i].insert_seconds);
+    EXPECT_EQ(back[i].build_seconds, results[i].build_seconds);
+    EXPECT_EQ(back[i].structure_bytes, results[i].structure_bytes);
+    EXPECT_EQ(back[i].extra, results[i].extra);
+  }
+}
+
+TEST(BenchReport, BrokenJsonIsAnError) {
+  RunInfo run;
+  EXPECT_THROW(readJson(::testing::TempDir() + "/no_such_run.json", run), std::runtime_error);
+  const std::string text = slurp(kRun);
+  const std::string cut = ::testing::TempDir() + "/bench_cut.json";
+  std::ofstream(cut) << text.substr(0, text.size() / 2);
+  EXPECT_THROW(readJson(cut, run), std::runtime_error);
+  const std::string wrong = ::testing::TempDir() + "/bench_wrong.json";
+  std::ofstream(wrong) << R"({"machine": {}, "results": [{"dataset": "x", "method": 3}]})";
+  EXPECT_THROW(readJson(wrong, run), std::runtime_error);
+}
+
+TEST(BenchReport, SpeedVerdictsFollowFromTheBuildTimes) {
+  RunInfo run;
+  const std::vector<Result> results = readJson(kRun, run);
+  const std::string md_path = ::testing::TempDir() + "/bench_report.md";
+  writeMarkdown(results, run, md_path, ::testing::TempDir());
+  std::istringstream md(slurp(md_path));
+  int rows = 0;
+  for (std::string line; std::getline(md, line);) {
+    const std::string marker = "insertion ≥ 20× faster than OctoMap's best (";
+    if (line.find(marker) == std::string::npos) continue;
+    ++rows;
+    // | dataset | res | target | measured | verdict |
+    std::vector<std::string> cells;
+    for (std::size_t p = 1, q; (q = line.find(" |", p)) != std::string::npos; p = q + 2)
+      cells.push_back(line.substr(p + 1, q - p - 1));
+    ASSERT_EQ(cells.size(), 5u) << line;
+    const double res = std::stod(cells[1]);
+    double octomap = std::numeric_limits<double>::infinity(), rtog = octomap;
+    for (const auto& r : results) {
+      if (r.dataset != cells[0] || r.resolution != res) continue;
+      if (r.method.rfind("OctoMap", 0) == 0) octomap = std::min(octomap, r.insert_seconds);
+      if (r.method == "rtog beam, merge equal" || r.method == "rtog beam, merge equal, 2 threads" ||
+          r.method == "rtog beam discretize, merge equal, 2 threads")
+        rtog = std::min(rtog, r.insert_seconds);
+    }
+    const double ratio = octomap / rtog;
+    EXPECT_NEAR(std::stod(cells[3]), ratio, 0.006 * ratio) << line;
+    const std::string want = res == 0.05 ? (ratio >= 20.0 ? "PASS" : "FAIL") : "– (target set at 0.05 m)";
+    EXPECT_EQ(cells[4], want) << line;
+  }
+  EXPECT_EQ(rows, 6);  // three 3D datasets at two resolutions
+}
+
+}  // namespace
