@@ -3,6 +3,9 @@
 // planar batch marks the same cells.
 #include <gtest/gtest.h>
 
+#include <array>
+#include <cstdio>
+#include <map>
 #include <random>
 #include <set>
 #include <string>
@@ -293,4 +296,70 @@ TEST(RayTraversal, FanSkipsMarkTheUnionOfTheWholeWalks) {
   }
   // The skips are not idle: a fifth of the runs or more.
   EXPECT_GT(skipped * 5, runs);
+}
+
+namespace {
+
+// A finalized batch's free marks: brick key -> the brick's free words.
+std::map<Key, std::array<std::uint64_t, kBrickWords>> freeMarks(UpdateBatch& batch) {
+  batch.finalize();
+  std::map<Key, std::array<std::uint64_t, kBrickWords>> marks;
+  for (const UpdateBatch::BrickUpdates* b : batch.bricks()) marks[b->brick] = b->free;
+  return marks;
+}
+
+}  // namespace
+
+// Queued rays (walked eight at a time in AVX2 lanes through a dense window, where the CPU has
+// AVX2) mark exactly what markRayFree marks ray by ray: segments from a shared start and from
+// scattered ones, from cell corners (every crossing a tie), exact diagonals, axis-parallel and
+// planar ones, zero-length ones, negative keys, and rays too long for the window.
+TEST(RayTraversal, QueuedRaysMarkWhatEachWalkMarks) {
+  std::mt19937 rng(33);
+  std::uniform_real_distribution<double> c(-1.0, 1.0), len(0.0, 90.0);
+  std::uniform_int_distribution<int> ci(-60, 60), kind(0, 7);
+  const bool avx2 = __builtin_cpu_supports("avx2");
+  std::printf("[ lanes    ] AVX2 %s\n", avx2 ? "on this CPU: lanes walked" : "absent: every ray walked alone");
+  for (int round = 0; round < 12; ++round) {
+    UpdateBatch queued, wide_off, one_by_one;
+    const Eigen::Vector3d shared(c(rng) * 30.0, c(rng) * 30.0, c(rng) * 10.0);
+    const int rays = round == 0 ? 20000 : 3000;  // round 0 fills the queue more than twice
+    for (int i = 0; i < rays; ++i) {
+      Eigen::Vector3d a = round % 3 == 2 ? Eigen::Vector3d(c(rng) * 60.0, c(rng) * 60.0, c(rng) * 20.0) : shared;
+      Eigen::Vector3d b = a + Eigen::Vector3d(c(rng), c(rng), 0.4 * c(rng)).normalized() * len(rng);
+      switch (kind(rng)) {
+        case 1:  // cell corners
+          a = Eigen::Vector3d(ci(rng), ci(rng), ci(rng) / 3), b = Eigen::Vector3d(ci(rng), ci(rng), ci(rng) / 3);
+          break;
+        case 2: {  // exact diagonal in x, y and z
+          const double s = 40.0 * c(rng);
+          b = a + Eigen::Vector3d(s, i % 2 ? s : -s, s);
+          break;
+        }
+        case 3:  // axis-parallel in one axis
+          b[i % 3] = a[i % 3];
+          break;
+        case 4:  // planar: walked in the exact integer form, never in lanes
+          b.z() = a.z();
+          break;
+        case 5:  // far beyond any window
+          b = a + (b - a) * 40.0;
+          break;
+        case 6:  // zero length
+          b = a;
+          break;
+        default: break;
+      }
+      const Key ka = floorKey(a), kb = floorKey(b);
+      queued.queueRayFree(a, b, ka, kb);
+      wide_off.queueRayFree(a, b, ka, kb);
+      if (i % 997 == 0) wide_off.walkQueued(/*wide=*/false);
+      one_by_one.markRayFree(a, b, ka, kb);
+    }
+    wide_off.walkQueued(false);
+    const auto want = freeMarks(one_by_one);
+    ASSERT_GT(want.size(), 10u);
+    ASSERT_TRUE(freeMarks(queued) == want) << "round " << round;
+    ASSERT_TRUE(freeMarks(wide_off) == want) << "round " << round;
+  }
 }

@@ -399,7 +399,7 @@ void OccupancyMap::traceBeams(const Eigen::Vector3d& origin, const Eigen::Vector
       if (hit) batch.markOccupied(end_key);
       end_l = lattice_.toLattice(end);
     }
-    if (trace) batch.markRayFree(origin_l, end_l, origin_key, end_key);
+    if (trace) batch.queueRayFree(origin_l, end_l, origin_key, end_key);
   }
 }
 

@@ -4,8 +4,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <type_traits>
 #include <numeric>
+
+#if defined(__x86_64__)
+#include <immintrin.h>
+#endif
 
 namespace rtog {
 
@@ -17,6 +22,7 @@ void UpdateBatch::clear() {
   sorted_codes_.clear();
   cached_ = nullptr;
   recent_.clear();
+  queued_.clear();
 }
 
 std::uint32_t UpdateBatch::brickSlot(const Key& b) {
@@ -62,13 +68,268 @@ void UpdateBatch::markRayFree(const Eigen::Vector3d& from, const Eigen::Vector3d
   walkRay(from, to, from_key, to_key, cursor);
 }
 
+namespace {
+
+#if defined(__x86_64__)
+// Window geometry: bricks along each axis a power of two, so that a step into the next brick
+// moves a word offset by a shift of the step.
+struct Window {
+  Key origin;   // brick coordinates of the window's first brick
+  int bits[3];  // log2 of the bricks along each axis
+  std::size_t bricks() const { return std::size_t{1} << (bits[0] + bits[1] + bits[2]); }
+  std::int64_t wordOffset(const Key& cell) const {
+    const std::int64_t bx = (cell.x >> kBrickBits) - origin.x, by = (cell.y >> kBrickBits) - origin.y,
+                       bz = (cell.z >> kBrickBits) - origin.z;
+    return ((bz << (bits[0] + bits[1])) | (by << bits[0]) | bx) * kBrickWords;
+  }
+};
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+// One ray in walkRay's floating-point form (its 3D branch): a lane's state.
+struct LaneRay {
+  double t[3], dt[3];
+  std::int64_t left[3];  // steps left along each axis
+  std::int64_t dir[3];
+  std::int64_t local[3];  // the current cell in its brick
+  std::int64_t word;      // window word offset of the current cell's brick
+  std::int64_t steps;
+};
+
+void setUpLane(const UpdateBatch::QueuedRay& q, const Window& w, LaneRay& r) {
+  int step[3];
+  r.steps = detail::setUpWalk(q.from, q.to, q.from_key, q.to_key, step, r.t, r.dt);
+  for (int a = 0; a < 3; ++a) {
+    const std::int64_t diff = std::int64_t{q.to_key[a]} - q.from_key[a];
+    r.left[a] = diff < 0 ? -diff : diff;
+    r.dir[a] = step[a];
+    r.local[a] = q.from_key[a] & (kBrickSize - 1);
+  }
+  r.word = w.wordOffset(q.from_key);
+}
+
+// Eight rays in two groups of four AVX2 lanes: each step is branch-free (the axis by compares
+// and blends, a brick change by a shifted carry), so the two groups' dependency chains overlap
+// instead of waiting on mispredicted branches. A lane whose ray ends takes the next ray.
+__attribute__((target("avx2"))) void walkLanes(const std::vector<UpdateBatch::QueuedRay>& queued,
+                                               const std::vector<std::uint32_t>& rays, const Window& w,
+                                               std::uint64_t* window) {
+  constexpr int kGroups = 2, kLanes = 4 * kGroups;
+  alignas(32) double t[kGroups][3][4], dt[kGroups][3][4];
+  alignas(32) std::int64_t left[kGroups][3][4], dir[kGroups][3][4], local[kGroups][3][4], word[kGroups][4];
+  std::int64_t steps[kLanes];
+  std::size_t next = 0;
+  int live = 0;
+  // A lane without a ray stands still (no direction, no axis ever at its end) and marks a
+  // scratch brick just before the window.
+  const auto load = [&](int lane) {
+    const int g = lane / 4, j = lane % 4;
+    while (next < rays.size()) {
+      LaneRay r;
+      setUpLane(queued[rays[next++]], w, r);
+      if (r.steps == 0) continue;
+      for (int a = 0; a < 3; ++a) {
+        t[g][a][j] = r.t[a];
+        dt[g][a][j] = r.dt[a];
+        left[g][a][j] = r.left[a];
+        dir[g][a][j] = r.dir[a];
+        local[g][a][j] = r.local[a];
+      }
+      word[g][j] = r.word;
+      steps[lane] = r.steps;
+      return true;
+    }
+    for (int a = 0; a < 3; ++a) {
+      t[g][a][j] = dt[g][a][j] = 0.0;
+      left[g][a][j] = -1;
+      dir[g][a][j] = local[g][a][j] = 0;
+    }
+    word[g][j] = -kBrickWords;  // marks go to the scratch brick in front of the window
+    steps[lane] = std::numeric_limits<std::int64_t>::max();
+    return false;
+  };
+  for (int lane = 0; lane < kLanes; ++lane) live += load(lane);
+  const __m256d inf = _mm256_set1_pd(kInf);
+  const __m256i low4 = _mm256_set1_epi64x(kBrickSize - 1), zero = _mm256_setzero_si256(),
+                one = _mm256_set1_epi64x(1), low6 = _mm256_set1_epi64x(63), all = _mm256_set1_epi64x(-1);
+  const __m128i carry_shift[3] = {_mm_cvtsi32_si128(6), _mm_cvtsi32_si128(6 + w.bits[0]),
+                                  _mm_cvtsi32_si128(6 + w.bits[0] + w.bits[1])};
+  while (live > 0) {
+    __m256d T[kGroups][3];
+    __m256i left_v[kGroups][3], local_v[kGroups][3], word_v[kGroups];
+    for (int g = 0; g < kGroups; ++g) {
+      for (int a = 0; a < 3; ++a) {
+        T[g][a] = _mm256_load_pd(t[g][a]);
+        left_v[g][a] = _mm256_load_si256(reinterpret_cast<const __m256i*>(left[g][a]));
+        local_v[g][a] = _mm256_load_si256(reinterpret_cast<const __m256i*>(local[g][a]));
+      }
+      word_v[g] = _mm256_load_si256(reinterpret_cast<const __m256i*>(word[g]));
+    }
+    std::int64_t run = steps[0];
+    for (int lane = 1; lane < kLanes; ++lane) run = std::min(run, steps[lane]);
+    for (std::int64_t step = 0; step < run; ++step)
+      for (int g = 0; g < kGroups; ++g) {
+        const __m256i cell = _mm256_or_si256(
+            local_v[g][0], _mm256_or_si256(_mm256_slli_epi64(local_v[g][1], kBrickBits),
+                                           _mm256_slli_epi64(local_v[g][2], 2 * kBrickBits)));
+        const __m256i at = _mm256_add_epi64(word_v[g], _mm256_srli_epi64(cell, 6));
+        const __m256i bit = _mm256_sllv_epi64(one, _mm256_and_si256(cell, low6));
+        const __m128i at_lo = _mm256_castsi256_si128(at), at_hi = _mm256_extracti128_si256(at, 1);
+        const __m128i bit_lo = _mm256_castsi256_si128(bit), bit_hi = _mm256_extracti128_si256(bit, 1);
+        window[_mm_cvtsi128_si64(at_lo)] |= static_cast<std::uint64_t>(_mm_cvtsi128_si64(bit_lo));
+        window[_mm_extract_epi64(at_lo, 1)] |= static_cast<std::uint64_t>(_mm_extract_epi64(bit_lo, 1));
+        window[_mm_cvtsi128_si64(at_hi)] |= static_cast<std::uint64_t>(_mm_cvtsi128_si64(bit_hi));
+        window[_mm_extract_epi64(at_hi, 1)] |= static_cast<std::uint64_t>(_mm_extract_epi64(bit_hi, 1));
+        // walkRay's choice: x if tx <= ty and tx <= tz, else y if ty <= tz, else z.
+        const __m256d x_first = _mm256_and_pd(_mm256_cmp_pd(T[g][0], T[g][1], _CMP_LE_OQ),
+                                              _mm256_cmp_pd(T[g][0], T[g][2], _CMP_LE_OQ));
+        const __m256d y_first = _mm256_andnot_pd(x_first, _mm256_cmp_pd(T[g][1], T[g][2], _CMP_LE_OQ));
+        const __m256d z_first = _mm256_andnot_pd(_mm256_or_pd(x_first, y_first), _mm256_castsi256_pd(all));
+        const __m256d chosen[3] = {x_first, y_first, z_first};
+        for (int a = 0; a < 3; ++a) {
+          const __m256i step_mask = _mm256_castpd_si256(chosen[a]);
+          left_v[g][a] = _mm256_add_epi64(left_v[g][a], step_mask);  // -1 where this axis steps
+          const __m256d at_end = _mm256_castsi256_pd(_mm256_cmpeq_epi64(left_v[g][a], zero));
+          const __m256d next_t =
+              _mm256_blendv_pd(_mm256_add_pd(T[g][a], _mm256_load_pd(dt[g][a])), inf, at_end);
+          T[g][a] = _mm256_blendv_pd(T[g][a], next_t, chosen[a]);
+          const __m256i moved = _mm256_add_epi64(
+              local_v[g][a],
+              _mm256_and_si256(_mm256_load_si256(reinterpret_cast<const __m256i*>(dir[g][a])), step_mask));
+          // Out of the brick: moved >> 4 is 1, or for -1 all ones but the top four bits, which the
+          // shift by the axis's word stride (>= 6 bits) pushes out, leaving minus that stride.
+          word_v[g] = _mm256_add_epi64(word_v[g], _mm256_sll_epi64(_mm256_srli_epi64(moved, kBrickBits),
+                                                                   carry_shift[a]));
+          local_v[g][a] = _mm256_and_si256(moved, low4);
+        }
+      }
+    for (int g = 0; g < kGroups; ++g) {
+      for (int a = 0; a < 3; ++a) {
+        _mm256_store_pd(t[g][a], T[g][a]);
+        _mm256_store_si256(reinterpret_cast<__m256i*>(left[g][a]), left_v[g][a]);
+        _mm256_store_si256(reinterpret_cast<__m256i*>(local[g][a]), local_v[g][a]);
+      }
+      _mm256_store_si256(reinterpret_cast<__m256i*>(word[g]), word_v[g]);
+    }
+    for (int lane = 0; lane < kLanes; ++lane) {
+      steps[lane] -= run;
+      if (steps[lane] == 0) live += load(lane) ? 0 : -1;
+    }
+  }
+}
+#endif
+
+}  // namespace
+
+void UpdateBatch::walkQueued(bool wide) {
+  if (queued_.empty()) return;
+  lane_rays_.clear();
+#if defined(__x86_64__)
+  static const bool avx2 = __builtin_cpu_supports("avx2");
+  // A segment within one z-layer is walked in walkRay's exact integer form: not in lanes.
+  if (wide && avx2)
+    for (std::uint32_t i = 0; i < queued_.size(); ++i)
+      if (queued_[i].from_key.z != queued_[i].to_key.z) lane_rays_.push_back(i);
+#else
+  (void)wide;
+#endif
+  const bool windowed = !lane_rays_.empty() && walkInWindow(lane_rays_);
+  std::size_t next_lane = 0;
+  for (std::uint32_t i = 0; i < queued_.size(); ++i) {
+    if (windowed && next_lane < lane_rays_.size() && lane_rays_[next_lane] == i) {
+      ++next_lane;
+      continue;
+    }
+    const QueuedRay& q = queued_[i];
+    markRayFree(q.from, q.to, q.from_key, q.to_key);
+  }
+  queued_.clear();
+}
+
+bool UpdateBatch::walkInWindow(std::vector<std::uint32_t>& lanes) {
+#if defined(__x86_64__)
+  // At most 2^13 bricks (4 MiB): the whole window is swept for marks after each walk.
+  constexpr int kMaxBits = 13;
+  const auto bitsFor = [](std::int64_t extent) {
+    int b = 0;
+    while ((std::int64_t{1} << b) < extent) ++b;
+    return b;
+  };
+  const auto boundsOf = [&](Key& lo, Key& hi) {
+    lo = hi = brickOf(queued_[lanes.front()].from_key);
+    for (const std::uint32_t i : lanes)
+      for (const Key& k : {queued_[i].from_key, queued_[i].to_key}) {
+        const Key b = brickOf(k);
+        for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], b[a]), hi[a] = std::max(hi[a], b[a]);
+      }
+  };
+  Key lo, hi;
+  boundsOf(lo, hi);
+  Window w{lo, {0, 0, 0}};
+  const auto fit = [&] {
+    int total = 0;
+    for (int a = 0; a < 3; ++a) total += w.bits[a] = bitsFor(std::int64_t{hi[a]} - lo[a] + 1);
+    return total <= kMaxBits;
+  };
+  if (!fit()) {
+    // Keep the rays within 16 x 16 x 8 bricks around where the first one starts.
+    const Key c = brickOf(queued_[lanes.front()].from_key);
+    const Key box_lo{c.x - 8, c.y - 8, c.z - 4}, box_hi{c.x + 7, c.y + 7, c.z + 3};
+    const auto inside = [&](const Key& k) {
+      const Key b = brickOf(k);
+      for (int a = 0; a < 3; ++a)
+        if (b[a] < box_lo[a] || b[a] > box_hi[a]) return false;
+      return true;
+    };
+    const auto outside = [&](std::uint32_t i) { return !inside(queued_[i].from_key) || !inside(queued_[i].to_key); };
+    lanes.erase(std::remove_if(lanes.begin(), lanes.end(), outside), lanes.end());
+    if (lanes.empty()) return false;
+    boundsOf(lo, hi);
+    w.origin = lo;
+    if (!fit()) return false;
+  }
+  // One scratch brick in front of the window for lanes without a ray; all zero between walks.
+  const std::size_t words = (w.bricks() + 1) * kBrickWords;
+  if (window_.size() < words) window_.resize(words, 0);
+  std::uint64_t* window = window_.data() + kBrickWords;
+  walkLanes(queued_, lanes, w, window);
+  std::fill_n(window_.data(), kBrickWords, 0);
+  const std::size_t mask0 = (std::size_t{1} << w.bits[0]) - 1, mask1 = (std::size_t{1} << w.bits[1]) - 1;
+  for (std::size_t b = 0; b < w.bricks(); ++b) {
+    std::uint64_t* brick_words = window + b * kBrickWords;
+    std::uint64_t any = 0;
+    for (int i = 0; i < kBrickWords; ++i) any |= brick_words[i];
+    if (any == 0) continue;
+    const Key brick{w.origin.x + static_cast<std::int32_t>(b & mask0),
+                    w.origin.y + static_cast<std::int32_t>((b >> w.bits[0]) & mask1),
+                    w.origin.z + static_cast<std::int32_t>(b >> (w.bits[0] + w.bits[1]))};
+    std::array<std::uint64_t, kBrickWords>& free = brickFor(brickOrigin(brick)).free;
+    for (int i = 0; i < kBrickWords; ++i) {
+      free[static_cast<std::size_t>(i)] |= brick_words[i];
+      brick_words[i] = 0;
+    }
+  }
+  return true;
+#else
+  (void)lanes;
+  return false;
+#endif
+}
+
 void UpdateBatch::finalize() {
+  walkQueued();
   // Sorted by a radix sort of the codes, computed from the packed keys kept beside the bricks:
   // reading the bricks (1 KiB apart) missed the cache on most of a comparison sort's comparisons.
   std::vector<std::pair<std::uint64_t, std::uint32_t>>& order = order_scratch_;
   order.clear();
-  for (std::uint32_t slot = 0; slot < packed_keys_.size(); ++slot)
-    order.emplace_back(mortonCode(unpackKey(packed_keys_[slot])), slot);
+  // A walk looks up the brick of the cell it stops in (the end cell, not marked free): a brick
+  // with no marks would only add an empty brick to the map, and only for walks done one by one.
+  for (std::uint32_t slot = 0; slot < packed_keys_.size(); ++slot) {
+    const BrickUpdates& b = brickAt(slot);
+    std::uint64_t any = 0;
+    for (const std::uint64_t w : b.free) any |= w;
+    if (any != 0 || b.any_occupied) order.emplace_back(mortonCode(unpackKey(packed_keys_[slot])), slot);
+  }
   detail::radixSortByKey(order);
   sorted_.clear();
   sorted_keys_.clear();

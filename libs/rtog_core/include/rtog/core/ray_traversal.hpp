@@ -86,22 +86,15 @@ std::int64_t walkPlanar(const PlanarSegment& seg, Cursor& cursor) {
   return n;
 }
 
-/// Walks the cells the segment from `from` to `to` (continuous lattice coordinates, whose
-/// cells are `from_key` and `to_key`) passes through, starting with `from_key` and stopping
-/// before `to_key`: at each cell calls cursor.visit(), then cursor.move(axis, dir) (axis a constant at each call).
-/// Every step moves one axis one cell towards `to_key` and an axis that reached the end
-/// coordinate never steps again, so the walk visits exactly |dx|+|dy|+|dz| cells and always
-/// ends at `to_key`, whatever the rounding. Ties go to x, then y. A segment within one z-layer
-/// is walked in its exact integer form (planarSegment). Returns the cell count.
-template <class Cursor>
-std::int64_t walkRay(const Eigen::Vector3d& from, const Eigen::Vector3d& to, const Key& from_key, const Key& to_key,
-                     Cursor& cursor) {
-  // Before the floating-point set-up below, which a planar segment does not use.
-  if (from_key.z == to_key.z) return walkPlanar(planarSegment(from, to, from_key, to_key), cursor);
+namespace detail {
+/// walkRay's set-up of a segment that leaves its z-layer: per axis the step (-1, 0 or 1), the
+/// time of the first boundary crossing and the time between crossings (infinite for an axis
+/// that does not step). Returns the number of steps. Shared with the batch's AVX2 lanes, which
+/// must take every decision from the same doubles.
+inline std::int64_t setUpWalk(const Eigen::Vector3d& from, const Eigen::Vector3d& to, const Key& from_key,
+                              const Key& to_key, int step[3], double t_max[3], double t_delta[3]) {
   constexpr double inf = std::numeric_limits<double>::infinity();
   const Eigen::Vector3d d = to - from;
-  int step[3];
-  double t_max[3], t_delta[3];
   std::int64_t n = 0;
   for (int a = 0; a < 3; ++a) {
     const std::int64_t diff = std::int64_t{to_key[a]} - from_key[a];
@@ -116,6 +109,26 @@ std::int64_t walkRay(const Eigen::Vector3d& from, const Eigen::Vector3d& to, con
       t_max[a] = (boundary - from[a]) / d[a];
     }
   }
+  return n;
+}
+}  // namespace detail
+
+/// Walks the cells the segment from `from` to `to` (continuous lattice coordinates, whose
+/// cells are `from_key` and `to_key`) passes through, starting with `from_key` and stopping
+/// before `to_key`: at each cell calls cursor.visit(), then cursor.move(axis, dir) (axis a constant at each call).
+/// Every step moves one axis one cell towards `to_key` and an axis that reached the end
+/// coordinate never steps again, so the walk visits exactly |dx|+|dy|+|dz| cells and always
+/// ends at `to_key`, whatever the rounding. Ties go to x, then y. A segment within one z-layer
+/// is walked in its exact integer form (planarSegment). Returns the cell count.
+template <class Cursor>
+std::int64_t walkRay(const Eigen::Vector3d& from, const Eigen::Vector3d& to, const Key& from_key, const Key& to_key,
+                     Cursor& cursor) {
+  // Before the floating-point set-up below, which a planar segment does not use.
+  if (from_key.z == to_key.z) return walkPlanar(planarSegment(from, to, from_key, to_key), cursor);
+  constexpr double inf = std::numeric_limits<double>::infinity();
+  int step[3];
+  double t_max[3], t_delta[3];
+  const std::int64_t n = detail::setUpWalk(from, to, from_key, to_key, step, t_max, t_delta);
   // Scalars, not arrays indexed by the chosen axis: keeps the loop in registers (~2 ns/step).
   std::int32_t x = from_key.x, y = from_key.y, z = from_key.z;
   double tx = t_max[0], ty = t_max[1], tz = t_max[2];

@@ -63,6 +63,12 @@ class alignas(64) UpdateBatch {
     bool any_occupied;  ///< some bit of `occupied` is set
   };
 
+  /// A ray queued by queueRayFree().
+  struct QueuedRay {
+    Eigen::Vector3d from, to;
+    Key from_key, to_key;
+  };
+
   UpdateBatch() = default;
   // Scratch kept between scans: a copied map starts with an empty batch.
   UpdateBatch(const UpdateBatch&) {}
@@ -76,6 +82,14 @@ class alignas(64) UpdateBatch {
   void clear();
   /// Marks the cells of traverseRay(from, to, from_key, to_key) free.
   void markRayFree(const Eigen::Vector3d& from, const Eigen::Vector3d& to, const Key& from_key, const Key& to_key);
+  /// markRayFree, later: rays wait in a queue and are walked together, eight at a time where
+  /// the CPU has AVX2 (finalize() walks what is left). The marks are the same.
+  void queueRayFree(const Eigen::Vector3d& from, const Eigen::Vector3d& to, const Key& from_key, const Key& to_key) {
+    queued_.push_back(QueuedRay{from, to, from_key, to_key});
+    if (queued_.size() == kQueuedRays) walkQueued();
+  }
+  /// Walks the queued rays now, with AVX2 if `wide` and the CPU has it, else one by one.
+  void walkQueued(bool wide = true);
   /// Returns false if the cell was already marked occupied in this batch.
   bool markOccupied(const Key& k) {
     const int i = localIndex(k);
@@ -105,7 +119,8 @@ class alignas(64) UpdateBatch {
            packed_keys_.capacity() * sizeof(std::uint64_t) +
            order_scratch_.capacity() * sizeof(std::pair<std::uint64_t, std::uint32_t>) +
            sorted_.capacity() * sizeof(void*) + sorted_keys_.capacity() * sizeof(Key) +
-           sorted_codes_.capacity() * sizeof(std::uint64_t);
+           sorted_codes_.capacity() * sizeof(std::uint64_t) + queued_.capacity() * sizeof(QueuedRay) +
+           lane_rays_.capacity() * sizeof(std::uint32_t) + window_.capacity() * sizeof(std::uint64_t);
   }
 
  private:
@@ -118,6 +133,11 @@ class alignas(64) UpdateBatch {
     return *cached_;
   }
   std::uint32_t brickSlot(const Key& b);
+  static constexpr std::size_t kQueuedRays = 8192;
+  /// Walks queued_[i] for each i of `lanes` into a dense window of bricks, then or-s the window
+  /// into the batch. Keeps in `lanes` only the rays the window holds (near the first one's start
+  /// if all would not fit); false if it walked none.
+  bool walkInWindow(std::vector<std::uint32_t>& lanes);
   BrickUpdates& brickAt(std::uint32_t slot) { return (*chunks_[slot / kChunkBricks])[slot % kChunkBricks]; }
   // Bricks live in fixed chunks kept from batch to batch: no copying as a batch grows, stable
   // addresses, and a new scan does not fault its memory in again.
@@ -132,6 +152,9 @@ class alignas(64) UpdateBatch {
   std::vector<std::uint64_t> sorted_codes_;
   std::vector<std::uint64_t> packed_keys_;  // of each brick slot; its size is the brick count
   std::vector<std::pair<std::uint64_t, std::uint32_t>> order_scratch_;  // finalize(): Morton code, slot
+  std::vector<QueuedRay> queued_;
+  std::vector<std::uint32_t> lane_rays_;  // walkQueued(): the queued rays the window takes
+  std::vector<std::uint64_t> window_;     // walkInWindow(): 64 words a brick, zero between walks
 };
 
 /// A beam of a planar scan in the exact form a PlanarBatch walks.
