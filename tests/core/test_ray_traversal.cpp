@@ -312,20 +312,22 @@ std::map<Key, std::array<std::uint64_t, kBrickWords>> freeMarks(UpdateBatch& bat
 
 // Queued rays (walked eight at a time in AVX2 lanes through a dense window, where the CPU has
 // AVX2) mark exactly what markRayFree marks ray by ray: segments from a shared start and from
-// scattered ones, from cell corners (every crossing a tie), exact diagonals, axis-parallel and
-// planar ones, zero-length ones, negative keys, and rays too long for the window.
+// scattered ones (some too far apart for one window), from cell corners (every crossing a tie),
+// exact diagonals, axis-parallel and planar ones, zero-length ones, negative keys, long ones.
 TEST(RayTraversal, QueuedRaysMarkWhatEachWalkMarks) {
   std::mt19937 rng(33);
   std::uniform_real_distribution<double> c(-1.0, 1.0), len(0.0, 90.0);
   std::uniform_int_distribution<int> ci(-60, 60), kind(0, 7);
   const bool avx2 = __builtin_cpu_supports("avx2");
   std::printf("[ lanes    ] AVX2 %s\n", avx2 ? "on this CPU: lanes walked" : "absent: every ray walked alone");
-  for (int round = 0; round < 12; ++round) {
+  for (int round = 0; round < 16; ++round) {
     UpdateBatch queued, wide_off, one_by_one;
     const Eigen::Vector3d shared(c(rng) * 30.0, c(rng) * 30.0, c(rng) * 10.0);
     const int rays = round == 0 ? 20000 : 3000;  // round 0 fills the queue more than twice
     for (int i = 0; i < rays; ++i) {
-      Eigen::Vector3d a = round % 3 == 2 ? Eigen::Vector3d(c(rng) * 60.0, c(rng) * 60.0, c(rng) * 20.0) : shared;
+      // Starts: one shared; scattered near each other; scattered too far apart for one window.
+      const double spread = round % 4 == 3 ? 4000.0 : 60.0;
+      Eigen::Vector3d a = round % 4 >= 2 ? Eigen::Vector3d(c(rng), c(rng), c(rng) / 3.0) * spread : shared;
       Eigen::Vector3d b = a + Eigen::Vector3d(c(rng), c(rng), 0.4 * c(rng)).normalized() * len(rng);
       switch (kind(rng)) {
         case 1:  // cell corners
@@ -342,7 +344,7 @@ TEST(RayTraversal, QueuedRaysMarkWhatEachWalkMarks) {
         case 4:  // planar: walked in the exact integer form, never in lanes
           b.z() = a.z();
           break;
-        case 5:  // far beyond any window
+        case 5:  // long: walked at once, not queued
           b = a + (b - a) * 40.0;
           break;
         case 6:  // zero length

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <limits>
 #include <type_traits>
 #include <numeric>
@@ -44,7 +45,8 @@ std::uint32_t UpdateBatch::brickSlot(const Key& b) {
 void UpdateBatch::markRayFree(const Eigen::Vector3d& from, const Eigen::Vector3d& to, const Key& from_key,
                               const Key& to_key) {
   // Tracks the cell's brick and bit incrementally: a carry out of the brick's local range is
-  // the only time the brick is looked up again.
+  // the only time the brick is looked up again. The walk does not move past its last visit, so
+  // no brick enters the batch without a mark.
   struct BrickCursor {
     UpdateBatch& batch;
     Key cell;
@@ -63,6 +65,7 @@ void UpdateBatch::markRayFree(const Eigen::Vector3d& from, const Eigen::Vector3d
       }
     }
   };
+  if (from_key == to_key) return;
   constexpr int m = kBrickSize - 1;
   BrickCursor cursor{*this, from_key, {from_key.x & m, from_key.y & m, from_key.z & m}, brickFor(from_key).free.data()};
   walkRay(from, to, from_key, to_key, cursor);
@@ -221,18 +224,38 @@ __attribute__((target("avx2"))) void walkLanes(const std::vector<UpdateBatch::Qu
 
 }  // namespace
 
+namespace {
+bool cpuHasAvx2() {
+#if defined(__x86_64__)
+  static const bool avx2 = __builtin_cpu_supports("avx2");
+  return avx2;
+#else
+  return false;
+#endif
+}
+}  // namespace
+
+void UpdateBatch::queueRayFree(const Eigen::Vector3d& from, const Eigen::Vector3d& to, const Key& from_key,
+                               const Key& to_key) {
+  // Long rays would need a window too large to sweep (LiDAR rays reach thousands of cells);
+  // walked at once, they also find the bricks their end points were just marked in.
+  const auto reach = [&](int a) { return std::abs(std::int64_t{to_key[a]} - from_key[a]); };
+  if (!cpuHasAvx2() || from_key.z == to_key.z || reach(0) >= kLaneReach || reach(1) >= kLaneReach ||
+      reach(2) >= kLaneReach / 2) {
+    markRayFree(from, to, from_key, to_key);
+    return;
+  }
+  queued_.push_back(QueuedRay{from, to, from_key, to_key});
+  if (queued_.size() == kQueuedRays) walkQueued();
+}
+
 void UpdateBatch::walkQueued(bool wide) {
   if (queued_.empty()) return;
   lane_rays_.clear();
-#if defined(__x86_64__)
-  static const bool avx2 = __builtin_cpu_supports("avx2");
   // A segment within one z-layer is walked in walkRay's exact integer form: not in lanes.
-  if (wide && avx2)
+  if (wide && cpuHasAvx2())
     for (std::uint32_t i = 0; i < queued_.size(); ++i)
       if (queued_[i].from_key.z != queued_[i].to_key.z) lane_rays_.push_back(i);
-#else
-  (void)wide;
-#endif
   const bool windowed = !lane_rays_.empty() && walkInWindow(lane_rays_);
   std::size_t next_lane = 0;
   for (std::uint32_t i = 0; i < queued_.size(); ++i) {
@@ -248,8 +271,8 @@ void UpdateBatch::walkQueued(bool wide) {
 
 bool UpdateBatch::walkInWindow(std::vector<std::uint32_t>& lanes) {
 #if defined(__x86_64__)
-  // At most 2^13 bricks (4 MiB): the whole window is swept for marks after each walk.
-  constexpr int kMaxBits = 13;
+  // At most 2^14 bricks (8 MiB): the whole window is swept for marks after each walk.
+  constexpr int kMaxBits = 14;
   const auto bitsFor = [](std::int64_t extent) {
     int b = 0;
     while ((std::int64_t{1} << b) < extent) ++b;
@@ -272,9 +295,11 @@ bool UpdateBatch::walkInWindow(std::vector<std::uint32_t>& lanes) {
     return total <= kMaxBits;
   };
   if (!fit()) {
-    // Keep the rays within 16 x 16 x 8 bricks around where the first one starts.
+    // Rays from scattered starts (queued rays are short): keep those within 32 x 32 x 16 bricks
+    // around where the first one starts, if that is most of them.
+    const std::size_t all = lanes.size();
     const Key c = brickOf(queued_[lanes.front()].from_key);
-    const Key box_lo{c.x - 8, c.y - 8, c.z - 4}, box_hi{c.x + 7, c.y + 7, c.z + 3};
+    const Key box_lo{c.x - 16, c.y - 16, c.z - 8}, box_hi{c.x + 15, c.y + 15, c.z + 7};
     const auto inside = [&](const Key& k) {
       const Key b = brickOf(k);
       for (int a = 0; a < 3; ++a)
@@ -283,7 +308,7 @@ bool UpdateBatch::walkInWindow(std::vector<std::uint32_t>& lanes) {
     };
     const auto outside = [&](std::uint32_t i) { return !inside(queued_[i].from_key) || !inside(queued_[i].to_key); };
     lanes.erase(std::remove_if(lanes.begin(), lanes.end(), outside), lanes.end());
-    if (lanes.empty()) return false;
+    if (lanes.size() * 2 < all) return false;
     boundsOf(lo, hi);
     w.origin = lo;
     if (!fit()) return false;
@@ -322,14 +347,8 @@ void UpdateBatch::finalize() {
   // reading the bricks (1 KiB apart) missed the cache on most of a comparison sort's comparisons.
   std::vector<std::pair<std::uint64_t, std::uint32_t>>& order = order_scratch_;
   order.clear();
-  // A walk looks up the brick of the cell it stops in (the end cell, not marked free): a brick
-  // with no marks would only add an empty brick to the map, and only for walks done one by one.
-  for (std::uint32_t slot = 0; slot < packed_keys_.size(); ++slot) {
-    const BrickUpdates& b = brickAt(slot);
-    std::uint64_t any = 0;
-    for (const std::uint64_t w : b.free) any |= w;
-    if (any != 0 || b.any_occupied) order.emplace_back(mortonCode(unpackKey(packed_keys_[slot])), slot);
-  }
+  for (std::uint32_t slot = 0; slot < packed_keys_.size(); ++slot)
+    order.emplace_back(mortonCode(unpackKey(packed_keys_[slot])), slot);
   detail::radixSortByKey(order);
   sorted_.clear();
   sorted_keys_.clear();

@@ -62,18 +62,20 @@ inline PlanarSegment planarSegment(const Eigen::Vector3d& from, const Eigen::Vec
 template <class Cursor>
 std::int64_t walkPlanar(const PlanarSegment& seg, Cursor& cursor) {
   const std::int64_t n = seg.nx + seg.ny;
+  if (n == 0) return 0;
   if (seg.nx == 0 || seg.ny == 0) {
     const int axis = seg.nx == 0 ? 1 : 0, dir = seg.nx == 0 ? seg.sy : seg.sx;
-    for (std::int64_t i = 0; i < n; ++i) {
+    for (std::int64_t i = 1; i < n; ++i) {
       cursor.visit();
       cursor.move(axis, dir);
     }
+    cursor.visit();
     return n;
   }
   const std::int64_t one = std::int64_t{1} << seg.shift;
   const std::int64_t step_x = one * seg.dy, step_y = one * seg.dx;
   std::int64_t ex = (one - seg.x0) * seg.dy, ey = (one - seg.y0) * seg.dx;
-  for (std::int64_t i = 0; i < n; ++i) {
+  for (std::int64_t i = 1; i < n; ++i) {
     cursor.visit();
     if (ex <= ey) {
       ex += step_x;
@@ -83,6 +85,7 @@ std::int64_t walkPlanar(const PlanarSegment& seg, Cursor& cursor) {
       cursor.move(1, seg.sy);
     }
   }
+  cursor.visit();
   return n;
 }
 
@@ -115,7 +118,8 @@ inline std::int64_t setUpWalk(const Eigen::Vector3d& from, const Eigen::Vector3d
 
 /// Walks the cells the segment from `from` to `to` (continuous lattice coordinates, whose
 /// cells are `from_key` and `to_key`) passes through, starting with `from_key` and stopping
-/// before `to_key`: at each cell calls cursor.visit(), then cursor.move(axis, dir) (axis a constant at each call).
+/// before `to_key`: at each cell calls cursor.visit(), then, but for the last,
+/// cursor.move(axis, dir) (axis a constant at each call).
 /// Every step moves one axis one cell towards `to_key` and an axis that reached the end
 /// coordinate never steps again, so the walk visits exactly |dx|+|dy|+|dz| cells and always
 /// ends at `to_key`, whatever the rounding. Ties go to x, then y. A segment within one z-layer
@@ -129,10 +133,11 @@ std::int64_t walkRay(const Eigen::Vector3d& from, const Eigen::Vector3d& to, con
   int step[3];
   double t_max[3], t_delta[3];
   const std::int64_t n = detail::setUpWalk(from, to, from_key, to_key, step, t_max, t_delta);
+  if (n == 0) return 0;
   // Scalars, not arrays indexed by the chosen axis: keeps the loop in registers (~2 ns/step).
   std::int32_t x = from_key.x, y = from_key.y, z = from_key.z;
   double tx = t_max[0], ty = t_max[1], tz = t_max[2];
-  for (std::int64_t i = 0; i < n; ++i) {
+  for (std::int64_t i = 1; i < n; ++i) {
     cursor.visit();
     if (tx <= ty && tx <= tz) {
       x += step[0];
@@ -148,6 +153,7 @@ std::int64_t walkRay(const Eigen::Vector3d& from, const Eigen::Vector3d& to, con
       cursor.move(2, step[2]);
     }
   }
+  cursor.visit();
   return n;
 }
 

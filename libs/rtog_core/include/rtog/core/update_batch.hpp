@@ -82,12 +82,11 @@ class alignas(64) UpdateBatch {
   void clear();
   /// Marks the cells of traverseRay(from, to, from_key, to_key) free.
   void markRayFree(const Eigen::Vector3d& from, const Eigen::Vector3d& to, const Key& from_key, const Key& to_key);
-  /// markRayFree, later: rays wait in a queue and are walked together, eight at a time where
-  /// the CPU has AVX2 (finalize() walks what is left). The marks are the same.
-  void queueRayFree(const Eigen::Vector3d& from, const Eigen::Vector3d& to, const Key& from_key, const Key& to_key) {
-    queued_.push_back(QueuedRay{from, to, from_key, to_key});
-    if (queued_.size() == kQueuedRays) walkQueued();
-  }
+  /// markRayFree, perhaps later: where the CPU has AVX2, a ray that leaves its z-layer and spans
+  /// under kLaneReach cells waits in a queue, to be walked with others eight at a time
+  /// (finalize() walks what is left); others are walked at once. The marks are the same.
+  void queueRayFree(const Eigen::Vector3d& from, const Eigen::Vector3d& to, const Key& from_key, const Key& to_key);
+  static constexpr std::int32_t kLaneReach = 240;
   /// Walks the queued rays now, with AVX2 if `wide` and the CPU has it, else one by one.
   void walkQueued(bool wide = true);
   /// Returns false if the cell was already marked occupied in this batch.
