@@ -114,9 +114,11 @@ void setUpLane(const UpdateBatch::QueuedRay& q, const Window& w, LaneRay& r) {
 // Eight rays in two groups of four AVX2 lanes: each step is branch-free (the axis by compares
 // and blends, a brick change by a shifted carry), so the two groups' dependency chains overlap
 // instead of waiting on mispredicted branches. A lane whose ray ends takes the next ray.
+// `touched` gets a non-zero byte for each brick marked (index: word offset / 64), so that only
+// those are swept.
 __attribute__((target("avx2"))) void walkLanes(const std::vector<UpdateBatch::QueuedRay>& queued,
                                                const std::vector<std::uint32_t>& rays, const Window& w,
-                                               std::uint64_t* window) {
+                                               std::uint64_t* window, std::uint8_t* touched) {
   constexpr int kGroups = 2, kLanes = 4 * kGroups;
   alignas(32) double t[kGroups][3][4], dt[kGroups][3][4];
   alignas(32) std::int64_t left[kGroups][3][4], dir[kGroups][3][4], local[kGroups][3][4], word[kGroups][4];
@@ -179,10 +181,13 @@ __attribute__((target("avx2"))) void walkLanes(const std::vector<UpdateBatch::Qu
         const __m256i bit = _mm256_sllv_epi64(one, _mm256_and_si256(cell, low6));
         const __m128i at_lo = _mm256_castsi256_si128(at), at_hi = _mm256_extracti128_si256(at, 1);
         const __m128i bit_lo = _mm256_castsi256_si128(bit), bit_hi = _mm256_extracti128_si256(bit, 1);
-        window[_mm_cvtsi128_si64(at_lo)] |= static_cast<std::uint64_t>(_mm_cvtsi128_si64(bit_lo));
-        window[_mm_extract_epi64(at_lo, 1)] |= static_cast<std::uint64_t>(_mm_extract_epi64(bit_lo, 1));
-        window[_mm_cvtsi128_si64(at_hi)] |= static_cast<std::uint64_t>(_mm_cvtsi128_si64(bit_hi));
-        window[_mm_extract_epi64(at_hi, 1)] |= static_cast<std::uint64_t>(_mm_extract_epi64(bit_hi, 1));
+        const std::int64_t at0 = _mm_cvtsi128_si64(at_lo), at1 = _mm_extract_epi64(at_lo, 1),
+                           at2 = _mm_cvtsi128_si64(at_hi), at3 = _mm_extract_epi64(at_hi, 1);
+        window[at0] |= static_cast<std::uint64_t>(_mm_cvtsi128_si64(bit_lo));
+        window[at1] |= static_cast<std::uint64_t>(_mm_extract_epi64(bit_lo, 1));
+        window[at2] |= static_cast<std::uint64_t>(_mm_cvtsi128_si64(bit_hi));
+        window[at3] |= static_cast<std::uint64_t>(_mm_extract_epi64(bit_hi, 1));
+        touched[at0 >> 6] = touched[at1 >> 6] = touched[at2 >> 6] = touched[at3 >> 6] = 1;
         // walkRay's choice: x if tx <= ty and tx <= tz, else y if ty <= tz, else z.
         const __m256d x_first = _mm256_and_pd(_mm256_cmp_pd(T[g][0], T[g][1], _CMP_LE_OQ),
                                               _mm256_cmp_pd(T[g][0], T[g][2], _CMP_LE_OQ));
@@ -271,7 +276,7 @@ void UpdateBatch::walkQueued(bool wide) {
 
 bool UpdateBatch::walkInWindow(std::vector<std::uint32_t>& lanes) {
 #if defined(__x86_64__)
-  // At most 2^14 bricks (8 MiB): the whole window is swept for marks after each walk.
+  // At most 2^14 bricks (8 MiB).
   constexpr int kMaxBits = 14;
   const auto bitsFor = [](std::int64_t extent) {
     int b = 0;
@@ -313,18 +318,21 @@ bool UpdateBatch::walkInWindow(std::vector<std::uint32_t>& lanes) {
     w.origin = lo;
     if (!fit()) return false;
   }
-  // One scratch brick in front of the window for lanes without a ray; all zero between walks.
+  // One scratch brick in front of the window for lanes without a ray; all zero between walks,
+  // as are the touched flags.
   const std::size_t words = (w.bricks() + 1) * kBrickWords;
   if (window_.size() < words) window_.resize(words, 0);
+  if (touched_.size() < w.bricks() + 1) touched_.resize(w.bricks() + 1, 0);
   std::uint64_t* window = window_.data() + kBrickWords;
-  walkLanes(queued_, lanes, w, window);
+  std::uint8_t* touched = touched_.data() + 1;
+  walkLanes(queued_, lanes, w, window, touched);
   std::fill_n(window_.data(), kBrickWords, 0);
+  touched[-1] = 0;
   const std::size_t mask0 = (std::size_t{1} << w.bits[0]) - 1, mask1 = (std::size_t{1} << w.bits[1]) - 1;
   for (std::size_t b = 0; b < w.bricks(); ++b) {
+    if (touched[b] == 0) continue;
+    touched[b] = 0;
     std::uint64_t* brick_words = window + b * kBrickWords;
-    std::uint64_t any = 0;
-    for (int i = 0; i < kBrickWords; ++i) any |= brick_words[i];
-    if (any == 0) continue;
     const Key brick{w.origin.x + static_cast<std::int32_t>(b & mask0),
                     w.origin.y + static_cast<std::int32_t>((b >> w.bits[0]) & mask1),
                     w.origin.z + static_cast<std::int32_t>(b >> (w.bits[0] + w.bits[1]))};

@@ -119,7 +119,8 @@ class alignas(64) UpdateBatch {
            order_scratch_.capacity() * sizeof(std::pair<std::uint64_t, std::uint32_t>) +
            sorted_.capacity() * sizeof(void*) + sorted_keys_.capacity() * sizeof(Key) +
            sorted_codes_.capacity() * sizeof(std::uint64_t) + queued_.capacity() * sizeof(QueuedRay) +
-           lane_rays_.capacity() * sizeof(std::uint32_t) + window_.capacity() * sizeof(std::uint64_t);
+           lane_rays_.capacity() * sizeof(std::uint32_t) + window_.capacity() * sizeof(std::uint64_t) +
+           touched_.capacity();
   }
 
  private:
@@ -154,6 +155,7 @@ class alignas(64) UpdateBatch {
   std::vector<QueuedRay> queued_;
   std::vector<std::uint32_t> lane_rays_;  // walkQueued(): the queued rays the window takes
   std::vector<std::uint64_t> window_;     // walkInWindow(): 64 words a brick, zero between walks
+  std::vector<std::uint8_t> touched_;     // walkInWindow(): a flag a brick of the window
 };
 
 /// A beam of a planar scan in the exact form a PlanarBatch walks.
