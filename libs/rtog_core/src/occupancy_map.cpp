@@ -310,8 +310,8 @@ ClassCover OccupancyMap::classCover(const std::function<void(const Box&, CellSta
       const std::uint64_t run = detail::xRun(e.lo[0], e.hi[0]);
       for (int z = e.lo[2]; z <= e.hi[2]; ++z)
         for (int y = e.lo[1]; y <= e.hi[1]; ++y) {
-          const int r = y + kBrickSize * z;
-          m[static_cast<std::size_t>(r >> 2)] |= run << ((r & 3) * kBrickSize);
+          const int base = detail::localIdx(0, y, z);
+          m[static_cast<std::size_t>(base >> 6)] |= run << (base & 63);
         }
     }
     const Key o = brickOrigin(b.brick);

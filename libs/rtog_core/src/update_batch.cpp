@@ -129,10 +129,9 @@ __attribute__((target("avx2"))) void walkLanes(const std::vector<UpdateBatch::Qu
   // scratch brick just before the window.
   const auto load = [&](int lane) {
     const int g = lane / 4, j = lane % 4;
-    while (next < rays.size()) {
+    if (next < rays.size()) {  // queued rays leave their z-layer: at least one step
       LaneRay r;
       setUpLane(queued[rays[next++]], w, r);
-      if (r.steps == 0) continue;
       for (int a = 0; a < 3; ++a) {
         t[g][a][j] = r.t[a];
         dt[g][a][j] = r.dt[a];
@@ -256,12 +255,11 @@ void UpdateBatch::queueRayFree(const Eigen::Vector3d& from, const Eigen::Vector3
 
 void UpdateBatch::walkQueued(bool wide) {
   if (queued_.empty()) return;
+  // queueRayFree queues only what lanes can walk (AVX2, rays leaving their z-layer).
   lane_rays_.clear();
-  // A segment within one z-layer is walked in walkRay's exact integer form: not in lanes.
-  if (wide && cpuHasAvx2())
-    for (std::uint32_t i = 0; i < queued_.size(); ++i)
-      if (queued_[i].from_key.z != queued_[i].to_key.z) lane_rays_.push_back(i);
-  const bool windowed = !lane_rays_.empty() && walkInWindow(lane_rays_);
+  if (wide)
+    for (std::uint32_t i = 0; i < queued_.size(); ++i) lane_rays_.push_back(i);
+  const bool windowed = wide && walkInWindow(lane_rays_);
   std::size_t next_lane = 0;
   for (std::uint32_t i = 0; i < queued_.size(); ++i) {
     if (windowed && next_lane < lane_rays_.size() && lane_rays_[next_lane] == i) {
