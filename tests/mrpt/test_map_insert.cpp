@@ -165,10 +165,24 @@ TEST(MapInsert, InvalidRangesCountedAndSkipped) {
     if (i % 3 == 0) s.setScanRangeValidity(i, false);
     if (!s.getScanRangeValidity(i)) ++invalid;
   }
-  CRTreeOccupancyGridMap m(0.05);
+  CRTreeOccupancyGridMap::TInsertionOptions io;
+  io.sensorModelPreset = "octomap";
+  CRTreeOccupancyGridMap m(0.05, io);
   EXPECT_TRUE(m.insertObservation(s));
   EXPECT_EQ(m.invalidRangesSkipped, invalid);
   EXPECT_EQ(m.lastInsertStats.raysTotal() + invalid, s.getScanSize());
+  // mrpt_grid, as COccupancyGridMap2D: no-return beams clear space (considerInvalidRangesAsFreeSpace)
+  // and count as truncated, or are skipped and counted as such.
+  CRTreeOccupancyGridMap g(0.05);
+  EXPECT_TRUE(g.insertObservation(s));
+  EXPECT_EQ(g.invalidRangesSkipped, 0u);
+  EXPECT_EQ(g.lastInsertStats.raysTotal(), s.getScanSize());
+  EXPECT_GE(g.lastInsertStats.rays_truncated, invalid);
+  CRTreeOccupancyGridMap h(0.05);
+  h.insertionOptions.considerInvalidRangesAsFreeSpace = false;
+  EXPECT_TRUE(h.insertObservation(s));
+  EXPECT_EQ(h.invalidRangesSkipped, invalid);
+  EXPECT_EQ(h.lastInsertStats.raysTotal(), s.getScanSize());
 }
 
 TEST(MapInsert, UnsupportedObservationReturnsFalse) {

@@ -31,6 +31,7 @@ occupancyGrid_count=1
 resolution=0.2
 
 [MappingApplication_rtreeOccupancyGrid_00_insertOpts]
+sensorModelPreset=octomap
 sensorModel=endpoint
 maxOccupancyUpdateCertainty=0.8
 maxFreenessUpdateCertainty=0.6
@@ -176,5 +177,51 @@ TEST(MapOptions, ChangingProbabilitiesOfANonEmptyMapThrows) {
   EXPECT_THROW(m.insertObservation(scan), std::logic_error);
   m.clear();
   EXPECT_TRUE(m.insertObservation(scan));
+  // mrpt_grid: P = 0.9 is the int8 step p2l(0.9) = 35, three times for a hit: 105 / 16.
+  EXPECT_EQ(static_cast<float>(rtog::logit(m.map().params().log_odds.prob_hit)), 105.0f / 16.0f);
+  m.insertionOptions.sensorModelPreset = "octomap";
+  EXPECT_THROW(m.insertObservation(scan), std::logic_error);
+  m.clear();
+  EXPECT_TRUE(m.insertObservation(scan));
   EXPECT_NEAR(m.map().params().log_odds.prob_hit, 0.9, 1e-6);
+}
+
+TEST(MapOptions, MrptGridStepsAreTheGridsInt8Steps) {
+  // icp-slam_demo_classic_gridmatch.ini's 0.54: p2l gives 2, so free steps of 2 and occupied of 6.
+  CRTreeOccupancyGridMap::TInsertionOptions io;
+  io.maxOccupancyUpdateCertainty = 0.54f;
+  CRTreeOccupancyGridMap m(0.05, io);
+  const rtog::LogOddsModel& lm = m.map().logOddsModel();
+  EXPECT_EQ(lm.hitDelta(), 6.0f / 16.0f);
+  EXPECT_EQ(lm.missDelta(), -2.0f / 16.0f);
+  EXPECT_EQ(lm.clampMin(), -127.0f / 16.0f);
+  EXPECT_EQ(lm.clampMax(), 127.0f / 16.0f);
+  EXPECT_EQ(lm.prior(), 0.0f);
+}
+
+TEST(MapOptions, UnknownKeysAreReported) {
+  const std::string ini =
+      "[MappingApplication]\nrtreeOccupancyGrid_count=1\n[MappingApplication_rtreeOccupancyGrid_00_insertOpts]\n"
+      "maxOccupancyUpdateCertainty=0.6\nmaxOcupancyUpdateCertainty=0.7\n";
+  testing::internal::CaptureStderr();
+  fromIni(ini);
+  fromIni(ini);
+  const std::string err = testing::internal::GetCapturedStderr();
+  const std::string want = "unknown key 'maxOcupancyUpdateCertainty'";
+  const auto first = err.find(want);
+  ASSERT_NE(first, std::string::npos) << err;
+  EXPECT_EQ(err.find(want, first + 1), std::string::npos) << "reported twice: " << err;
+  EXPECT_EQ(err.find("'maxOccupancyUpdateCertainty'"), std::string::npos) << err;
+}
+
+TEST(MapOptions, WideningBeamsRefusedInMrptGridPreset) {
+  const std::string ini =
+      "[MappingApplication]\nrtreeOccupancyGrid_count=1\n[MappingApplication_rtreeOccupancyGrid_00_insertOpts]\n"
+      "wideningBeamsWithDistance=true\n";
+  try {
+    fromIni(ini);
+    ADD_FAILURE() << "no exception";
+  } catch (const std::exception& e) {
+    EXPECT_NE(std::string(e.what()).find("wideningBeamsWithDistance"), std::string::npos) << e.what();
+  }
 }

@@ -1,11 +1,15 @@
 // rtog::CRTreeBackedGridMap2D: a COccupancyGridMap2D view of an R-tree map.
 #include "rtog/mrpt/CRTreeBackedGridMap2D.h"
 
+#include "mrpt_grid.hpp"
+#include "options_check.hpp"
+
 #include <cmath>
 #include <limits>
 #include <sstream>
 
 #include <mrpt/config/CConfigFileBase.h>
+#include <mrpt/obs/CObservation2DRangeScan.h>
 #include <mrpt/serialization/CArchive.h>
 
 using namespace mrpt::maps;
@@ -27,6 +31,10 @@ void CRTreeBackedGridMap2D::TMapDefinition::loadFromConfigFile_map_specific(
     if (!(std::isfinite(resolution) && resolution >= 1e-3 && resolution <= 1e2))
       throw std::invalid_argument("rtog::CRTreeBackedGridMap2D: invalid option [" + sec +
                                   "] resolution: must lie in [1e-3, 1e2] m, got " + std::to_string(resolution));
+    readGridExtent(source, sec, min_x, max_x, min_y, max_y);
+    reportUnknownKeys(source, sec,
+                      {"resolution", "min_x", "max_x", "min_y", "max_y", "gridView_minZ", "gridView_maxZ",
+                       "disableSaveAs3DObject"});
     gridView_minZ = source.read_float(sec, "gridView_minZ", gridView_minZ);
     gridView_maxZ = source.read_float(sec, "gridView_maxZ", gridView_maxZ);
     if (!(gridView_minZ <= gridView_maxZ))
@@ -52,6 +60,20 @@ mrpt::maps::CMetricMap* CRTreeBackedGridMap2D::internal_CreateFromMapDefinition(
   if (!d.loadError.empty()) throw std::invalid_argument(d.loadError);
   auto* m = new CRTreeBackedGridMap2D(d.resolution);
   m->rtree_ = CRTreeOccupancyGridMap(d.resolution, d.insertionOpts);
+  m->setExtent(d.min_x, d.max_x, d.min_y, d.max_y);
+  // The grid's own insertion options, for code that reads them off a COccupancyGridMap2D.
+  auto& gio = m->insertionOptions;
+  const auto& io = d.insertionOpts;
+  gio.mapAltitude = io.mapAltitude;
+  gio.useMapAltitude = io.useMapAltitude;
+  gio.maxDistanceInsertion = io.maxDistanceInsertion;
+  gio.maxOccupancyUpdateCertainty = io.maxOccupancyUpdateCertainty;
+  gio.maxFreenessUpdateCertainty = io.maxFreenessUpdateCertainty;
+  gio.maxFreenessInvalidRanges = io.maxFreenessInvalidRanges;
+  gio.considerInvalidRangesAsFreeSpace = io.considerInvalidRangesAsFreeSpace;
+  gio.decimation = io.decimation;
+  gio.horizontalTolerance = io.horizontalTolerance;
+  gio.wideningBeamsWithDistance = io.wideningBeamsWithDistance;
   m->likelihoodOptions = d.likelihoodOpts;
   m->gridView_minZ = d.gridView_minZ;
   m->gridView_maxZ = d.gridView_maxZ;
@@ -60,15 +82,46 @@ mrpt::maps::CMetricMap* CRTreeBackedGridMap2D::internal_CreateFromMapDefinition(
 }
 
 CRTreeBackedGridMap2D::CRTreeBackedGridMap2D(double resolution)
-    : COccupancyGridMap2D(-1.0f, 1.0f, -1.0f, 1.0f, static_cast<float>(resolution)), rtree_(resolution) {}
+    : COccupancyGridMap2D(-10.0f, 10.0f, -10.0f, 10.0f, static_cast<float>(resolution)), rtree_(resolution) {}
 
 void CRTreeBackedGridMap2D::internal_clear() {
   COccupancyGridMap2D::internal_clear();
   rtree_.clear();
 }
 
+void CRTreeBackedGridMap2D::setExtent(float x_min, float x_max, float y_min, float y_max) {
+  setSize(x_min, x_max, y_min, y_max, getResolution(), 0.5f);
+  rtree_.setGridFrame(x_min, x_max, y_min, y_max);
+}
+
+bool CRTreeBackedGridMap2D::insertGridScan(const mrpt::obs::CObservation2DRangeScan& scan,
+                                           const mrpt::poses::CPose3D& pose) {
+  thread_local CRTreeOccupancyGridMap::GridScanUpdate upd;
+  if (!rtree_.insertGridScan(scan, pose, &upd)) return false;
+  // MRPT's own growth of this grid, from the same request: it must land on the geometry the
+  // R-tree map's mirror computed, or the cells below would not be the grid's.
+  resizeGrid(upd.grow[0], upd.grow[1], upd.grow[2], upd.grow[3], 0.5f);
+  const TGridFrame2D& f = rtree_.gridFrame();
+  TGridFrame2D mine = f;
+  mine.x_min = getXMin(), mine.x_max = getXMax(), mine.y_min = getYMin(), mine.y_max = getYMax();
+  mine.size_x = getSizeX(), mine.size_y = getSizeY();
+  if (!mine.sameGeometry(f)) throw std::logic_error("rtog::CRTreeBackedGridMap2D: the grid grew unlike its mirror");
+  const std::int32_t ox = mrpt_grid::keyOffsetX(f), oy = mrpt_grid::keyOffsetY(f);
+  for (std::size_t i = 0; i < upd.steps.size(); ++i) {
+    const auto& st = upd.steps[i];
+    m_map[static_cast<std::size_t>(st.x - ox) + static_cast<std::size_t>(st.y - oy) * m_size_x] =
+        static_cast<cellType>(mrpt_grid::cellOfValue(upd.after[i]));
+  }
+  m_likelihoodCacheOutDated = true;
+  m_is_empty = false;
+  return true;
+}
+
 bool CRTreeBackedGridMap2D::internal_insertObservation(const mrpt::obs::CObservation& obs,
                                                        const std::optional<const mrpt::poses::CPose3D>& robotPose) {
+  if (rtree_.insertionOptions.mrptGrid())
+    if (const auto* scan = dynamic_cast<const mrpt::obs::CObservation2DRangeScan*>(&obs))
+      return insertGridScan(*scan, robotPose ? *robotPose : mrpt::poses::CPose3D());
   ObservationBeams beams;
   const mrpt::poses::CPose3D pose = robotPose ? *robotPose : mrpt::poses::CPose3D();
   if (!rtree_.extractBeams(obs, pose, beams, true)) return false;

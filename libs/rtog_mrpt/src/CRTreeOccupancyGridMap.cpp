@@ -6,9 +6,12 @@
 #include <stdexcept>
 
 #include <mrpt/config/CConfigFileBase.h>
+#include <mrpt/core/bits_math.h>
 #include <mrpt/core/initializer.h>
 #include <mrpt/rtti/CObject.h>
 
+#include "mrpt_grid.hpp"
+#include "options_check.hpp"
 #include "rtog/mrpt/CRTreeBackedGridMap2D.h"
 
 using namespace mrpt::maps;
@@ -37,9 +40,17 @@ bool isProbability(float p) { return std::isfinite(p) && p > 0.0f && p < 1.0f; }
 
 void CRTreeOccupancyGridMap::TInsertionOptions::loadFromConfigFile(const mrpt::config::CConfigFileBase& s,
                                                                   const std::string& sec) {
+  sensorModelPreset = s.read_string(sec, "sensorModelPreset", sensorModelPreset);
   sensorModel = s.read_string(sec, "sensorModel", sensorModel);
   maxOccupancyUpdateCertainty = s.read_float(sec, "maxOccupancyUpdateCertainty", maxOccupancyUpdateCertainty);
   maxFreenessUpdateCertainty = s.read_float(sec, "maxFreenessUpdateCertainty", maxFreenessUpdateCertainty);
+  maxFreenessInvalidRanges = s.read_float(sec, "maxFreenessInvalidRanges", maxFreenessInvalidRanges);
+  considerInvalidRangesAsFreeSpace =
+      s.read_bool(sec, "considerInvalidRangesAsFreeSpace", considerInvalidRangesAsFreeSpace);
+  horizontalTolerance = mrpt::DEG2RAD(s.read_float(sec, "horizontalTolerance", mrpt::RAD2DEG(horizontalTolerance)));
+  useMapAltitude = s.read_bool(sec, "useMapAltitude", useMapAltitude);
+  mapAltitude = s.read_float(sec, "mapAltitude", mapAltitude);
+  wideningBeamsWithDistance = s.read_bool(sec, "wideningBeamsWithDistance", wideningBeamsWithDistance);
   clampingMin = s.read_float(sec, "clampingMin", clampingMin);
   clampingMax = s.read_float(sec, "clampingMax", clampingMax);
   occupiedThreshold = s.read_float(sec, "occupiedThreshold", occupiedThreshold);
@@ -57,6 +68,14 @@ void CRTreeOccupancyGridMap::TInsertionOptions::loadFromConfigFile(const mrpt::c
   planarCache = s.read_bool(sec, "planarCache", planarCache);
   rotatingScan_minElevation_deg = s.read_float(sec, "rotatingScan_minElevation_deg", rotatingScan_minElevation_deg);
   rotatingScan_maxElevation_deg = s.read_float(sec, "rotatingScan_maxElevation_deg", rotatingScan_maxElevation_deg);
+  // COccupancyGridMap2D's keys that concern what rtog does not build (its CFD features).
+  reportUnknownKeys(s, sec,
+                    {"sensorModelPreset", "sensorModel", "maxOccupancyUpdateCertainty", "maxFreenessUpdateCertainty",
+                     "maxFreenessInvalidRanges", "considerInvalidRangesAsFreeSpace", "horizontalTolerance",
+                     "useMapAltitude", "mapAltitude", "wideningBeamsWithDistance", "clampingMin", "clampingMax",
+                     "occupiedThreshold", "maxDistanceInsertion", "decimation", "decimation_3d_range", "mergePolicy",
+                     "discretize", "threads", "planarCache", "rotatingScan_minElevation_deg",
+                     "rotatingScan_maxElevation_deg", "CFD_features_gaussian_size", "CFD_features_median_size"});
   try {
     validate();
   } catch (const std::invalid_argument& e) {
@@ -66,7 +85,14 @@ void CRTreeOccupancyGridMap::TInsertionOptions::loadFromConfigFile(const mrpt::c
 
 void CRTreeOccupancyGridMap::TInsertionOptions::saveToConfigFile(mrpt::config::CConfigFileBase& c,
                                                                 const std::string& sec) const {
+  c.write(sec, "sensorModelPreset", sensorModelPreset);
   c.write(sec, "sensorModel", sensorModel);
+  c.write(sec, "maxFreenessInvalidRanges", maxFreenessInvalidRanges);
+  c.write(sec, "considerInvalidRangesAsFreeSpace", considerInvalidRangesAsFreeSpace);
+  c.write(sec, "horizontalTolerance", mrpt::RAD2DEG(horizontalTolerance));
+  c.write(sec, "useMapAltitude", useMapAltitude);
+  c.write(sec, "mapAltitude", mapAltitude);
+  c.write(sec, "wideningBeamsWithDistance", wideningBeamsWithDistance);
   c.write(sec, "maxOccupancyUpdateCertainty", maxOccupancyUpdateCertainty);
   c.write(sec, "maxFreenessUpdateCertainty", maxFreenessUpdateCertainty);
   c.write(sec, "clampingMin", clampingMin);
@@ -85,7 +111,19 @@ void CRTreeOccupancyGridMap::TInsertionOptions::saveToConfigFile(mrpt::config::C
 
 void CRTreeOccupancyGridMap::TInsertionOptions::validate() const {
   const std::string sec = "insertOpts";
+  if (sensorModelPreset != "mrpt_grid" && sensorModelPreset != "octomap")
+    badOption(sec, "sensorModelPreset", "must be mrpt_grid or octomap, got '" + sensorModelPreset + "'");
   sensorModelFromString(sensorModel);  // throws std::invalid_argument with the accepted names
+  if (!(maxFreenessInvalidRanges == 0.0f ||
+        (isProbability(maxFreenessInvalidRanges) && maxFreenessInvalidRanges > 0.5f)))
+    badOption(sec, "maxFreenessInvalidRanges", "must be 0 or lie in (0.5, 1), got " +
+                                                   std::to_string(maxFreenessInvalidRanges));
+  if (!(std::isfinite(horizontalTolerance) && horizontalTolerance >= 0.0f))
+    badOption(sec, "horizontalTolerance", "must be a non-negative angle");
+  if (!std::isfinite(mapAltitude)) badOption(sec, "mapAltitude", "must be finite");
+  if (mrptGrid() && wideningBeamsWithDistance)
+    badOption(sec, "wideningBeamsWithDistance",
+              "COccupancyGridMap2D's widening beams are not reproduced by the mrpt_grid preset: set it to false");
   mergePolicyFromString(mergePolicy);
   if (!isProbability(maxOccupancyUpdateCertainty) || maxOccupancyUpdateCertainty <= 0.5f)
     badOption(sec, "maxOccupancyUpdateCertainty", "must lie in (0.5, 1), got " + std::to_string(maxOccupancyUpdateCertainty));
@@ -93,8 +131,9 @@ void CRTreeOccupancyGridMap::TInsertionOptions::validate() const {
         (isProbability(maxFreenessUpdateCertainty) && maxFreenessUpdateCertainty > 0.5f)))
     badOption(sec, "maxFreenessUpdateCertainty", "must be 0 or lie in (0.5, 1), got " +
                                                      std::to_string(maxFreenessUpdateCertainty));
-  if (!isProbability(clampingMin) || !isProbability(clampingMax) || !(clampingMin < clampingMax))
-    badOption(sec, "clampingMin/clampingMax", "need 0 < clampingMin < clampingMax < 1");
+  // Checked in both presets (mrpt_grid does not use them): a bad value is an error wherever it stands.
+  if (!isProbability(clampingMin) || !isProbability(clampingMax) || !(clampingMin < 0.5f && 0.5f < clampingMax))
+    badOption(sec, "clampingMin/clampingMax", "need 0 < clampingMin < 0.5 < clampingMax < 1");
   if (!isProbability(occupiedThreshold)) badOption(sec, "occupiedThreshold", "must lie in (0, 1)");
   if (!std::isfinite(maxDistanceInsertion)) badOption(sec, "maxDistanceInsertion", "must be finite");
   if (decimation < 1) badOption(sec, "decimation", "must be >= 1");
@@ -109,13 +148,17 @@ void CRTreeOccupancyGridMap::TInsertionOptions::validate() const {
 MapParams CRTreeOccupancyGridMap::TInsertionOptions::toMapParams(double resolution) const {
   MapParams p;
   p.resolution = resolution;
+  p.merge = mergePolicyFromString(mergePolicy);
+  if (mrptGrid()) {
+    p.log_odds = mrpt_grid::logOddsParams(mrpt_grid::stepsOf(*this), occupiedThreshold);
+    return p;
+  }
   p.log_odds.prob_hit = maxOccupancyUpdateCertainty;
   p.log_odds.prob_miss =
       1.0 - (maxFreenessUpdateCertainty == 0.0f ? maxOccupancyUpdateCertainty : maxFreenessUpdateCertainty);
   p.log_odds.clamp_min = clampingMin;
   p.log_odds.clamp_max = clampingMax;
   p.log_odds.occupied_threshold = occupiedThreshold;
-  p.merge = mergePolicyFromString(mergePolicy);
   return p;
 }
 
@@ -196,6 +239,8 @@ void CRTreeOccupancyGridMap::TMapDefinition::loadFromConfigFile_map_specific(
     resolution = source.read_double(sec, "resolution", resolution);
     if (!(std::isfinite(resolution) && resolution >= 1e-4 && resolution <= 1e3))
       badOption(sec, "resolution", "must lie in [1e-4, 1e3] m, got " + std::to_string(resolution));
+    readGridExtent(source, sec, min_x, max_x, min_y, max_y);
+    reportUnknownKeys(source, sec, {"resolution", "min_x", "max_x", "min_y", "max_y", "disableSaveAs3DObject"});
     insertionOpts.loadFromConfigFile(source, sectionNamePrefix + "_insertOpts");
     likelihoodOpts.loadFromConfigFile(source, sectionNamePrefix + "_likelihoodOpts");
   } catch (const std::exception& e) {
@@ -214,6 +259,7 @@ mrpt::maps::CMetricMap* CRTreeOccupancyGridMap::internal_CreateFromMapDefinition
   const auto& d = dynamic_cast<const CRTreeOccupancyGridMap::TMapDefinition&>(def);
   if (!d.loadError.empty()) throw std::invalid_argument(d.loadError);
   auto* m = new CRTreeOccupancyGridMap(d.resolution, d.insertionOpts);
+  m->setGridFrame(d.min_x, d.max_x, d.min_y, d.max_y);
   m->likelihoodOptions = d.likelihoodOpts;
   m->genericMapParams = d.genericMapParams;
   return m;
@@ -222,11 +268,14 @@ mrpt::maps::CMetricMap* CRTreeOccupancyGridMap::internal_CreateFromMapDefinition
 // ---- the map -----------------------------------------------------------------------------
 
 CRTreeOccupancyGridMap::CRTreeOccupancyGridMap(double resolution)
-    : map_(insertionOptions.toMapParams(resolution)) {}
+    : map_(insertionOptions.toMapParams(resolution)) {
+  setGridFrame(-10, 10, -10, 10);
+}
 
 CRTreeOccupancyGridMap::CRTreeOccupancyGridMap(double resolution, const TInsertionOptions& io)
     : insertionOptions(io), map_(io.toMapParams(resolution)) {
   io.validate();
+  setGridFrame(-10, 10, -10, 10);
 }
 
 void CRTreeOccupancyGridMap::syncParams() {
@@ -256,6 +305,7 @@ void CRTreeOccupancyGridMap::notifyMapChanged() {
 
 void CRTreeOccupancyGridMap::internal_clear() {
   map_.clear();
+  setGridFrame(-10, 10, -10, 10);  // as COccupancyGridMap2D::clear()
   lastInsertStats = InsertStats{};
   totalInsertStats = InsertStats{};
   invalidRangesSkipped = 0;

@@ -261,6 +261,9 @@ bool CRTreeOccupancyGridMap::extractBeams(const mrpt::obs::CObservation& obs, co
 
 bool CRTreeOccupancyGridMap::internal_insertObservation(const mrpt::obs::CObservation& obs,
                                                         const std::optional<const CPose3D>& robotPose) {
+  if (insertionOptions.mrptGrid())
+    if (const auto* scan = dynamic_cast<const mrpt::obs::CObservation2DRangeScan*>(&obs))
+      return insertGridScan(*scan, robotPose ? *robotPose : CPose3D());
   ObservationBeams beams;
   if (!extractBeams(obs, robotPose ? *robotPose : CPose3D(), beams, true)) return false;
   syncParams();

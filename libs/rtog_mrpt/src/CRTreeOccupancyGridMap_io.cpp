@@ -16,8 +16,10 @@ namespace rtog {
 
 // Version 0: genericMapParams, insertion and likelihood options, then the core map's own
 // binary format (doc/format.md) as a length-prefixed byte block. Version 1 adds
-// insertionOptions.planarCache after the rotating-scan elevations.
-uint8_t CRTreeOccupancyGridMap::serializeGetVersion() const { return 1; }
+// insertionOptions.planarCache after the rotating-scan elevations. Version 2 adds the update
+// preset with the mrpt_grid options and the grid geometry (TGridFrame2D); older maps were built
+// with OctoMap's rule and load as the octomap preset.
+uint8_t CRTreeOccupancyGridMap::serializeGetVersion() const { return 2; }
 
 void CRTreeOccupancyGridMap::serializeTo(mrpt::serialization::CArchive& out) const {
   out << genericMapParams;
@@ -26,6 +28,10 @@ void CRTreeOccupancyGridMap::serializeTo(mrpt::serialization::CArchive& out) con
       << io.clampingMax << io.occupiedThreshold << io.maxDistanceInsertion << io.decimation << io.decimation_3d_range
       << io.mergePolicy << io.discretize << static_cast<int32_t>(io.threads) << io.rotatingScan_minElevation_deg
       << io.rotatingScan_maxElevation_deg << io.planarCache;
+  out << io.sensorModelPreset << io.maxFreenessInvalidRanges << io.considerInvalidRangesAsFreeSpace
+      << io.horizontalTolerance << io.useMapAltitude << io.mapAltitude << io.wideningBeamsWithDistance;
+  out << frame_.x_min << frame_.x_max << frame_.y_min << frame_.y_max << frame_.resolution << frame_.size_x
+      << frame_.size_y << frame_.has_layer << frame_.layer;
   const auto& lo = likelihoodOptions;
   out << static_cast<int32_t>(lo.likelihoodMethod) << lo.LF_stdHit << lo.LF_zHit << lo.LF_zRandom << lo.LF_maxRange
       << lo.LF_decimation << lo.LF_maxCorrsDistance << lo.LF_useSquareDist << lo.enableLikelihoodCache
@@ -40,7 +46,8 @@ void CRTreeOccupancyGridMap::serializeTo(mrpt::serialization::CArchive& out) con
 void CRTreeOccupancyGridMap::serializeFrom(mrpt::serialization::CArchive& in, uint8_t version) {
   switch (version) {
     case 0:
-    case 1: {
+    case 1:
+    case 2: {
       in >> genericMapParams;
       auto& io = insertionOptions;
       int32_t threads = 1;
@@ -51,6 +58,15 @@ void CRTreeOccupancyGridMap::serializeFrom(mrpt::serialization::CArchive& in, ui
       io.threads = threads;
       io.planarCache = true;
       if (version >= 1) in >> io.planarCache;
+      TGridFrame2D frame;
+      if (version >= 2) {
+        in >> io.sensorModelPreset >> io.maxFreenessInvalidRanges >> io.considerInvalidRangesAsFreeSpace >>
+            io.horizontalTolerance >> io.useMapAltitude >> io.mapAltitude >> io.wideningBeamsWithDistance;
+        in >> frame.x_min >> frame.x_max >> frame.y_min >> frame.y_max >> frame.resolution >> frame.size_x >>
+            frame.size_y >> frame.has_layer >> frame.layer;
+      } else {
+        io.sensorModelPreset = "octomap";
+      }
       auto& lo = likelihoodOptions;
       int32_t method = 0;
       in >> method >> lo.LF_stdHit >> lo.LF_zHit >> lo.LF_zRandom >> lo.LF_maxRange >> lo.LF_decimation >>
@@ -66,6 +82,7 @@ void CRTreeOccupancyGridMap::serializeFrom(mrpt::serialization::CArchive& in, ui
         throw std::runtime_error("rtog::CRTreeOccupancyGridMap: truncated stream");
       std::istringstream is(bytes, std::ios::binary);
       map_ = OccupancyMap::read(is);
+      frame_ = frame;
       break;
     }
     default:

@@ -2,6 +2,8 @@
 #pragma once
 
 #include <algorithm>
+#include <cstddef>
+#include <cstdint>
 
 #include <cmath>
 #include <stdexcept>
@@ -54,6 +56,30 @@ class LogOddsModel {
  private:
   LogOddsParams params_;
   float hit_delta_, miss_delta_, l0_, min_, max_, occ_;
+};
+
+/// What one beam did to one cell, for a grid that updates beam by beam (StepRule).
+enum class StepKind : std::uint8_t {
+  Free = 0,        ///< crossed by a beam that returned
+  FreeNoEcho = 1,  ///< crossed by a no-return beam
+  Occupied = 2,    ///< the end cell of a beam that returned
+};
+
+/// The update of a grid whose cells take one step per beam, in beam order, with integer
+/// log-odds that saturate (MRPT's COccupancyGridMap2D/3D): a step moves a cell by its kind's
+/// delta unless the cell is within a step of its kind's bound, which it then takes. Saturating
+/// steps do not commute, so the order of the steps is part of the result; OctoMap's rule
+/// (LogOddsModel::update, one update per cell and scan) is the other rule the map holds.
+struct StepRule {
+  float delta[3] = {0, 0, 0};  ///< signed change per kind (index: StepKind)
+  float limit[3] = {0, 0, 0};  ///< free kinds step while v > limit, occupied while v < limit
+  float bound[3] = {0, 0, 0};  ///< the value taken otherwise
+
+  float apply(float v, StepKind kind) const {
+    const auto i = static_cast<std::size_t>(kind);
+    const bool steps = kind == StepKind::Occupied ? v < limit[i] : v > limit[i];
+    return steps ? v + delta[i] : bound[i];
+  }
 };
 
 }  // namespace rtog

@@ -152,6 +152,21 @@ class OccupancyMap {
     return insertPointCloud(origin, points.data(), points.size(), ip);
   }
 
+  /// One step of StepRule for the cell (x, y) of a z-layer.
+  struct CellStep {
+    std::int32_t x, y;
+    StepKind kind;
+  };
+  /// Applies `steps` in their order to cells of z-layer `z`, each one StepRule::apply: a cell
+  /// crossed by five beams takes five steps, as in a grid that updates beam by beam, where
+  /// insertPointCloud() updates each cell once a scan. Unknown cells start at the prior. The
+  /// cells go through the planar cache, as planar scans do. `after`, if given, receives the value
+  /// of each step's cell after that step (n floats). The stats count steps (cells_free and
+  /// cells_occupied by kind, cells_unchanged where the value stayed). Throws std::out_of_range,
+  /// changing nothing, if a cell has no key.
+  InsertStats applySteps(std::int32_t z, const CellStep* steps, std::size_t n, const StepRule& rule,
+                         float* after = nullptr);
+
   /// Step 1 of an insertion: traces the beams into `batch` (no change to the map). Throws
   /// std::out_of_range if the origin has no key.
   void computeUpdate(const Eigen::Vector3d& origin, const Eigen::Vector3f* points, std::size_t count,

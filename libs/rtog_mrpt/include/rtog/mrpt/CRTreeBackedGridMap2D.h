@@ -38,6 +38,8 @@ class CRTreeBackedGridMap2D : public mrpt::maps::COccupancyGridMap2D {
   MAP_DEFINITION_START(CRTreeBackedGridMap2D)
   /// Cell edge length [m] of both the R-tree map and its 2D view. (Default: 0.10)
   double resolution{0.10};
+  /// The grid's initial extent, as COccupancyGridMap2D's. (Default: -10, 10, -10, 10)
+  float min_x{-10.0f}, max_x{10.0f}, min_y{-10.0f}, max_y{10.0f};
   float gridView_minZ{-1000.0f};  ///< see CRTreeBackedGridMap2D::gridView_minZ (Default: -1000)
   float gridView_maxZ{1000.0f};   ///< (Default: 1000)
   rtog::CRTreeOccupancyGridMap::TInsertionOptions insertionOpts;
@@ -54,6 +56,11 @@ class CRTreeBackedGridMap2D : public mrpt::maps::COccupancyGridMap2D {
  private:
   /// Refreshes the 2D cells within the metric rectangle (grows the grid to contain it).
   void refreshRegion(double x0, double y0, double x1, double y1);
+  /// mrpt_grid preset, 2D scans: grows the grid as COccupancyGridMap2D does and writes the int8
+  /// values the R-tree map's cells took, step by step (the R-tree map decided them).
+  bool insertGridScan(const mrpt::obs::CObservation2DRangeScan& scan, const mrpt::poses::CPose3D& pose);
+  /// Size the grid and the R-tree map's grid geometry alike (COccupancyGridMap2D::setSize).
+  void setExtent(float x_min, float x_max, float y_min, float y_max);
 
   CRTreeOccupancyGridMap rtree_;
 };

@@ -43,6 +43,22 @@ struct ObservationBeams {
   }
 };
 
+/// The geometry a COccupancyGridMap2D would have grown to from the same observations (the
+/// mrpt_grid preset keeps it: the grid's float extent decides the cell a point falls in).
+struct TGridFrame2D {
+  float x_min{-10.0f}, x_max{10.0f}, y_min{-10.0f}, y_max{10.0f};
+  float resolution{0.10f};
+  std::uint32_t size_x{0}, size_y{0};
+  /// The grid is one plane: every 2D scan steps the cells of one z-layer of the lattice, the
+  /// layer of the first one's sensor height.
+  bool has_layer{false};
+  std::int32_t layer{0};
+  bool sameGeometry(const TGridFrame2D& o) const {
+    return x_min == o.x_min && x_max == o.x_max && y_min == o.y_min && y_max == o.y_max &&
+           resolution == o.resolution && size_x == o.size_x && size_y == o.size_y;
+  }
+};
+
 class CRTreeOccupancyGridMap : public mrpt::maps::CMetricMap {
   DEFINE_SERIALIZABLE(CRTreeOccupancyGridMap, rtog)
 
@@ -54,6 +70,11 @@ class CRTreeOccupancyGridMap : public mrpt::maps::CMetricMap {
     /// Throws std::invalid_argument naming the first bad option.
     void validate() const;
 
+    /// Whose update rule the map follows (doc/mrpt_map.md): "mrpt_grid", COccupancyGridMap2D's
+    /// (int8 log-odds, the occupied step three times the free one, a step per beam in beam order,
+    /// the grid's raster for 2D scans: the grid's cells exactly), or "octomap", OctoMap's (float
+    /// log-odds, one update per cell and scan, clamping at clampingMin/Max). (Default: mrpt_grid)
+    std::string sensorModelPreset{"mrpt_grid"};
     /// "beam" (ray traced: free along the beam, occupied at its end) or "endpoint". (Default: beam)
     std::string sensorModel{"beam"};
     /// P(occupied) of a cell where a beam ends, as in COccupancyGridMap2D. (Default: 0.65)
@@ -61,9 +82,22 @@ class CRTreeOccupancyGridMap : public mrpt::maps::CMetricMap {
     /// 1 - P(occupied) of a cell a beam crosses; 0 means "same as maxOccupancyUpdateCertainty",
     /// as in COccupancyGridMap2D. (Default: 0)
     float maxFreenessUpdateCertainty{0.0f};
-    /// Lower clamping probability of a cell. (Default: 0.1192)
+    /// mrpt_grid: P(free) of a cell crossed by a no-return beam; 0 means "same as
+    /// maxOccupancyUpdateCertainty", as in COccupancyGridMap2D. (Default: 0)
+    float maxFreenessInvalidRanges{0.0f};
+    /// mrpt_grid: no-return beams clear space up to half the last valid range. (Default: true)
+    bool considerInvalidRangesAsFreeSpace{true};
+    /// mrpt_grid: 2D scans whose sensor is tilted more than this [rad; .ini in degrees] are
+    /// not inserted, as in COccupancyGridMap2D. (Default: 0.05 deg)
+    float horizontalTolerance{0.05f * 3.14159265358979f / 180.0f};
+    /// mrpt_grid: insert only 2D scans taken within 1 mm of mapAltitude. (Default: false, 0)
+    bool useMapAltitude{false};
+    float mapAltitude{0.0f};
+    /// mrpt_grid: COccupancyGridMap2D's widening beams; only false is supported. (Default: false)
+    bool wideningBeamsWithDistance{false};
+    /// octomap: lower clamping probability of a cell (mrpt_grid: the int8 range). (Default: 0.1192)
     float clampingMin{0.1192f};
-    /// Upper clamping probability of a cell. (Default: 0.971)
+    /// octomap: upper clamping probability of a cell. (Default: 0.971)
     float clampingMax{0.971f};
     /// Cells at or above this probability are occupied. (Default: 0.5)
     float occupiedThreshold{0.5f};
@@ -90,6 +124,7 @@ class CRTreeOccupancyGridMap : public mrpt::maps::CMetricMap {
     float rotatingScan_maxElevation_deg{15.0f};
 
     MapParams toMapParams(double resolution) const;
+    bool mrptGrid() const { return sensorModelPreset == "mrpt_grid"; }
   };
 
   enum TLikelihoodMethod { lmLikelihoodField_Thrun = 0, lmRayTracing = 1 };
@@ -150,6 +185,22 @@ class CRTreeOccupancyGridMap : public mrpt::maps::CMetricMap {
   bool extractBeams(const mrpt::obs::CObservation& obs, const mrpt::poses::CPose3D& robotPose,
                     ObservationBeams& out, bool forInsertion) const;
 
+  /// mrpt_grid: the geometry a COccupancyGridMap2D would have now (2D scans grow it as they
+  /// grow the grid); setGridFrame() sets it as the grid's setSize() would, on an empty map.
+  const TGridFrame2D& gridFrame() const { return frame_; }
+  void setGridFrame(float x_min, float x_max, float y_min, float y_max);
+
+  /// What inserting a 2D scan in the mrpt_grid preset did, for a 2D view to follow it.
+  struct GridScanUpdate {
+    float grow[4];  ///< the rectangle the grid grew to (x_min, x_max, y_min, y_max)
+    std::vector<OccupancyMap::CellStep> steps;  ///< the cells stepped, in order (lattice keys)
+    std::vector<float> after;                   ///< each step's cell value after it
+  };
+  /// Inserts a 2D scan with COccupancyGridMap2D's rule (mrpt_grid preset); false where the grid
+  /// would insert nothing. `update`, if given, receives what changed.
+  bool insertGridScan(const mrpt::obs::CObservation2DRangeScan& scan, const mrpt::poses::CPose3D& robotPose,
+                      GridScanUpdate* update = nullptr);
+
   /// Figures of the last and of all insertions.
   InsertStats lastInsertStats, totalInsertStats;
   std::size_t invalidRangesSkipped{0};  ///< over all insertions
@@ -185,6 +236,9 @@ class CRTreeOccupancyGridMap : public mrpt::maps::CMetricMap {
   MAP_DEFINITION_START(CRTreeOccupancyGridMap)
   /// Cell edge length [m], as in COccupancyGridMap2D. (Default: 0.10)
   double resolution{0.10};
+  /// mrpt_grid: the initial extent of the grid the 2D scans follow, as COccupancyGridMap2D's.
+  /// (Default: -10, 10, -10, 10)
+  float min_x{-10.0f}, max_x{10.0f}, min_y{-10.0f}, max_y{10.0f};
   rtog::CRTreeOccupancyGridMap::TInsertionOptions insertionOpts;
   rtog::CRTreeOccupancyGridMap::TLikelihoodOptions likelihoodOpts;
   /// A bad .ini value found while loading, raised when the map is created: MRPT leaks the
@@ -260,6 +314,7 @@ class CRTreeOccupancyGridMap : public mrpt::maps::CMetricMap {
   };
 
   OccupancyMap map_;
+  TGridFrame2D frame_;
   mutable Caches caches_;
 
   /// cos/sin of the scan's beam angles, from the cache when the geometry is the last one's.

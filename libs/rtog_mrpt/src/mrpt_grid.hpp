@@ -1,0 +1,62 @@
+// The mrpt_grid preset: COccupancyGridMap2D's update of 2D range scans, reproduced so that an
+// R-tree map holds exactly the cells the grid holds. Three parts of the grid decide its cells
+// and are mirrored here type for type (float where MRPT computes in float): the int8 log-odds
+// steps, the float geometry the grid grows to (it decides the cell a point falls in), and the
+// fixed-point raster of its simple rays (MRPT 2.5: COccupancyGridMap2D_insert.cpp, _common.cpp).
+// tests/mrpt/test_mrpt_grid_fidelity.cpp holds the result against the grid itself.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include <mrpt/obs/CObservation2DRangeScan.h>
+#include <mrpt/poses/CPose3D.h>
+
+#include "rtog/core/occupancy_map.hpp"
+#include "rtog/mrpt/CRTreeOccupancyGridMap.h"
+
+namespace rtog::mrpt_grid {
+
+/// The grid's steps in its int8 units (a cell holds the log-odds of being free, x16).
+struct Steps {
+  int free = 1, noecho = 1, occupied = 3;
+};
+Steps stepsOf(const CRTreeOccupancyGridMap::TInsertionOptions& o);
+/// The steps as rtog stores them: value = -cell / 16, the natural log-odds of occupancy (every
+/// int8 cell value is a float exactly).
+StepRule stepRule(const Steps& s);
+/// The clamp-and-add parameters with the same steps and the int8 bounds, for what the grid
+/// does not rasterise beam by beam (3D observations).
+LogOddsParams logOddsParams(const Steps& s, double occupiedThreshold);
+inline float valueOfCell(int cell) { return static_cast<float>(-cell) / 16.0f; }
+/// The int8 cell of a value of the preset (exact for values the preset makes).
+int cellOfValue(float v);
+
+/// COccupancyGridMap2D::setSize() and resizeGrid(..., additionalMargin = true), on the geometry.
+void setSize(TGridFrame2D& f, float x_min, float x_max, float y_min, float y_max, float resolution);
+void resize(TGridFrame2D& f, float x_min, float x_max, float y_min, float y_max);
+inline int x2idx(const TGridFrame2D& f, float x) { return static_cast<int>((x - f.x_min) / f.resolution); }
+inline int y2idx(const TGridFrame2D& f, float y) { return static_cast<int>((y - f.y_min) / f.resolution); }
+/// Lattice key of the grid's cell 0 along x / y (the grid's minima lie on multiples of its resolution).
+std::int32_t keyOffsetX(const TGridFrame2D& f);
+std::int32_t keyOffsetY(const TGridFrame2D& f);
+
+/// One scan's beams as the grid computes them before it grows to hold them.
+struct ScanPlan {
+  float px = 0, py = 0;            ///< sensor position
+  std::vector<float> xs, ys;       ///< end point of each beam index used (others unset)
+  float grow[4] = {0, 0, 0, 0};    ///< the rectangle the grid grows to: x_min, x_max, y_min, y_max
+  std::size_t non_finite = 0;      ///< beams flagged valid whose range is NaN (skipped)
+};
+/// The grid's first half of inserting `o` taken at `robotPose`: false where the grid inserts
+/// nothing (a scan that is not horizontal within horizontalTolerance, or off mapAltitude).
+/// Throws std::invalid_argument for a non-finite pose.
+bool planScan(const mrpt::obs::CObservation2DRangeScan& o, const mrpt::poses::CPose3D& robotPose,
+              const CRTreeOccupancyGridMap::TInsertionOptions& opts, const TGridFrame2D& f, ScanPlan& plan);
+/// The second half, on the grown geometry: the cells each beam steps, in the grid's order, as
+/// lattice keys of z-layer `z`. Counts beams into `stats` as the core does.
+void traceScan(const mrpt::obs::CObservation2DRangeScan& o, const ScanPlan& plan,
+               const CRTreeOccupancyGridMap::TInsertionOptions& opts, const TGridFrame2D& f,
+               std::vector<OccupancyMap::CellStep>& steps, InsertStats& stats);
+
+}  // namespace rtog::mrpt_grid

@@ -1,0 +1,44 @@
+#include "options_check.hpp"
+
+#include <strings.h>
+
+#include <cmath>
+#include <iostream>
+#include <mutex>
+#include <set>
+#include <stdexcept>
+#include <vector>
+
+namespace rtog {
+
+void reportUnknownKeys(const mrpt::config::CConfigFileBase& source, const std::string& section,
+                       std::initializer_list<const char*> known) {
+  static std::mutex mutex;
+  static std::set<std::string> reported;
+  std::vector<std::string> keys;
+  source.getAllKeys(section, keys);
+  for (const std::string& k : keys) {
+    bool ok = false;
+    for (const char* name : known) ok = ok || strcasecmp(k.c_str(), name) == 0;  // MRPT keys ignore case
+    if (ok) continue;
+    std::lock_guard<std::mutex> lk(mutex);
+    if (reported.insert(section + "/" + k).second)
+      std::cerr << "rtog: warning: [" << section << "] unknown key '" << k << "' is ignored\n";
+  }
+}
+
+void readGridExtent(const mrpt::config::CConfigFileBase& source, const std::string& section, float& min_x,
+                    float& max_x, float& min_y, float& max_y) {
+  min_x = source.read_float(section, "min_x", min_x);
+  max_x = source.read_float(section, "max_x", max_x);
+  min_y = source.read_float(section, "min_y", min_y);
+  max_y = source.read_float(section, "max_y", max_y);
+  const auto bad = [&](const char* key) {
+    throw std::invalid_argument("rtog: invalid option [" + section + "] " + key +
+                                ": the grid extent needs finite min_x < max_x and min_y < max_y");
+  };
+  if (!(std::isfinite(min_x) && std::isfinite(max_x) && min_x < max_x)) bad("min_x/max_x");
+  if (!(std::isfinite(min_y) && std::isfinite(max_y) && min_y < max_y)) bad("min_y/max_y");
+}
+
+}  // namespace rtog

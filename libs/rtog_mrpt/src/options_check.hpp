@@ -1,0 +1,21 @@
+// Checks of .ini sections shared by the map types' option loaders.
+#pragma once
+
+#include <initializer_list>
+#include <string>
+
+#include <mrpt/config/CConfigFileBase.h>
+
+namespace rtog {
+
+/// Warns once per process (stderr) about each key of `section` that is not in `known`: a key
+/// pasted from another map's section, or misspelt, would otherwise be dropped without a word.
+void reportUnknownKeys(const mrpt::config::CConfigFileBase& source, const std::string& section,
+                       std::initializer_list<const char*> known);
+
+/// Reads COccupancyGridMap2D's creation extent (min_x, max_x, min_y, max_y) from `section`;
+/// throws std::invalid_argument naming the key when it is not a finite, ordered extent.
+void readGridExtent(const mrpt::config::CConfigFileBase& source, const std::string& section, float& min_x,
+                    float& max_x, float& min_y, float& max_y);
+
+}  // namespace rtog
