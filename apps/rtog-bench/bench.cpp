@@ -419,10 +419,14 @@ void run2D(const std::string& rawlog, const Options& opts, std::vector<Result>& 
   };
   for (const double res : opts.resolutions) {
     std::vector<Method2D> methods;
+    // Both update rules: mrpt_grid (the MRPT map types' default: COccupancyGridMap2D's cells) and
+    // octomap (one update per cell and scan, OctoMap's clamping).
+    for (const std::string preset : {"mrpt_grid", "octomap"})
     for (const std::string policy : {"equal", "clamped", "off"})
-      methods.push_back({"rtog (CRTreeOccupancyGridMap), merge " + policy,
+      methods.push_back({"rtog (CRTreeOccupancyGridMap), " + preset + ", merge " + policy,
                          [=] {
                            CRTreeOccupancyGridMap::TInsertionOptions io;
+                           io.sensorModelPreset = preset;
                            io.maxDistanceInsertion = max_range;
                            io.mergePolicy = policy;
                            auto m = std::make_shared<CRTreeOccupancyGridMap>(res, io);

@@ -73,7 +73,9 @@ void loadQuietly(const std::string& what, const std::string& path, Load&& load) 
 std::shared_ptr<CRTreeOccupancyGridMap> makeMap(const BuildOptions& o) {
   if (o.ini_path.empty()) {
     // The command-line options, in the map's MRPT terms.
+    // rtog's own flags state OctoMap's rule (hit/miss probabilities, clamping); an .ini states MRPT's.
     CRTreeOccupancyGridMap::TInsertionOptions io;
+    io.sensorModelPreset = "octomap";
     const LogOddsParams& lp = o.map.log_odds;
     io.sensorModel = toString(o.insert.model);
     io.mergePolicy = toString(o.map.merge);

@@ -1,49 +1,96 @@
 // Ordered per-beam steps (StepRule) into the planar cache: the update rule of grids that step
 // every cell a beam touches, beam by beam (MRPT's COccupancyGridMap2D).
-#include <limits>
+#include <algorithm>
 #include <stdexcept>
 
 #include "rtog/core/occupancy_map.hpp"
 
 namespace rtog {
 
-InsertStats OccupancyMap::applySteps(std::int32_t z, const CellStep* steps, std::size_t n, const StepRule& rule,
-                                     float* after) {
+InsertStats OccupancyMap::applyStepRuns(std::int32_t z, const StepRun* runs, std::size_t n, const StepRule& rule,
+                                        std::vector<float>* after) {
   InsertStats stats;
+  if (after) after->clear();
   if (n == 0) return stats;
-  // Every key checked before the first change: a throw leaves the map as it was.
-  std::int32_t x0 = steps[0].x, x1 = x0, y0 = steps[0].y, y1 = y0;
-  for (std::size_t i = 1; i < n; ++i) {
-    x0 = std::min(x0, steps[i].x), x1 = std::max(x1, steps[i].x);
-    y0 = std::min(y0, steps[i].y), y1 = std::max(y1, steps[i].y);
+  // Every key checked before the first change (a run's cells lie between its first and last,
+  // the walk being monotone): a throw leaves the map as it was.
+  std::int32_t x0 = runs[0].x, x1 = x0, y0 = runs[0].y, y1 = y0;
+  std::size_t steps = 0;
+  const auto extend = [&](std::int64_t x, std::int64_t y) {
+    if (x < kKeyMin || x > kKeyMax || y < kKeyMin || y > kKeyMax)
+      throw std::out_of_range("OccupancyMap::applyStepRuns: a cell lies outside the key range");
+    x0 = std::min(x0, static_cast<std::int32_t>(x)), x1 = std::max(x1, static_cast<std::int32_t>(x));
+    y0 = std::min(y0, static_cast<std::int32_t>(y)), y1 = std::max(y1, static_cast<std::int32_t>(y));
+  };
+  for (std::size_t i = 0; i < n; ++i) {
+    const StepRun& r = runs[i];
+    extend(r.x, r.y);
+    if (r.count > 0) {
+      const std::int64_t k = r.count - 1;
+      extend(((std::int64_t{r.x} << kRunFracBits) + k * r.dx) >> kRunFracBits,
+             ((std::int64_t{r.y} << kRunFracBits) + k * r.dy) >> kRunFracBits);
+    }
+    if (r.end) extend(r.end_x, r.end_y);
+    steps += r.count + (r.end ? 1 : 0);
   }
   if (!keyInRange(Key{x0, y0, z}) || !keyInRange(Key{x1, y1, z}))
-    throw std::out_of_range("OccupancyMap::applySteps: cells " + toString(Box{Key{x0, y0, z}, Key{x1, y1, z}}) +
-                            " lie outside the key range");
+    throw std::out_of_range("OccupancyMap::applyStepRuns: z-layer outside the key range");
+  if (after) after->reserve(steps);
+  // The layers under the runs' bounding box by arithmetic, found or made on first use: the hash
+  // lookups a step would cost otherwise (a beam changes brick every 16 cells).
+  const std::int32_t bx0 = x0 >> kBrickBits, by0 = y0 >> kBrickBits;
+  const auto bw = static_cast<std::size_t>((x1 >> kBrickBits) - bx0 + 1);
+  const auto bh = static_cast<std::size_t>((y1 >> kBrickBits) - by0 + 1);
+  std::vector<PlanarLayer*> table(bw * bh, nullptr);
   const int local_z = z & (kBrickSize - 1);
   const std::int32_t bz = z >> kBrickBits;
-  // Consecutive steps of a beam mostly stay in one brick: its layer is looked up once for them.
-  std::int32_t bx = std::numeric_limits<std::int32_t>::min(), by = bx;
-  PlanarLayer* layer = nullptr;
-  for (std::size_t i = 0; i < n; ++i) {
-    const CellStep& s = steps[i];
-    if ((s.x >> kBrickBits) != bx || (s.y >> kBrickBits) != by) {
-      bx = s.x >> kBrickBits;
-      by = s.y >> kBrickBits;
-      layer = &planar_layers_[recent_layers_.get(packKey(Key{bx, by, z}), [&] {
-        return planarLayer(brickSlot(Key{bx, by, bz}), local_z);
-      })];
+  const auto layerAt = [&](std::int32_t x, std::int32_t y) {
+    PlanarLayer*& l = table[static_cast<std::size_t>((y >> kBrickBits) - by0) * bw +
+                            static_cast<std::size_t>((x >> kBrickBits) - bx0)];
+    if (!l) {
+      const Key brick{x >> kBrickBits, y >> kBrickBits, bz};
+      l = &planar_layers_[recent_layers_.get(packKey(Key{brick.x, brick.y, z}),
+                                             [&] { return planarLayer(brickSlot(brick), local_z); })];
     }
-    const int cell = ((s.y & (kBrickSize - 1)) << kBrickBits) | (s.x & (kBrickSize - 1));
+    return l;
+  };
+  // The walk of forEachRunCell, with the rule's constants of the run's kind hoisted and the
+  // layer kept while the walk stays in its brick: this loop is the whole cost of a 2D scan.
+  std::int32_t cur_bx = 0, cur_by = 0;
+  PlanarLayer* layer = nullptr;
+  std::size_t unchanged = 0, free_steps = 0, occupied_steps = 0;
+  const auto step = [&](std::int32_t x, std::int32_t y, bool occupied, float delta, float limit, float bound) {
+    if (!layer || (x >> kBrickBits) != cur_bx || (y >> kBrickBits) != cur_by) {
+      cur_bx = x >> kBrickBits, cur_by = y >> kBrickBits;
+      layer = layerAt(x, y);
+    }
+    const int cell = ((y & (kBrickSize - 1)) << kBrickBits) | (x & (kBrickSize - 1));
     float& v = layer->value[static_cast<std::size_t>(cell)];
     const float prev = v;
-    v = rule.apply(prev, s.kind);
+    v = (occupied ? prev < limit : prev > limit) ? prev + delta : bound;  // StepRule::apply
     layer->known[static_cast<std::size_t>(cell >> 6)] |= std::uint64_t{1} << (cell & 63);
-    if (after) after[i] = v;
-    if (v == prev) ++stats.cells_unchanged;
-    else if (s.kind == StepKind::Occupied) ++stats.cells_occupied;
-    else ++stats.cells_free;
+    unchanged += v == prev;
+    if (after) after->push_back(v);
+  };
+  for (std::size_t i = 0; i < n; ++i) {
+    const StepRun& r = runs[i];
+    const auto k = static_cast<std::size_t>(r.kind);
+    const float delta = rule.delta[k], limit = rule.limit[k], bound = rule.bound[k];
+    const bool occ = r.kind == StepKind::Occupied;
+    std::int32_t fx = r.x * (1 << kRunFracBits), fy = r.y * (1 << kRunFracBits);
+    for (std::uint32_t c = 0; c < r.count; ++c, fx += r.dx, fy += r.dy)
+      step(fx >> kRunFracBits, fy >> kRunFracBits, occ, delta, limit, bound);
+    (occ ? occupied_steps : free_steps) += r.count;
+    if (r.end) {
+      const auto o = static_cast<std::size_t>(StepKind::Occupied);
+      step(r.end_x, r.end_y, true, rule.delta[o], rule.limit[o], rule.bound[o]);
+      ++occupied_steps;
+    }
   }
+  // Changed steps by kind; unchanged ones (saturated cells) are not told apart by kind.
+  stats.cells_unchanged = unchanged;
+  stats.cells_free = free_steps;
+  stats.cells_occupied = occupied_steps;
   cover_pending_.store(true, std::memory_order_release);
   return stats;
 }

@@ -107,11 +107,12 @@ bool CRTreeBackedGridMap2D::insertGridScan(const mrpt::obs::CObservation2DRangeS
   mine.size_x = getSizeX(), mine.size_y = getSizeY();
   if (!mine.sameGeometry(f)) throw std::logic_error("rtog::CRTreeBackedGridMap2D: the grid grew unlike its mirror");
   const std::int32_t ox = mrpt_grid::keyOffsetX(f), oy = mrpt_grid::keyOffsetY(f);
-  for (std::size_t i = 0; i < upd.steps.size(); ++i) {
-    const auto& st = upd.steps[i];
-    m_map[static_cast<std::size_t>(st.x - ox) + static_cast<std::size_t>(st.y - oy) * m_size_x] =
-        static_cast<cellType>(mrpt_grid::cellOfValue(upd.after[i]));
-  }
+  const float* value = upd.after.data();
+  for (const auto& run : upd.runs)
+    rtog::OccupancyMap::forEachRunCell(run, [&](std::int32_t x, std::int32_t y, rtog::StepKind) {
+      m_map[static_cast<std::size_t>(x - ox) + static_cast<std::size_t>(y - oy) * m_size_x] =
+          static_cast<cellType>(mrpt_grid::cellOfValue(*value++));
+    });
   m_likelihoodCacheOutDated = true;
   m_is_empty = false;
   return true;

@@ -136,6 +136,8 @@ void CRTreeOccupancyGridMap::TInsertionOptions::validate() const {
     badOption(sec, "clampingMin/clampingMax", "need 0 < clampingMin < 0.5 < clampingMax < 1");
   if (!isProbability(occupiedThreshold)) badOption(sec, "occupiedThreshold", "must lie in (0, 1)");
   if (!std::isfinite(maxDistanceInsertion)) badOption(sec, "maxDistanceInsertion", "must be finite");
+  if (mrptGrid() && !(maxDistanceInsertion > 0.0f))
+    badOption(sec, "maxDistanceInsertion", "must be > 0 in the mrpt_grid preset (the grid cuts every beam there)");
   if (decimation < 1) badOption(sec, "decimation", "must be >= 1");
   if (decimation_3d_range < 1 || decimation_3d_range > 255) badOption(sec, "decimation_3d_range", "must be in [1, 255]");
   if (threads < 1 || threads > 256) badOption(sec, "threads", "must be in [1, 256]");

@@ -32,18 +32,12 @@ bool CRTreeOccupancyGridMap::insertGridScan(const mrpt::obs::CObservation2DRange
     grown.layer = k.z;
   }
   InsertStats stats;
-  thread_local std::vector<OccupancyMap::CellStep> own_steps;
-  thread_local std::vector<float> own_after;
-  std::vector<OccupancyMap::CellStep>& steps = update ? update->steps : own_steps;
-  mrpt_grid::traceScan(scan, plan, io, grown, steps, stats);
-  float* after = nullptr;
-  if (update) {
-    update->after.resize(steps.size());
-    after = update->after.data();
-    std::copy(std::begin(plan.grow), std::end(plan.grow), update->grow);
-  }
+  thread_local std::vector<OccupancyMap::StepRun> own_runs;
+  std::vector<OccupancyMap::StepRun>& runs = update ? update->runs : own_runs;
+  mrpt_grid::traceScan(scan, plan, io, grown, runs, stats);
+  if (update) std::copy(std::begin(plan.grow), std::end(plan.grow), update->grow);
   const StepRule rule = mrpt_grid::stepRule(mrpt_grid::stepsOf(io));
-  stats += map_.applySteps(grown.layer, steps.data(), steps.size(), rule, after);
+  stats += map_.applyStepRuns(grown.layer, runs.data(), runs.size(), rule, update ? &update->after : nullptr);
   frame_ = grown;
   std::size_t invalid = 0;
   if (!io.considerInvalidRangesAsFreeSpace)

@@ -169,15 +169,16 @@ bool planScan(const mrpt::obs::CObservation2DRangeScan& o, const mrpt::poses::CP
 
 void traceScan(const mrpt::obs::CObservation2DRangeScan& o, const ScanPlan& plan,
                const CRTreeOccupancyGridMap::TInsertionOptions& opts, const TGridFrame2D& f,
-               std::vector<OccupancyMap::CellStep>& steps, InsertStats& stats) {
-  constexpr int kFrBits = 9;  // the raster's fixed point: 1/512 cell
+               std::vector<OccupancyMap::StepRun>& runs, InsertStats& stats) {
+  constexpr int kFrBits = OccupancyMap::kRunFracBits;  // the grid's raster: 1/512 cell
   const std::size_t n = o.getScanSize();
   const auto K = static_cast<std::size_t>(opts.decimation);
   const bool trace_free = opts.sensorModel != "endpoint";
   const float maxd = opts.maxDistanceInsertion;
   const std::int32_t ox = keyOffsetX(f), oy = keyOffsetY(f);
   const int cx0 = x2idx(f, plan.px), cy0 = y2idx(f, plan.py);
-  steps.clear();
+  runs.clear();
+  runs.reserve(n / K + 1);
   for (std::size_t i = 0; i < n; i += K) {
     const bool valid = o.getScanRangeValidity(i);
     if (!valid && !opts.considerInvalidRangesAsFreeSpace) {
@@ -193,24 +194,19 @@ void traceScan(const mrpt::obs::CObservation2DRangeScan& o, const ScanPlan& plan
       ++stats.skipped_zero_length;
       continue;
     }
+    OccupancyMap::StepRun r{};
+    r.x = cx0 + ox, r.y = cy0 + oy;
+    r.kind = valid ? StepKind::Free : StepKind::FreeNoEcho;
     if (trace_free) {
       const float inv = 1.0f / nsteps;
-      const int dx = static_cast<int>((ax < 0 ? -1 : +1) * std::round((std::abs(ax) << kFrBits) * inv));
-      const int dy = static_cast<int>((ay < 0 ? -1 : +1) * std::round((std::abs(ay) << kFrBits) * inv));
-      const StepKind kind = valid ? StepKind::Free : StepKind::FreeNoEcho;
-      int fx = cx0 << kFrBits, fy = cy0 << kFrBits, cx = cx0, cy = cy0;
-      for (int s = 0; s < nsteps; ++s) {
-        steps.push_back({cx + ox, cy + oy, kind});
-        fx += dx, fy += dy;
-        cx = fx >> kFrBits, cy = fy >> kFrBits;
-      }
+      r.dx = static_cast<int>((ax < 0 ? -1 : +1) * std::round((std::abs(ax) << kFrBits) * inv));
+      r.dy = static_cast<int>((ay < 0 ? -1 : +1) * std::round((std::abs(ay) << kFrBits) * inv));
+      r.count = static_cast<std::uint32_t>(nsteps);
     }
-    if (valid && o.getScanRange(i) < maxd) {
-      steps.push_back({tx + ox, ty + oy, StepKind::Occupied});
-      ++stats.rays_hit;
-    } else {
-      ++stats.rays_truncated;
-    }
+    r.end = valid && o.getScanRange(i) < maxd;
+    r.end_x = tx + ox, r.end_y = ty + oy;
+    ++(r.end ? stats.rays_hit : stats.rays_truncated);
+    if (r.count > 0 || r.end) runs.push_back(r);
   }
 }
 

@@ -53,10 +53,10 @@ struct ScanPlan {
 /// Throws std::invalid_argument for a non-finite pose.
 bool planScan(const mrpt::obs::CObservation2DRangeScan& o, const mrpt::poses::CPose3D& robotPose,
               const CRTreeOccupancyGridMap::TInsertionOptions& opts, const TGridFrame2D& f, ScanPlan& plan);
-/// The second half, on the grown geometry: the cells each beam steps, in the grid's order, as
-/// lattice keys of z-layer `z`. Counts beams into `stats` as the core does.
+/// The second half, on the grown geometry: the run of cells each beam steps, in the grid's order,
+/// in lattice keys. Counts beams into `stats` as the core does.
 void traceScan(const mrpt::obs::CObservation2DRangeScan& o, const ScanPlan& plan,
                const CRTreeOccupancyGridMap::TInsertionOptions& opts, const TGridFrame2D& f,
-               std::vector<OccupancyMap::CellStep>& steps, InsertStats& stats);
+               std::vector<OccupancyMap::StepRun>& runs, InsertStats& stats);
 
 }  // namespace rtog::mrpt_grid

@@ -152,20 +152,33 @@ class OccupancyMap {
     return insertPointCloud(origin, points.data(), points.size(), ip);
   }
 
-  /// One step of StepRule for the cell (x, y) of a z-layer.
-  struct CellStep {
-    std::int32_t x, y;
+  /// Cells a beam steps in one z-layer, as grids raster beams in fixed point: cell k (k < count)
+  /// is (((x << F) + k * dx) >> F, ((y << F) + k * dy) >> F) for F = kRunFracBits, each taking a
+  /// `kind` step; then, if `end`, the cell (end_x, end_y) takes an Occupied step.
+  struct StepRun {
+    std::int32_t x, y, dx, dy;
+    std::uint32_t count;
     StepKind kind;
+    bool end;
+    std::int32_t end_x, end_y;
   };
-  /// Applies `steps` in their order to cells of z-layer `z`, each one StepRule::apply: a cell
-  /// crossed by five beams takes five steps, as in a grid that updates beam by beam, where
-  /// insertPointCloud() updates each cell once a scan. Unknown cells start at the prior. The
-  /// cells go through the planar cache, as planar scans do. `after`, if given, receives the value
-  /// of each step's cell after that step (n floats). The stats count steps (cells_free and
-  /// cells_occupied by kind, cells_unchanged where the value stayed). Throws std::out_of_range,
-  /// changing nothing, if a cell has no key.
-  InsertStats applySteps(std::int32_t z, const CellStep* steps, std::size_t n, const StepRule& rule,
-                         float* after = nullptr);
+  static constexpr int kRunFracBits = 9;
+  /// Calls fn(x, y, kind) for every cell of a run, in its order.
+  template <class Fn>
+  static void forEachRunCell(const StepRun& r, Fn&& fn) {
+    std::int32_t fx = r.x * (1 << kRunFracBits), fy = r.y * (1 << kRunFracBits);
+    for (std::uint32_t k = 0; k < r.count; ++k, fx += r.dx, fy += r.dy) fn(fx >> kRunFracBits, fy >> kRunFracBits, r.kind);
+    if (r.end) fn(r.end_x, r.end_y, StepKind::Occupied);
+  }
+  /// Applies the runs' steps in their order to cells of z-layer `z`, each one StepRule::apply: a
+  /// cell crossed by five beams takes five steps, as in a grid that updates beam by beam, where
+  /// insertPointCloud() updates each cell once a scan. Unknown cells start at the prior; the cells
+  /// go through the planar cache, as planar scans do. `after`, if given, receives the value of
+  /// each step's cell after that step, in forEachRunCell's order. The stats count steps:
+  /// cells_free and cells_occupied by kind, cells_unchanged those (of either) where the value stayed. Throws
+  /// std::out_of_range, changing nothing, if a cell has no key.
+  InsertStats applyStepRuns(std::int32_t z, const StepRun* runs, std::size_t n, const StepRule& rule,
+                            std::vector<float>* after = nullptr);
 
   /// Step 1 of an insertion: traces the beams into `batch` (no change to the map). Throws
   /// std::out_of_range if the origin has no key.

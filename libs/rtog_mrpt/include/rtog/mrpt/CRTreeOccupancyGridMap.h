@@ -193,8 +193,8 @@ class CRTreeOccupancyGridMap : public mrpt::maps::CMetricMap {
   /// What inserting a 2D scan in the mrpt_grid preset did, for a 2D view to follow it.
   struct GridScanUpdate {
     float grow[4];  ///< the rectangle the grid grew to (x_min, x_max, y_min, y_max)
-    std::vector<OccupancyMap::CellStep> steps;  ///< the cells stepped, in order (lattice keys)
-    std::vector<float> after;                   ///< each step's cell value after it
+    std::vector<OccupancyMap::StepRun> runs;  ///< the cells stepped, in order (lattice keys)
+    std::vector<float> after;                 ///< each step's cell value after it
   };
   /// Inserts a 2D scan with COccupancyGridMap2D's rule (mrpt_grid preset); false where the grid
   /// would insert nothing. `update`, if given, receives what changed.
