@@ -16,8 +16,10 @@ namespace rtog {
 
 // Version 0: genericMapParams, insertion and likelihood options, then the core map's own
 // binary format (doc/format.md) as a length-prefixed byte block. Version 1 adds
-// insertionOptions.planarCache after the rotating-scan elevations.
-uint8_t CRTreeOccupancyGridMap::serializeGetVersion() const { return 1; }
+// insertionOptions.planarCache after the rotating-scan elevations. Version 2 numbers the
+// likelihood method as COccupancyGridMap2D (0 was the likelihood field before) and adds the
+// options of its methods and the 2D view's band after the likelihood options.
+uint8_t CRTreeOccupancyGridMap::serializeGetVersion() const { return 2; }
 
 void CRTreeOccupancyGridMap::serializeTo(mrpt::serialization::CArchive& out) const {
   out << genericMapParams;
@@ -30,6 +32,9 @@ void CRTreeOccupancyGridMap::serializeTo(mrpt::serialization::CArchive& out) con
   out << static_cast<int32_t>(lo.likelihoodMethod) << lo.LF_stdHit << lo.LF_zHit << lo.LF_zRandom << lo.LF_maxRange
       << lo.LF_decimation << lo.LF_maxCorrsDistance << lo.LF_useSquareDist << lo.enableLikelihoodCache
       << lo.rayTracing_decimation << lo.rayTracing_stdHit;
+  out << lo.LF_alternateAverageMethod << lo.MI_exponent << lo.MI_skip_rays << lo.MI_ratio_max_distance
+      << lo.rayTracing_useDistanceFilter << lo.consensus_takeEachRange << lo.consensus_pow << lo.OWA_weights
+      << lo.scanLikelihoodOnGridView << gridViewOptions.gridView_minZ << gridViewOptions.gridView_maxZ;
   std::ostringstream os(std::ios::binary);
   map_.write(os);
   const std::string bytes = os.str();
@@ -40,7 +45,8 @@ void CRTreeOccupancyGridMap::serializeTo(mrpt::serialization::CArchive& out) con
 void CRTreeOccupancyGridMap::serializeFrom(mrpt::serialization::CArchive& in, uint8_t version) {
   switch (version) {
     case 0:
-    case 1: {
+    case 1:
+    case 2: {
       in >> genericMapParams;
       auto& io = insertionOptions;
       int32_t threads = 1;
@@ -56,7 +62,23 @@ void CRTreeOccupancyGridMap::serializeFrom(mrpt::serialization::CArchive& in, ui
       in >> method >> lo.LF_stdHit >> lo.LF_zHit >> lo.LF_zRandom >> lo.LF_maxRange >> lo.LF_decimation >>
           lo.LF_maxCorrsDistance >> lo.LF_useSquareDist >> lo.enableLikelihoodCache >> lo.rayTracing_decimation >>
           lo.rayTracing_stdHit;
-      if (method != lmLikelihoodField_Thrun && method != lmRayTracing)
+      if (version < 2) {  // 0/1: the likelihood field / ray tracing, as COccupancyGridMap3D
+        if (method != 0 && method != 1)
+          throw std::runtime_error("rtog::CRTreeOccupancyGridMap: corrupt stream (likelihood method)");
+        method = method == 0 ? lmLikelihoodField_Thrun : lmRayTracing;
+        const TLikelihoodOptions d;  // options these versions did not have: defaults
+        lo.LF_alternateAverageMethod = d.LF_alternateAverageMethod, lo.MI_exponent = d.MI_exponent;
+        lo.MI_skip_rays = d.MI_skip_rays, lo.MI_ratio_max_distance = d.MI_ratio_max_distance;
+        lo.rayTracing_useDistanceFilter = d.rayTracing_useDistanceFilter;
+        lo.consensus_takeEachRange = d.consensus_takeEachRange, lo.consensus_pow = d.consensus_pow;
+        lo.OWA_weights = d.OWA_weights, lo.scanLikelihoodOnGridView = d.scanLikelihoodOnGridView;
+        gridViewOptions = TGridViewOptions{};
+      } else {
+        in >> lo.LF_alternateAverageMethod >> lo.MI_exponent >> lo.MI_skip_rays >> lo.MI_ratio_max_distance >>
+            lo.rayTracing_useDistanceFilter >> lo.consensus_takeEachRange >> lo.consensus_pow >> lo.OWA_weights >>
+            lo.scanLikelihoodOnGridView >> gridViewOptions.gridView_minZ >> gridViewOptions.gridView_maxZ;
+      }
+      if (method < lmMeanInformation || method > lmConsensusOWA)
         throw std::runtime_error("rtog::CRTreeOccupancyGridMap: corrupt stream (likelihood method)");
       lo.likelihoodMethod = static_cast<TLikelihoodMethod>(method);
       const uint64_t n = in.ReadAs<uint64_t>();
