@@ -91,47 +91,56 @@ void CRTreeOccupancyGridMap::TGridViewOptions::saveToConfigFile(mrpt::config::CC
 int8_t toMrptCell(float v) {
   // Scaling by a power of two is exact: a stored -l/16 gives back l bit for bit.
   const float t = -16.0f * v;
-  if (t == std::nearbyint(t) && std::abs(t) <= 127.0f) return static_cast<int8_t>(t);
+  if (t == std::nearbyint(t) && t >= -128.0f && t <= 127.0f) return static_cast<int8_t>(t);
   return Grid2D::p2l(static_cast<float>(1.0 - probability(v)));
 }
 
 // ---- the view ----------------------------------------------------------------------------
 
-CRTreeOccupancyGridMap::GridView::GridView(const OccupancyMap& m, float lo, float hi) : minZ(lo), maxZ(hi) {
+CRTreeOccupancyGridMap::GridView::GridView(const OccupancyMap& m, float lo, float hi, const std::optional<Rect>& ex)
+    : minZ(lo), maxZ(hi), extra(ex) {
   const double res = m.resolution();
   const auto fres = static_cast<float>(res);
   const Box kb = m.keyBounds();
-  if (kb.isEmpty()) {  // MRPT's grid needs at least one cell
-    grid.setSize(0.0f, fres, 0.0f, fres, fres, 0.5f);
-    return;
+  // The grid's lattice cells: the known cells' columns and `extra`, at least one cell.
+  double gx0 = 0, gy0 = 0, gx1 = 0, gy1 = 0;  // inclusive cell keys
+  if (!kb.isEmpty()) gx0 = kb.min.x, gy0 = kb.min.y, gx1 = kb.max.x, gy1 = kb.max.y;
+  if (extra) {
+    const auto key = [&](double v) { return std::floor(std::min(std::max(v / res, double(kKeyMin)), double(kKeyMax))); };
+    const bool any = !kb.isEmpty();
+    gx0 = any ? std::min(gx0, key((*extra)[0])) : key((*extra)[0]);
+    gy0 = any ? std::min(gy0, key((*extra)[1])) : key((*extra)[1]);
+    gx1 = std::max(any ? gx1 : gx0, key((*extra)[2]));
+    gy1 = std::max(any ? gy1 : gy0, key((*extra)[3]));
   }
-  // Cell k of the lattice is cell k - kb.min of the grid: setSize keeps multiples of res.
-  grid.setSize(static_cast<float>(kb.min.x * res), static_cast<float>((kb.max.x + 1.0) * res),
-               static_cast<float>(kb.min.y * res), static_cast<float>((kb.max.y + 1.0) * res), fres, 0.5f);
+  // Cell k of the lattice is cell k - g*0 of the grid: setSize keeps multiples of res.
+  grid.setSize(static_cast<float>(gx0 * res), static_cast<float>((gx1 + 1) * res), static_cast<float>(gy0 * res),
+               static_cast<float>((gy1 + 1) * res), fres, 0.5f);
+  if (kb.isEmpty()) return;
   grid.setNonEmpty();
-  const std::int64_t nx = std::min<std::int64_t>(kb.extent(0), grid.getSizeX());
-  const std::int64_t ny = std::min<std::int64_t>(kb.extent(1), grid.getSizeY());
+  const auto sx = static_cast<std::int64_t>(grid.getSizeX()), sy = static_cast<std::int64_t>(grid.getSizeY());
   // z-layers whose interval [k*res, (k+1)*res) meets the band.
   const double z0 = std::max<double>(kb.min.z, std::floor(double(lo) / res));
   const double z1 = std::min<double>(kb.max.z, std::floor(double(hi) / res));
   if (!(z0 <= z1)) return;  // band outside the map: all unknown
   const Box region{Key{kb.min.x, kb.min.y, static_cast<std::int32_t>(z0)},
                    Key{kb.max.x, kb.max.y, static_cast<std::int32_t>(z1)}};
+  const std::int64_t nx = kb.extent(0), ny = kb.extent(1);
   std::vector<float> best(static_cast<std::size_t>(nx * ny), std::numeric_limits<float>::quiet_NaN());
   m.forEachLeafIn(region, [&](const Box& b, float v) {
     const Box c = b.intersection(region);
-    for (std::int32_t y = c.min.y; y <= c.max.y && y - region.min.y < ny; ++y)
-      for (std::int32_t x = c.min.x; x <= c.max.x && x - region.min.x < nx; ++x) {
+    for (std::int32_t y = c.min.y; y <= c.max.y; ++y)
+      for (std::int32_t x = c.min.x; x <= c.max.x; ++x) {
         float& dst = best[static_cast<std::size_t>((y - region.min.y) * nx + (x - region.min.x))];
         if (!(dst >= v)) dst = v;  // NaN (unknown) or lower
       }
   });
   auto& cells = grid.cells();
-  const std::size_t sx = grid.getSizeX();
-  for (std::int64_t y = 0; y < ny; ++y)
-    for (std::int64_t x = 0; x < nx; ++x) {
+  const auto ox = static_cast<std::int64_t>(kb.min.x - gx0), oy = static_cast<std::int64_t>(kb.min.y - gy0);
+  for (std::int64_t y = 0; y < ny && y + oy < sy; ++y)
+    for (std::int64_t x = 0; x < nx && x + ox < sx; ++x) {
       const float v = best[static_cast<std::size_t>(y * nx + x)];
-      if (!std::isnan(v)) cells[static_cast<std::size_t>(y) * sx + static_cast<std::size_t>(x)] = toMrptCell(v);
+      if (!std::isnan(v)) cells[static_cast<std::size_t>((y + oy) * sx + x + ox)] = toMrptCell(v);
     }
 }
 
@@ -165,12 +174,24 @@ void CRTreeOccupancyGridMap::GridView::setOptions(const TLikelihoodOptions& o, c
   if (lfChanged) grid.invalidateLikelihoodCache();
 }
 
-std::shared_ptr<CRTreeOccupancyGridMap::GridView> CRTreeOccupancyGridMap::gridViewShared() const {
+std::shared_ptr<CRTreeOccupancyGridMap::GridView> CRTreeOccupancyGridMap::gridViewShared(const double* need) const {
   const float lo = gridViewOptions.gridView_minZ, hi = gridViewOptions.gridView_maxZ;
   if (!(lo <= hi)) throw std::invalid_argument("rtog::CRTreeOccupancyGridMap: need gridView_minZ <= gridView_maxZ");
   std::lock_guard<std::mutex> lk(caches_.mutex);
   auto& v = caches_.grid_view;
-  if (!v || v->minZ != lo || v->maxZ != hi) v = std::make_shared<GridView>(map_, lo, hi);
+  const bool same = v && v->minZ == lo && v->maxZ == hi;
+  if (same && (!need || v->covers({need[0], need[1], need[2], need[3]}))) return v;
+  std::optional<GridView::Rect> extra;
+  if (need) {
+    // Grown with a margin, so that particles wandering out of it rebuild it rarely.
+    constexpr double kMargin = 5.0;
+    extra = GridView::Rect{need[0] - kMargin, need[1] - kMargin, need[2] + kMargin, need[3] + kMargin};
+    if (same && v->extra)
+      for (int i = 0; i < 4; ++i) (*extra)[i] = i < 2 ? std::min((*extra)[i], (*v->extra)[i]) : std::max((*extra)[i], (*v->extra)[i]);
+  } else if (same) {
+    extra = v->extra;
+  }
+  v = std::make_shared<GridView>(map_, lo, hi, extra);
   return v;
 }
 
@@ -189,10 +210,24 @@ std::optional<double> CRTreeOccupancyGridMap::gridViewLikelihood(const mrpt::obs
         std::isfinite(pose.pitch()) && std::isfinite(pose.roll())))
     return std::nullopt;
   likelihoodOptions.validate();
-  const auto v = gridViewShared();
-  if (!scan->isPlanarScan(v->grid.insertionOptions.horizontalTolerance)) return std::nullopt;
+  if (!scan->isPlanarScan(mrpt::maps::COccupancyGridMap2D::TInsertionOptions().horizontalTolerance))
+    return std::nullopt;
+  // MRPT's methods read cells without bounds checks (lmConsensus) or fail (OWA, LF_II) for end
+  // points off the grid; a stock grid grown by insertion holds them, so the view is grown too.
+  double r = 0;
+  for (std::size_t i = 0; i < scan->getScanSize(); ++i)
+    if (scan->getScanRangeValidity(i)) r = std::max<double>(r, scan->getScanRange(i));
+  r += std::hypot(scan->sensorPose.x(), scan->sensorPose.y()) + 1.0;  // + OWA / LF_II windows
+  const double need[4] = {pose.x() - r, pose.y() - r, pose.x() + r, pose.y() + r};
+  const auto v = gridViewShared(need);
   std::lock_guard<std::mutex> lk(v->mutex);
   v->setOptions(likelihoodOptions, insertionOptions);
+  if (likelihoodOptions.likelihoodMethod == lmMeanInformation) {
+    // MRPT's MI "inserts" the scan counting information, but its scan insertion writes (and may
+    // resize) the grid all the same: run it on a copy, so that the view stays the map's.
+    GridView::Grid scratch = v->grid;
+    return scratch.computeObservationLikelihood(obs, pose);
+  }
   return v->grid.computeObservationLikelihood(obs, pose);
 }
 

@@ -1,7 +1,9 @@
 // Private to librtog_mrpt: the 2D view of CRTreeOccupancyGridMap and the likelihood-method names.
 #pragma once
 
+#include <array>
 #include <cstdint>
+#include <optional>
 #include <mutex>
 #include <string>
 
@@ -35,8 +37,13 @@ struct CRTreeOccupancyGridMap::GridView {
     void setNonEmpty() { m_is_empty = false; }
     void invalidateLikelihoodCache() { m_likelihoodCacheOutDated = true; }
   };
-  /// Built from the map's cells within [minZ, maxZ].
-  GridView(const OccupancyMap& m, float minZ, float maxZ);
+  /// A metric rectangle [m]: x0, y0, x1, y1.
+  using Rect = std::array<double, 4>;
+  /// Built from the map's cells within [minZ, maxZ], covering the known cells and `extra`.
+  GridView(const OccupancyMap& m, float minZ, float maxZ, const std::optional<Rect>& extra);
+  bool covers(const Rect& r) const {
+    return r[0] >= grid.getXMin() && r[1] >= grid.getYMin() && r[2] <= grid.getXMax() && r[3] <= grid.getYMax();
+  }
   /// Copies the likelihood (and the insertion options MRPT's methods read) to the grid, dropping
   /// MRPT's likelihood-field cache when its parameters changed. The caller holds `mutex`.
   void setOptions(const TLikelihoodOptions& lo, const TInsertionOptions& io);
@@ -45,6 +52,7 @@ struct CRTreeOccupancyGridMap::GridView {
   std::mutex mutex;
   Grid grid;
   float minZ, maxZ;
+  std::optional<Rect> extra;
 };
 
 }  // namespace rtog

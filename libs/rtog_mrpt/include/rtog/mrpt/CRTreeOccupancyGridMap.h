@@ -283,7 +283,8 @@ class CRTreeOccupancyGridMap : public mrpt::maps::CMetricMap {
   /// Planar 2D scans scored on the 2D view (see scanLikelihoodOnGridView); nullopt: not so.
   std::optional<double> gridViewLikelihood(const mrpt::obs::CObservation& obs, const mrpt::poses::CPose3D& pose) const;
   struct GridView;  // CRTreeOccupancyGridMap_grid2d.hpp
-  std::shared_ptr<GridView> gridViewShared() const;
+  /// The view, grown (rebuilt) first if it does not cover `need` (x0, y0, x1, y1 [m]).
+  std::shared_ptr<GridView> gridViewShared(const double* need = nullptr) const;
   double likelihoodField(const ObservationBeams& b) const;
   double rayTracing(const ObservationBeams& b) const;
   /// The likelihood field's parameters, folded once per scan.
