@@ -13,6 +13,7 @@
 #include "mrpt_grid.hpp"
 #include "options_check.hpp"
 #include "rtog/mrpt/CRTreeBackedGridMap2D.h"
+#include "CRTreeOccupancyGridMap_grid2d.hpp"
 
 using namespace mrpt::maps;
 
@@ -169,16 +170,10 @@ MapParams CRTreeOccupancyGridMap::TInsertionOptions::toMapParams(double resoluti
 void CRTreeOccupancyGridMap::TLikelihoodOptions::loadFromConfigFile(const mrpt::config::CConfigFileBase& s,
                                                                    const std::string& sec) {
   const std::string m = s.read_string(sec, "likelihoodMethod", "");
-  if (!m.empty()) {
-    // Numbers as in COccupancyGridMap3D (0, 1); 4 is COccupancyGridMap2D's number of the
-    // likelihood field, so that a pasted 2D section keeps working.
-    if (m == "lmLikelihoodField_Thrun" || m == "0" || m == "4")
-      likelihoodMethod = lmLikelihoodField_Thrun;
-    else if (m == "lmRayTracing" || m == "1")
-      likelihoodMethod = lmRayTracing;
-    else
-      badOption(sec, "likelihoodMethod", "unknown method '" + m + "' (expected lmLikelihoodField_Thrun or lmRayTracing)");
-  }
+  // COccupancyGridMap2D's names and numbers (0 meant the likelihood field before: doc/mrpt_map.md).
+  if (!m.empty() && !likelihoodMethodFromString(m, likelihoodMethod))
+    badOption(sec, "likelihoodMethod", "unknown method '" + m + "' (expected one of COccupancyGridMap2D's: " +
+                                           kLikelihoodMethodNames + ")");
   LF_stdHit = s.read_float(sec, "LF_stdHit", LF_stdHit);
   LF_zHit = s.read_float(sec, "LF_zHit", LF_zHit);
   LF_zRandom = s.read_float(sec, "LF_zRandom", LF_zRandom);
@@ -191,6 +186,7 @@ void CRTreeOccupancyGridMap::TLikelihoodOptions::loadFromConfigFile(const mrpt::
   enableLikelihoodCache = s.read_bool(sec, "enableLikelihoodCache", enableLikelihoodCache);
   rayTracing_decimation = s.read_int(sec, "rayTracing_decimation", rayTracing_decimation);
   rayTracing_stdHit = s.read_float(sec, "rayTracing_stdHit", rayTracing_stdHit);
+  loadGridLikelihoodKeys(*this, s, sec);
   try {
     validate();
   } catch (const std::invalid_argument& e) {
@@ -200,8 +196,7 @@ void CRTreeOccupancyGridMap::TLikelihoodOptions::loadFromConfigFile(const mrpt::
 
 void CRTreeOccupancyGridMap::TLikelihoodOptions::saveToConfigFile(mrpt::config::CConfigFileBase& c,
                                                                  const std::string& sec) const {
-  c.write(sec, "likelihoodMethod",
-          std::string(likelihoodMethod == lmRayTracing ? "lmRayTracing" : "lmLikelihoodField_Thrun"));
+  c.write(sec, "likelihoodMethod", std::string(likelihoodMethodName(likelihoodMethod)));
   c.write(sec, "LF_stdHit", LF_stdHit);
   c.write(sec, "LF_zHit", LF_zHit);
   c.write(sec, "LF_zRandom", LF_zRandom);
@@ -212,6 +207,7 @@ void CRTreeOccupancyGridMap::TLikelihoodOptions::saveToConfigFile(mrpt::config::
   c.write(sec, "enableLikelihoodCache", enableLikelihoodCache);
   c.write(sec, "rayTracing_decimation", rayTracing_decimation);
   c.write(sec, "rayTracing_stdHit", rayTracing_stdHit);
+  saveGridLikelihoodKeys(*this, c, sec);
 }
 
 void CRTreeOccupancyGridMap::TLikelihoodOptions::validate() const {
@@ -227,6 +223,9 @@ void CRTreeOccupancyGridMap::TLikelihoodOptions::validate() const {
     badOption(sec, "LF_zHit/LF_zRandom", "must be non-negative and not both zero");
   if (LF_decimation < 1) badOption(sec, "LF_decimation", "must be >= 1");
   if (rayTracing_decimation < 1) badOption(sec, "rayTracing_decimation", "must be >= 1");
+  if (!likelihoodMethodName(likelihoodMethod)) badOption(sec, "likelihoodMethod", "not a known method");
+  if (MI_skip_rays < 1) badOption(sec, "MI_skip_rays", "must be >= 1");
+  if (consensus_takeEachRange < 1) badOption(sec, "consensus_takeEachRange", "must be >= 1");
 }
 
 // ---- TMapDefinition ----------------------------------------------------------------------
@@ -245,6 +244,7 @@ void CRTreeOccupancyGridMap::TMapDefinition::loadFromConfigFile_map_specific(
     reportUnknownKeys(source, sec, {"resolution", "min_x", "max_x", "min_y", "max_y", "disableSaveAs3DObject"});
     insertionOpts.loadFromConfigFile(source, sectionNamePrefix + "_insertOpts");
     likelihoodOpts.loadFromConfigFile(source, sectionNamePrefix + "_likelihoodOpts");
+    gridViewOpts.loadFromConfigFile(source, sec);
   } catch (const std::exception& e) {
     loadError = e.what();
   }
@@ -254,6 +254,7 @@ void CRTreeOccupancyGridMap::TMapDefinition::dumpToTextStream_map_specific(std::
   out << "resolution = " << resolution << "\n";
   insertionOpts.dumpToTextStream(out);
   likelihoodOpts.dumpToTextStream(out);
+  gridViewOpts.dumpToTextStream(out);
 }
 
 mrpt::maps::CMetricMap* CRTreeOccupancyGridMap::internal_CreateFromMapDefinition(
@@ -263,6 +264,7 @@ mrpt::maps::CMetricMap* CRTreeOccupancyGridMap::internal_CreateFromMapDefinition
   auto* m = new CRTreeOccupancyGridMap(d.resolution, d.insertionOpts);
   m->setGridFrame(d.min_x, d.max_x, d.min_y, d.max_y);
   m->likelihoodOptions = d.likelihoodOpts;
+  m->gridViewOptions = d.gridViewOpts;
   m->genericMapParams = d.genericMapParams;
   return m;
 }
@@ -303,6 +305,7 @@ void CRTreeOccupancyGridMap::notifyMapChanged() {
   std::lock_guard<std::mutex> lk(caches_.mutex);
   caches_.lf.clear();
   caches_.points_dirty = true;
+  caches_.grid_view.reset();
 }
 
 void CRTreeOccupancyGridMap::internal_clear() {

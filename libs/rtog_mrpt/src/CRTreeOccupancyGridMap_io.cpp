@@ -17,8 +17,10 @@ namespace rtog {
 // Version 0: genericMapParams, insertion and likelihood options, then the core map's own
 // binary format (doc/format.md) as a length-prefixed byte block. Version 1 adds
 // insertionOptions.planarCache after the rotating-scan elevations. Version 2 adds the update
-// preset with the mrpt_grid options and the grid geometry (TGridFrame2D); older maps were built
-// with OctoMap's rule and load as the octomap preset.
+// preset with the mrpt_grid options and the grid geometry (TGridFrame2D) (older maps were built
+// with OctoMap's rule and load as the octomap preset), numbers the likelihood method as
+// COccupancyGridMap2D (0 was the likelihood field before) and adds the options of its methods
+// and the 2D view's band after the likelihood options.
 uint8_t CRTreeOccupancyGridMap::serializeGetVersion() const { return 2; }
 
 void CRTreeOccupancyGridMap::serializeTo(mrpt::serialization::CArchive& out) const {
@@ -36,6 +38,9 @@ void CRTreeOccupancyGridMap::serializeTo(mrpt::serialization::CArchive& out) con
   out << static_cast<int32_t>(lo.likelihoodMethod) << lo.LF_stdHit << lo.LF_zHit << lo.LF_zRandom << lo.LF_maxRange
       << lo.LF_decimation << lo.LF_maxCorrsDistance << lo.LF_useSquareDist << lo.enableLikelihoodCache
       << lo.rayTracing_decimation << lo.rayTracing_stdHit;
+  out << lo.LF_alternateAverageMethod << lo.MI_exponent << lo.MI_skip_rays << lo.MI_ratio_max_distance
+      << lo.rayTracing_useDistanceFilter << lo.consensus_takeEachRange << lo.consensus_pow << lo.OWA_weights
+      << lo.scanLikelihoodOnGridView << gridViewOptions.gridView_minZ << gridViewOptions.gridView_maxZ;
   std::ostringstream os(std::ios::binary);
   map_.write(os);
   const std::string bytes = os.str();
@@ -72,7 +77,23 @@ void CRTreeOccupancyGridMap::serializeFrom(mrpt::serialization::CArchive& in, ui
       in >> method >> lo.LF_stdHit >> lo.LF_zHit >> lo.LF_zRandom >> lo.LF_maxRange >> lo.LF_decimation >>
           lo.LF_maxCorrsDistance >> lo.LF_useSquareDist >> lo.enableLikelihoodCache >> lo.rayTracing_decimation >>
           lo.rayTracing_stdHit;
-      if (method != lmLikelihoodField_Thrun && method != lmRayTracing)
+      if (version < 2) {  // 0/1: the likelihood field / ray tracing, as COccupancyGridMap3D
+        if (method != 0 && method != 1)
+          throw std::runtime_error("rtog::CRTreeOccupancyGridMap: corrupt stream (likelihood method)");
+        method = method == 0 ? lmLikelihoodField_Thrun : lmRayTracing;
+        const TLikelihoodOptions d;  // options these versions did not have: defaults
+        lo.LF_alternateAverageMethod = d.LF_alternateAverageMethod, lo.MI_exponent = d.MI_exponent;
+        lo.MI_skip_rays = d.MI_skip_rays, lo.MI_ratio_max_distance = d.MI_ratio_max_distance;
+        lo.rayTracing_useDistanceFilter = d.rayTracing_useDistanceFilter;
+        lo.consensus_takeEachRange = d.consensus_takeEachRange, lo.consensus_pow = d.consensus_pow;
+        lo.OWA_weights = d.OWA_weights, lo.scanLikelihoodOnGridView = d.scanLikelihoodOnGridView;
+        gridViewOptions = TGridViewOptions{};
+      } else {
+        in >> lo.LF_alternateAverageMethod >> lo.MI_exponent >> lo.MI_skip_rays >> lo.MI_ratio_max_distance >>
+            lo.rayTracing_useDistanceFilter >> lo.consensus_takeEachRange >> lo.consensus_pow >> lo.OWA_weights >>
+            lo.scanLikelihoodOnGridView >> gridViewOptions.gridView_minZ >> gridViewOptions.gridView_maxZ;
+      }
+      if (method < lmMeanInformation || method > lmConsensusOWA)
         throw std::runtime_error("rtog::CRTreeOccupancyGridMap: corrupt stream (likelihood method)");
       lo.likelihoodMethod = static_cast<TLikelihoodMethod>(method);
       const uint64_t n = in.ReadAs<uint64_t>();

@@ -23,6 +23,8 @@ bool CRTreeOccupancyGridMap::internal_canComputeObservationLikelihood(const mrpt
 
 double CRTreeOccupancyGridMap::internal_computeObservationLikelihood(const mrpt::obs::CObservation& obs,
                                                                      const mrpt::poses::CPose3D& takenFrom) const {
+  // Planar 2D scans: MRPT's own method on the 2D view (see scanLikelihoodOnGridView).
+  if (const std::optional<double> l = gridViewLikelihood(obs, takenFrom)) return *l;
   // Per thread and kept: a particle filter calls this for every particle.
   thread_local ObservationBeams beams;
   if (!extractBeams(obs, takenFrom, beams, false)) return 0.0;  // no information: neutral
@@ -31,6 +33,8 @@ double CRTreeOccupancyGridMap::internal_computeObservationLikelihood(const mrpt:
 
 double CRTreeOccupancyGridMap::beamsLikelihood(const ObservationBeams& b) const {
   likelihoodOptions.validate();
+  // 3D beams: the native ray tracing, or the native likelihood field for every other method
+  // (MRPT defines those on planar scans only).
   return likelihoodOptions.likelihoodMethod == lmRayTracing ? rayTracing(b) : likelihoodField(b);
 }
 

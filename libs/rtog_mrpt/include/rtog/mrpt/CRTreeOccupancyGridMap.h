@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -14,6 +15,7 @@
 #include <Eigen/Core>
 #include <mrpt/config/CLoadableOptions.h>
 #include <mrpt/maps/CMetricMap.h>
+#include <mrpt/maps/COccupancyGridMap2D.h>
 #include <mrpt/maps/CSimplePointsMap.h>
 #include <mrpt/poses/CPose3D.h>
 
@@ -22,6 +24,7 @@
 
 namespace mrpt::obs {
 class CObservation2DRangeScan;
+class CObservationRange;
 }
 
 namespace rtog {
@@ -127,7 +130,17 @@ class CRTreeOccupancyGridMap : public mrpt::maps::CMetricMap {
     bool mrptGrid() const { return sensorModelPreset == "mrpt_grid"; }
   };
 
-  enum TLikelihoodMethod { lmLikelihoodField_Thrun = 0, lmRayTracing = 1 };
+  /// COccupancyGridMap2D's methods and numbers (doc/mrpt_map.md: 0 meant the likelihood field
+  /// before, and now means lmMeanInformation as in MRPT's grid).
+  enum TLikelihoodMethod {
+    lmMeanInformation = 0,
+    lmRayTracing = 1,
+    lmConsensus = 2,
+    lmCellsDifference = 3,
+    lmLikelihoodField_Thrun = 4,
+    lmLikelihoodField_II = 5,
+    lmConsensusOWA = 6
+  };
 
   /// Options for computeObservationLikelihood ([<prefix>_likelihoodOpts]).
   struct TLikelihoodOptions : public mrpt::config::CLoadableOptions {
@@ -135,7 +148,7 @@ class CRTreeOccupancyGridMap : public mrpt::maps::CMetricMap {
     void saveToConfigFile(mrpt::config::CConfigFileBase& target, const std::string& section) const override;
     void validate() const;
 
-    /// lmLikelihoodField_Thrun or lmRayTracing. (Default: lmLikelihoodField_Thrun)
+    /// One of COccupancyGridMap2D's seven methods. (Default: lmLikelihoodField_Thrun)
     TLikelihoodMethod likelihoodMethod{lmLikelihoodField_Thrun};
     /// Std. dev. [m] of the likelihood field's Gaussian. (Default: 0.35)
     float LF_stdHit{0.35f};
@@ -157,6 +170,28 @@ class CRTreeOccupancyGridMap : public mrpt::maps::CMetricMap {
     int32_t rayTracing_decimation{10};
     /// Std. dev. [m] of the measured vs. ray-traced range. (Default: 1.0)
     float rayTracing_stdHit{1.0f};
+    // COccupancyGridMap2D's keys for the methods it computes on the 2D view (same defaults).
+    bool LF_alternateAverageMethod{false};  ///< [LF, 2D view] average, not product. (Default: false)
+    float MI_exponent{2.5f};                ///< [MI] (Default: 2.5)
+    uint32_t MI_skip_rays{10};              ///< [MI] (Default: 10)
+    float MI_ratio_max_distance{1.5f};      ///< [MI] (Default: 1.5)
+    bool rayTracing_useDistanceFilter{true};  ///< [rayTracing, 2D view] (Default: true)
+    int32_t consensus_takeEachRange{1};     ///< [Consensus] (Default: 1)
+    float consensus_pow{5.0f};              ///< [Consensus] (Default: 5)
+    std::vector<float> OWA_weights = std::vector<float>(100, 0.01f);  ///< [OWA] (Default: 100 x 0.01)
+    /// Planar 2D scans are scored by MRPT's COccupancyGridMap2D code on gridView() (exactly the
+    /// stock grid's value); false: by the native 3D LF / ray tracing. (Default: true)
+    bool scanLikelihoodOnGridView{true};
+  };
+
+  /// The 2D view (gridView()): a COccupancyGridMap2D of the cells within a height band.
+  struct TGridViewOptions : public mrpt::config::CLoadableOptions {
+    void loadFromConfigFile(const mrpt::config::CConfigFileBase& source, const std::string& section) override;
+    void saveToConfigFile(mrpt::config::CConfigFileBase& target, const std::string& section) const override;
+    /// A 2D cell takes the highest log-odds among the observed cells of its column whose height
+    /// interval meets [gridView_minZ, gridView_maxZ] [m]; unknown if none. (Default: -1000 / 1000)
+    float gridView_minZ{-1000.0f};
+    float gridView_maxZ{1000.0f};
   };
 
   /// How getVisualizationInto draws the map.
@@ -172,6 +207,7 @@ class CRTreeOccupancyGridMap : public mrpt::maps::CMetricMap {
 
   TInsertionOptions insertionOptions;
   TLikelihoodOptions likelihoodOptions;
+  TGridViewOptions gridViewOptions;
   TRenderingOptions renderingOptions;
 
   /// The wrapped core map. Changing it directly does not invalidate the caches: call
@@ -233,6 +269,46 @@ class CRTreeOccupancyGridMap : public mrpt::maps::CMetricMap {
   /// Log-likelihood of beams already in the map frame (used by computeObservationLikelihood).
   double beamsLikelihood(const ObservationBeams& b) const;
 
+  // ---- COccupancyGridMap2D's API on the 2D view (see doc/mrpt_map.md, "2D view") ----------
+  /// The band's cells as a COccupancyGridMap2D (same resolution, cell k covers [k*res,(k+1)*res)),
+  /// built on first use and kept until the map or the band changes. Shared: its methods that
+  /// fill MRPT's mutable caches (likelihoods) must not run concurrently on it.
+  std::shared_ptr<const mrpt::maps::COccupancyGridMap2D> gridView() const;
+  void computeEntropy(mrpt::maps::COccupancyGridMap2D::TEntropyInfo& info) const;
+  void laserScanSimulator(mrpt::obs::CObservation2DRangeScan& inout_Scan, const mrpt::poses::CPose2D& robotPose,
+                          float threshold = 0.6f, size_t N = 361, float noiseStd = 0, unsigned int decimation = 1,
+                          float angleNoiseStd = 0) const;
+  void sonarSimulator(mrpt::obs::CObservationRange& inout_observation, const mrpt::poses::CPose2D& robotPose,
+                      float threshold = 0.5f, float rangeNoiseStd = 0.f, float angleNoiseStd = 0.f) const;
+  void simulateScanRay(double x, double y, double angle_direction, float& out_range, bool& out_valid,
+                       double max_range_meters, float threshold_free = 0.4f, double noiseStd = 0,
+                       double angleNoiseStd = 0) const;
+  void getAsImage(mrpt::img::CImage& img, bool verticalFlip = false, bool forceRGB = false,
+                  bool tricolor = false) const;
+  bool saveAsBitmapFile(const std::string& file) const;
+  float computeClearance(float x, float y, float maxSearchDistance) const;
+  double getArea() const;  ///< of the 2D view [m^2]
+  struct TCellCounts {
+    std::size_t free{0}, occupied{0}, unknown{0};  ///< P(free) > 0.5, < 0.5, == 0.5
+  };
+  TCellCounts gridViewCellCounts() const;
+  /// Replaces the map with the grid's known cells, one z-layer (the one holding z = 0, moved
+  /// into the band) at the grid's resolution, values exact (-l/16); widens clampingMin/Max
+  /// if the grid holds more certain cells.
+  void loadFromGrid(const mrpt::maps::COccupancyGridMap2D& grid);
+  /// As COccupancyGridMap2D::loadFromBitmapFile, then loadFromGrid.
+  bool loadFromBitmapFile(const std::string& file, float resolution,
+                          const mrpt::math::TPoint2D& origin = mrpt::math::TPoint2D(
+                              std::numeric_limits<double>::max(), std::numeric_limits<double>::max()));
+  /// A .gridmap / .gridmap.gz (a CArchive of a COccupancyGridMap2D, gzip or not), then loadFromGrid.
+  bool loadFromGridmapFile(const std::string& file);
+  /// Metres along `direction` from `origin` to the first occupied cell (native 3D); nullopt if
+  /// none within maxRange.
+  std::optional<double> castRay(const mrpt::math::TPoint3D& origin, const mrpt::math::TVector3D& direction,
+                                double maxRange) const;
+  /// Metres from p to the nearest occupied cell (native 3D); nullopt if none within maxDistance.
+  std::optional<double> nearestObstacleDistance(const mrpt::math::TPoint3D& p, double maxDistance) const;
+
   MAP_DEFINITION_START(CRTreeOccupancyGridMap)
   /// Cell edge length [m], as in COccupancyGridMap2D. (Default: 0.10)
   double resolution{0.10};
@@ -241,6 +317,7 @@ class CRTreeOccupancyGridMap : public mrpt::maps::CMetricMap {
   float min_x{-10.0f}, max_x{10.0f}, min_y{-10.0f}, max_y{10.0f};
   rtog::CRTreeOccupancyGridMap::TInsertionOptions insertionOpts;
   rtog::CRTreeOccupancyGridMap::TLikelihoodOptions likelihoodOpts;
+  rtog::CRTreeOccupancyGridMap::TGridViewOptions gridViewOpts;  ///< read from _creationOpts
   /// A bad .ini value found while loading, raised when the map is created: MRPT leaks the
   /// definition if loading itself throws.
   std::string loadError;
@@ -257,6 +334,11 @@ class CRTreeOccupancyGridMap : public mrpt::maps::CMetricMap {
   /// Re-creates the (empty) core map if the insertion options changed its parameters; throws
   /// std::logic_error if they changed while the map holds cells.
   void syncParams();
+  /// Planar 2D scans scored on the 2D view (see scanLikelihoodOnGridView); nullopt: not so.
+  std::optional<double> gridViewLikelihood(const mrpt::obs::CObservation& obs, const mrpt::poses::CPose3D& pose) const;
+  struct GridView;  // CRTreeOccupancyGridMap_grid2d.hpp
+  /// The view, grown (rebuilt) first if it does not cover `need` (x0, y0, x1, y1 [m]).
+  std::shared_ptr<GridView> gridViewShared(const double* need = nullptr) const;
   double likelihoodField(const ObservationBeams& b) const;
   double rayTracing(const ObservationBeams& b) const;
   /// The likelihood field's parameters, folded once per scan.
@@ -301,6 +383,7 @@ class CRTreeOccupancyGridMap : public mrpt::maps::CMetricMap {
       std::vector<double> cos, sin;
     };
     std::shared_ptr<const ScanAngles> scan_angles;
+    std::shared_ptr<GridView> grid_view;  ///< gridView(); reset when the map changes
     Caches() = default;
     Caches(const Caches&) {}
     Caches& operator=(const Caches&) {
@@ -309,6 +392,7 @@ class CRTreeOccupancyGridMap : public mrpt::maps::CMetricMap {
       lf_params.reset();
       points_dirty = true;
       local_obs = nullptr;
+      grid_view.reset();
       return *this;
     }
   };

@@ -1,0 +1,270 @@
+// rtog::CRTreeOccupancyGridMap: the 2D view (a COccupancyGridMap2D of a height band), the
+// likelihood of planar scans on it, and the grid queries MRPT users call on a 2D grid.
+#include "CRTreeOccupancyGridMap_grid2d.hpp"
+
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+#include <mrpt/config/CConfigFileBase.h>
+#include <mrpt/obs/CObservation2DRangeScan.h>
+
+namespace rtog {
+
+using Grid2D = mrpt::maps::COccupancyGridMap2D;
+
+// Our enumerators must be MRPT's numbers: configs and serialized maps carry them.
+static_assert(int(CRTreeOccupancyGridMap::lmMeanInformation) == int(Grid2D::lmMeanInformation));
+static_assert(int(CRTreeOccupancyGridMap::lmRayTracing) == int(Grid2D::lmRayTracing));
+static_assert(int(CRTreeOccupancyGridMap::lmConsensus) == int(Grid2D::lmConsensus));
+static_assert(int(CRTreeOccupancyGridMap::lmCellsDifference) == int(Grid2D::lmCellsDifference));
+static_assert(int(CRTreeOccupancyGridMap::lmLikelihoodField_Thrun) == int(Grid2D::lmLikelihoodField_Thrun));
+static_assert(int(CRTreeOccupancyGridMap::lmLikelihoodField_II) == int(Grid2D::lmLikelihoodField_II));
+static_assert(int(CRTreeOccupancyGridMap::lmConsensusOWA) == int(Grid2D::lmConsensusOWA));
+
+namespace {
+constexpr const char* kNames[] = {"lmMeanInformation",       "lmRayTracing",         "lmConsensus",
+                                  "lmCellsDifference",       "lmLikelihoodField_Thrun",
+                                  "lmLikelihoodField_II",    "lmConsensusOWA"};
+constexpr int kMethods = int(sizeof(kNames) / sizeof(kNames[0]));
+}  // namespace
+
+const char* const kLikelihoodMethodNames =
+    "lmMeanInformation (0), lmRayTracing (1), lmConsensus (2), lmCellsDifference (3), lmLikelihoodField_Thrun (4), "
+    "lmLikelihoodField_II (5), lmConsensusOWA (6)";
+
+const char* likelihoodMethodName(CRTreeOccupancyGridMap::TLikelihoodMethod m) {
+  const int i = static_cast<int>(m);
+  return i >= 0 && i < kMethods ? kNames[i] : nullptr;
+}
+
+bool likelihoodMethodFromString(const std::string& s, CRTreeOccupancyGridMap::TLikelihoodMethod& out) {
+  for (int i = 0; i < kMethods; ++i)
+    if (s == kNames[i] || s == std::to_string(i)) {
+      out = static_cast<CRTreeOccupancyGridMap::TLikelihoodMethod>(i);
+      return true;
+    }
+  return false;
+}
+
+void loadGridLikelihoodKeys(CRTreeOccupancyGridMap::TLikelihoodOptions& o, const mrpt::config::CConfigFileBase& s,
+                            const std::string& sec) {
+  o.LF_alternateAverageMethod = s.read_bool(sec, "LF_alternateAverageMethod", o.LF_alternateAverageMethod);
+  o.MI_exponent = s.read_float(sec, "MI_exponent", o.MI_exponent);
+  o.MI_skip_rays = static_cast<uint32_t>(s.read_int(sec, "MI_skip_rays", static_cast<int>(o.MI_skip_rays)));
+  o.MI_ratio_max_distance = s.read_float(sec, "MI_ratio_max_distance", o.MI_ratio_max_distance);
+  o.rayTracing_useDistanceFilter = s.read_bool(sec, "rayTracing_useDistanceFilter", o.rayTracing_useDistanceFilter);
+  o.consensus_takeEachRange = s.read_int(sec, "consensus_takeEachRange", o.consensus_takeEachRange);
+  o.consensus_pow = s.read_float(sec, "consensus_pow", o.consensus_pow);
+  s.read_vector(sec, "OWA_weights", std::vector<float>(o.OWA_weights), o.OWA_weights);
+  o.scanLikelihoodOnGridView = s.read_bool(sec, "scanLikelihoodOnGridView", o.scanLikelihoodOnGridView);
+}
+
+void saveGridLikelihoodKeys(const CRTreeOccupancyGridMap::TLikelihoodOptions& o, mrpt::config::CConfigFileBase& c,
+                            const std::string& sec) {
+  c.write(sec, "LF_alternateAverageMethod", o.LF_alternateAverageMethod);
+  c.write(sec, "MI_exponent", o.MI_exponent);
+  c.write(sec, "MI_skip_rays", static_cast<int>(o.MI_skip_rays));
+  c.write(sec, "MI_ratio_max_distance", o.MI_ratio_max_distance);
+  c.write(sec, "rayTracing_useDistanceFilter", o.rayTracing_useDistanceFilter);
+  c.write(sec, "consensus_takeEachRange", o.consensus_takeEachRange);
+  c.write(sec, "consensus_pow", o.consensus_pow);
+  c.write(sec, "OWA_weights", o.OWA_weights);
+  c.write(sec, "scanLikelihoodOnGridView", o.scanLikelihoodOnGridView);
+}
+
+void CRTreeOccupancyGridMap::TGridViewOptions::loadFromConfigFile(const mrpt::config::CConfigFileBase& s,
+                                                                 const std::string& sec) {
+  gridView_minZ = s.read_float(sec, "gridView_minZ", gridView_minZ);
+  gridView_maxZ = s.read_float(sec, "gridView_maxZ", gridView_maxZ);
+  if (!(gridView_minZ <= gridView_maxZ))  // also rejects NaN
+    throw std::invalid_argument("rtog::CRTreeOccupancyGridMap: invalid option [" + sec +
+                                "] gridView_minZ/gridView_maxZ: need gridView_minZ <= gridView_maxZ");
+}
+
+void CRTreeOccupancyGridMap::TGridViewOptions::saveToConfigFile(mrpt::config::CConfigFileBase& c,
+                                                               const std::string& sec) const {
+  c.write(sec, "gridView_minZ", gridView_minZ);
+  c.write(sec, "gridView_maxZ", gridView_maxZ);
+}
+
+int8_t toMrptCell(float v) {
+  // Scaling by a power of two is exact: a stored -l/16 gives back l bit for bit.
+  const float t = -16.0f * v;
+  if (t == std::nearbyint(t) && t >= -128.0f && t <= 127.0f) return static_cast<int8_t>(t);
+  return Grid2D::p2l(static_cast<float>(1.0 - probability(v)));
+}
+
+// ---- the view ----------------------------------------------------------------------------
+
+CRTreeOccupancyGridMap::GridView::GridView(const OccupancyMap& m, float lo, float hi, const std::optional<Rect>& ex)
+    : minZ(lo), maxZ(hi), extra(ex) {
+  const double res = m.resolution();
+  const auto fres = static_cast<float>(res);
+  const Box kb = m.keyBounds();
+  // The grid's lattice cells: the known cells' columns and `extra`, at least one cell.
+  double gx0 = 0, gy0 = 0, gx1 = 0, gy1 = 0;  // inclusive cell keys
+  if (!kb.isEmpty()) gx0 = kb.min.x, gy0 = kb.min.y, gx1 = kb.max.x, gy1 = kb.max.y;
+  if (extra) {
+    const auto key = [&](double v) { return std::floor(std::min(std::max(v / res, double(kKeyMin)), double(kKeyMax))); };
+    const bool any = !kb.isEmpty();
+    gx0 = any ? std::min(gx0, key((*extra)[0])) : key((*extra)[0]);
+    gy0 = any ? std::min(gy0, key((*extra)[1])) : key((*extra)[1]);
+    gx1 = std::max(any ? gx1 : gx0, key((*extra)[2]));
+    gy1 = std::max(any ? gy1 : gy0, key((*extra)[3]));
+  }
+  // Cell k of the lattice is cell k - g*0 of the grid: setSize keeps multiples of res.
+  grid.setSize(static_cast<float>(gx0 * res), static_cast<float>((gx1 + 1) * res), static_cast<float>(gy0 * res),
+               static_cast<float>((gy1 + 1) * res), fres, 0.5f);
+  if (kb.isEmpty()) return;
+  grid.setNonEmpty();
+  const auto sx = static_cast<std::int64_t>(grid.getSizeX()), sy = static_cast<std::int64_t>(grid.getSizeY());
+  // z-layers whose interval [k*res, (k+1)*res) meets the band.
+  const double z0 = std::max<double>(kb.min.z, std::floor(double(lo) / res));
+  const double z1 = std::min<double>(kb.max.z, std::floor(double(hi) / res));
+  if (!(z0 <= z1)) return;  // band outside the map: all unknown
+  const Box region{Key{kb.min.x, kb.min.y, static_cast<std::int32_t>(z0)},
+                   Key{kb.max.x, kb.max.y, static_cast<std::int32_t>(z1)}};
+  const std::int64_t nx = kb.extent(0), ny = kb.extent(1);
+  std::vector<float> best(static_cast<std::size_t>(nx * ny), std::numeric_limits<float>::quiet_NaN());
+  m.forEachLeafIn(region, [&](const Box& b, float v) {
+    const Box c = b.intersection(region);
+    for (std::int32_t y = c.min.y; y <= c.max.y; ++y)
+      for (std::int32_t x = c.min.x; x <= c.max.x; ++x) {
+        float& dst = best[static_cast<std::size_t>((y - region.min.y) * nx + (x - region.min.x))];
+        if (!(dst >= v)) dst = v;  // NaN (unknown) or lower
+      }
+  });
+  auto& cells = grid.cells();
+  const auto ox = static_cast<std::int64_t>(kb.min.x - gx0), oy = static_cast<std::int64_t>(kb.min.y - gy0);
+  for (std::int64_t y = 0; y < ny && y + oy < sy; ++y)
+    for (std::int64_t x = 0; x < nx && x + ox < sx; ++x) {
+      const float v = best[static_cast<std::size_t>(y * nx + x)];
+      if (!std::isnan(v)) cells[static_cast<std::size_t>((y + oy) * sx + x + ox)] = toMrptCell(v);
+    }
+}
+
+void CRTreeOccupancyGridMap::GridView::setOptions(const TLikelihoodOptions& o, const TInsertionOptions& io) {
+  auto& g = grid.likelihoodOptions;
+  // MRPT keeps its per-cell likelihood-field values until the cells change, whatever the options.
+  const bool lfChanged = g.LF_stdHit != o.LF_stdHit || g.LF_zHit != o.LF_zHit || g.LF_zRandom != o.LF_zRandom ||
+                         g.LF_maxRange != o.LF_maxRange || g.LF_maxCorrsDistance != o.LF_maxCorrsDistance ||
+                         g.LF_useSquareDist != o.LF_useSquareDist;
+  g.likelihoodMethod = static_cast<Grid2D::TLikelihoodMethod>(o.likelihoodMethod);
+  g.LF_stdHit = o.LF_stdHit;
+  g.LF_zHit = o.LF_zHit;
+  g.LF_zRandom = o.LF_zRandom;
+  g.LF_maxRange = o.LF_maxRange;
+  g.LF_decimation = o.LF_decimation;
+  g.LF_maxCorrsDistance = o.LF_maxCorrsDistance;
+  g.LF_useSquareDist = o.LF_useSquareDist;
+  g.LF_alternateAverageMethod = o.LF_alternateAverageMethod;
+  g.MI_exponent = o.MI_exponent;
+  g.MI_skip_rays = o.MI_skip_rays;
+  g.MI_ratio_max_distance = o.MI_ratio_max_distance;
+  g.rayTracing_useDistanceFilter = o.rayTracing_useDistanceFilter;
+  g.rayTracing_decimation = o.rayTracing_decimation;
+  g.rayTracing_stdHit = o.rayTracing_stdHit;
+  g.consensus_takeEachRange = o.consensus_takeEachRange;
+  g.consensus_pow = o.consensus_pow;
+  if (g.OWA_weights != o.OWA_weights) g.OWA_weights = o.OWA_weights;
+  g.enableLikelihoodCache = o.enableLikelihoodCache;
+  // MI and ray tracing read the grid's insertion range.
+  grid.insertionOptions.maxDistanceInsertion = io.maxDistanceInsertion;
+  if (lfChanged) grid.invalidateLikelihoodCache();
+}
+
+std::shared_ptr<CRTreeOccupancyGridMap::GridView> CRTreeOccupancyGridMap::gridViewShared(const double* need) const {
+  const float lo = gridViewOptions.gridView_minZ, hi = gridViewOptions.gridView_maxZ;
+  if (!(lo <= hi)) throw std::invalid_argument("rtog::CRTreeOccupancyGridMap: need gridView_minZ <= gridView_maxZ");
+  std::lock_guard<std::mutex> lk(caches_.mutex);
+  auto& v = caches_.grid_view;
+  const bool same = v && v->minZ == lo && v->maxZ == hi;
+  if (same && (!need || v->covers({need[0], need[1], need[2], need[3]}))) return v;
+  std::optional<GridView::Rect> extra;
+  if (need) {
+    // Grown with a margin, so that particles wandering out of it rebuild it rarely.
+    constexpr double kMargin = 5.0;
+    extra = GridView::Rect{need[0] - kMargin, need[1] - kMargin, need[2] + kMargin, need[3] + kMargin};
+    if (same && v->extra)
+      for (int i = 0; i < 4; ++i) (*extra)[i] = i < 2 ? std::min((*extra)[i], (*v->extra)[i]) : std::max((*extra)[i], (*v->extra)[i]);
+  } else if (same) {
+    extra = v->extra;
+  }
+  v = std::make_shared<GridView>(map_, lo, hi, extra);
+  return v;
+}
+
+std::shared_ptr<const Grid2D> CRTreeOccupancyGridMap::gridView() const {
+  auto v = gridViewShared();
+  return std::shared_ptr<const Grid2D>(v, &v->grid);  // keeps the view alive, not the map's cache
+}
+
+std::optional<double> CRTreeOccupancyGridMap::gridViewLikelihood(const mrpt::obs::CObservation& obs,
+                                                                 const mrpt::poses::CPose3D& pose) const {
+  if (!likelihoodOptions.scanLikelihoodOnGridView) return std::nullopt;
+  const auto* scan = dynamic_cast<const mrpt::obs::CObservation2DRangeScan*>(&obs);
+  if (!scan) return std::nullopt;
+  // Non-finite poses and tilted scans are left to the native 3D path.
+  if (!(std::isfinite(pose.x()) && std::isfinite(pose.y()) && std::isfinite(pose.z()) && std::isfinite(pose.yaw()) &&
+        std::isfinite(pose.pitch()) && std::isfinite(pose.roll())))
+    return std::nullopt;
+  likelihoodOptions.validate();
+  if (!scan->isPlanarScan(mrpt::maps::COccupancyGridMap2D::TInsertionOptions().horizontalTolerance))
+    return std::nullopt;
+  // MRPT's methods read cells without bounds checks (lmConsensus) or fail (OWA, LF_II) for end
+  // points off the grid; a stock grid grown by insertion holds them, so the view is grown too.
+  double r = 0;
+  for (std::size_t i = 0; i < scan->getScanSize(); ++i)
+    if (scan->getScanRangeValidity(i)) r = std::max<double>(r, scan->getScanRange(i));
+  r += std::hypot(scan->sensorPose.x(), scan->sensorPose.y()) + 1.0;  // + OWA / LF_II windows
+  const double need[4] = {pose.x() - r, pose.y() - r, pose.x() + r, pose.y() + r};
+  const auto v = gridViewShared(need);
+  std::lock_guard<std::mutex> lk(v->mutex);
+  v->setOptions(likelihoodOptions, insertionOptions);
+  if (likelihoodOptions.likelihoodMethod == lmMeanInformation) {
+    // MRPT's MI "inserts" the scan counting information, but its scan insertion writes (and may
+    // resize) the grid all the same: run it on a copy, so that the view stays the map's.
+    GridView::Grid scratch = v->grid;
+    return scratch.computeObservationLikelihood(obs, pose);
+  }
+  return v->grid.computeObservationLikelihood(obs, pose);
+}
+
+// ---- grid queries on the view --------------------------------------------------------------
+
+void CRTreeOccupancyGridMap::computeEntropy(Grid2D::TEntropyInfo& info) const {
+  const auto v = gridViewShared();
+  std::lock_guard<std::mutex> lk(v->mutex);
+  v->grid.computeEntropy(info);
+}
+
+void CRTreeOccupancyGridMap::getAsImage(mrpt::img::CImage& img, bool verticalFlip, bool forceRGB,
+                                        bool tricolor) const {
+  const auto v = gridViewShared();
+  std::lock_guard<std::mutex> lk(v->mutex);
+  v->grid.getAsImage(img, verticalFlip, forceRGB, tricolor);
+}
+
+bool CRTreeOccupancyGridMap::saveAsBitmapFile(const std::string& file) const {
+  const auto v = gridViewShared();
+  std::lock_guard<std::mutex> lk(v->mutex);
+  return v->grid.saveAsBitmapFile(file);
+}
+
+float CRTreeOccupancyGridMap::computeClearance(float x, float y, float maxSearchDistance) const {
+  const auto v = gridViewShared();
+  std::lock_guard<std::mutex> lk(v->mutex);
+  return v->grid.computeClearance(x, y, maxSearchDistance);
+}
+
+double CRTreeOccupancyGridMap::getArea() const { return gridViewShared()->grid.getArea(); }
+
+CRTreeOccupancyGridMap::TCellCounts CRTreeOccupancyGridMap::gridViewCellCounts() const {
+  const auto v = gridViewShared();
+  TCellCounts n;
+  for (const auto l : v->grid.getRawMap()) (l > 0 ? n.free : l < 0 ? n.occupied : n.unknown)++;
+  return n;
+}
+
+}  // namespace rtog

@@ -1,0 +1,58 @@
+// Private to librtog_mrpt: the 2D view of CRTreeOccupancyGridMap and the likelihood-method names.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <mutex>
+#include <string>
+
+#include <mrpt/maps/COccupancyGridMap2D.h>
+
+#include "rtog/mrpt/CRTreeOccupancyGridMap.h"
+
+namespace rtog {
+
+/// The accepted likelihoodMethod values, for error messages.
+extern const char* const kLikelihoodMethodNames;
+/// COccupancyGridMap2D's name of m; nullptr if m is none of the seven.
+const char* likelihoodMethodName(CRTreeOccupancyGridMap::TLikelihoodMethod m);
+/// A name or COccupancyGridMap2D's number ("0".."6"); false if neither.
+bool likelihoodMethodFromString(const std::string& s, CRTreeOccupancyGridMap::TLikelihoodMethod& out);
+/// The keys of COccupancyGridMap2D's methods (MI_*, consensus_*, OWA_weights, ...).
+void loadGridLikelihoodKeys(CRTreeOccupancyGridMap::TLikelihoodOptions& o, const mrpt::config::CConfigFileBase& s,
+                            const std::string& sec);
+void saveGridLikelihoodKeys(const CRTreeOccupancyGridMap::TLikelihoodOptions& o, mrpt::config::CConfigFileBase& c,
+                            const std::string& sec);
+
+/// MRPT's int8 cell (log-odds of P(free), x16) of a core log-odds v (of P(occupied)): exactly
+/// -16 v when that is an MRPT value, else MRPT's own p2l of P(free).
+int8_t toMrptCell(float v);
+
+struct CRTreeOccupancyGridMap::GridView {
+  /// A COccupancyGridMap2D whose cells and caches the view may set directly.
+  class Grid : public mrpt::maps::COccupancyGridMap2D {
+   public:
+    std::vector<cellType>& cells() { return m_map; }
+    void setNonEmpty() { m_is_empty = false; }
+    void invalidateLikelihoodCache() { m_likelihoodCacheOutDated = true; }
+  };
+  /// A metric rectangle [m]: x0, y0, x1, y1.
+  using Rect = std::array<double, 4>;
+  /// Built from the map's cells within [minZ, maxZ], covering the known cells and `extra`.
+  GridView(const OccupancyMap& m, float minZ, float maxZ, const std::optional<Rect>& extra);
+  bool covers(const Rect& r) const {
+    return r[0] >= grid.getXMin() && r[1] >= grid.getYMin() && r[2] <= grid.getXMax() && r[3] <= grid.getYMax();
+  }
+  /// Copies the likelihood (and the insertion options MRPT's methods read) to the grid, dropping
+  /// MRPT's likelihood-field cache when its parameters changed. The caller holds `mutex`.
+  void setOptions(const TLikelihoodOptions& lo, const TInsertionOptions& io);
+
+  /// Serializes the calls into `grid`: MRPT's likelihood methods fill mutable caches.
+  std::mutex mutex;
+  Grid grid;
+  float minZ, maxZ;
+  std::optional<Rect> extra;
+};
+
+}  // namespace rtog

@@ -1,0 +1,150 @@
+// rtog::CRTreeOccupancyGridMap: a COccupancyGridMap2D (.gridmap file, bitmap, object) as the
+// initial map, its cells becoming R-tree cells with the grid's values.
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <sstream>
+
+#include <mrpt/io/CFileGZInputStream.h>
+#include <mrpt/serialization/CArchive.h>
+
+#include "CRTreeOccupancyGridMap_grid2d.hpp"
+
+namespace rtog {
+
+namespace {
+
+/// A float probability whose float log-odds (as LogOddsModel computes it) is v, or else lies
+/// just beyond v in direction dir (-1: below, +1: above), so that v is within the bound.
+float boundProbability(float v, int dir) {
+  const float p0 = static_cast<float>(probability(v));
+  const auto l = [](float p) { return static_cast<float>(logit(p)); };
+  float p = p0;
+  for (int i = 0; i < 4; ++i, p = std::nextafter(p, 0.0f))  // exact if a nearby float gives it
+    if (l(p) == v) return p;
+  p = p0;
+  for (int i = 0; i < 4; ++i, p = std::nextafter(p, 1.0f))
+    if (l(p) == v) return p;
+  p = p0;
+  while (dir < 0 ? l(p) > v : l(p) < v) p = std::nextafter(p, dir < 0 ? 0.0f : 1.0f);
+  return p;
+}
+
+struct Leaf {
+  std::int32_t lo[3], hi[3];
+  float value;
+};
+
+// The core map's binary format (doc/format.md), the one public way to give cells a value.
+std::string encodeMap(const MapParams& p, const std::vector<Leaf>& leaves) {
+  std::ostringstream os(std::ios::binary);
+  std::uint64_t h = 0xcbf29ce484222325ull;  // FNV-1a over every byte after the magic
+  const auto put = [&](const auto& v) {
+    const auto* b = reinterpret_cast<const unsigned char*>(&v);
+    os.write(reinterpret_cast<const char*>(b), sizeof v);
+    for (std::size_t i = 0; i < sizeof v; ++i) h = (h ^ b[i]) * 0x100000001b3ull;
+  };
+  os.write("RTOGMAP", 8);  // with its terminating NUL
+  put(std::uint32_t{1});
+  const LogOddsParams& l = p.log_odds;
+  for (double d : {p.resolution, l.prob_hit, l.prob_miss, l.clamp_min, l.clamp_max, l.occupied_threshold, l.prior}) put(d);
+  put(static_cast<std::uint8_t>(p.merge));
+  put(p.rtree.max_entries);
+  put(p.rtree.min_entries);
+  put(static_cast<std::uint64_t>(leaves.size()));
+  for (const Leaf& f : leaves) {
+    for (int a = 0; a < 3; ++a) put(f.lo[a]);
+    for (int a = 0; a < 3; ++a) put(f.hi[a]);
+    put(f.value);
+  }
+  os.write(reinterpret_cast<const char*>(&h), sizeof h);
+  return os.str();
+}
+
+}  // namespace
+
+void CRTreeOccupancyGridMap::loadFromGrid(const mrpt::maps::COccupancyGridMap2D& grid) {
+  const double res = grid.getResolution();
+  const auto& cells = grid.getRawMap();
+  const std::size_t sx = grid.getSizeX(), sy = grid.getSizeY();
+  int lmin = 0, lmax = 0;
+  for (const auto c : cells) lmin = std::min<int>(lmin, std::max<int>(c, -127)), lmax = std::max<int>(lmax, c);
+  // Widen the clamping only as far as the grid's most certain cells need, so that they keep
+  // their values (MRPT's grid saturates at +-127 only).
+  TInsertionOptions io = insertionOptions;
+  const LogOddsModel before(io.toMapParams(res).log_odds);
+  const float vmin = -static_cast<float>(lmax) / 16.0f, vmax = -static_cast<float>(lmin) / 16.0f;
+  if (vmin < before.clampMin()) io.clampingMin = boundProbability(vmin, -1);
+  if (vmax > before.clampMax()) io.clampingMax = boundProbability(vmax, +1);
+  io.validate();
+  MapParams p = io.toMapParams(res);
+  p.rtree = map_.params().rtree;
+  const LogOddsModel model(p.log_odds);
+  const auto mergeable = [&](float v) {
+    return p.merge == MergePolicy::Equal || (p.merge == MergePolicy::Clamped && model.isClamped(v));
+  };
+  const Lattice lat(res);
+  const double zc = std::min<double>(std::max<double>(0.0, gridViewOptions.gridView_minZ), gridViewOptions.gridView_maxZ);
+  Key k0;
+  if (!lat.tryKey(Eigen::Vector3d(grid.idx2x(0), grid.idx2y(0), zc), k0))
+    throw std::out_of_range("rtog::CRTreeOccupancyGridMap::loadFromGrid: grid outside the key range");
+  if (k0.x + static_cast<std::int64_t>(sx) - 1 > kKeyMax || k0.y + static_cast<std::int64_t>(sy) - 1 > kKeyMax)
+    throw std::out_of_range("rtog::CRTreeOccupancyGridMap::loadFromGrid: grid outside the key range");
+  std::vector<Leaf> leaves;
+  for (std::size_t cy = 0; cy < sy; ++cy)
+    for (std::size_t cx = 0; cx < sx;) {
+      // An int8 cell may hold -128, which MRPT reads as -127 (its bound): the mrpt_grid preset's too.
+      const int l = std::max<int>(cells[cy * sx + cx], -127);
+      if (l == 0) {  // never observed: unknown, as in MRPT
+        ++cx;
+        continue;
+      }
+      const float v = -static_cast<float>(l) / 16.0f;
+      const auto kx = static_cast<std::int32_t>(k0.x + static_cast<std::int64_t>(cx));
+      const auto ky = static_cast<std::int32_t>(k0.y + static_cast<std::int64_t>(cy));
+      // Runs of equal mergeable values along x, within one brick.
+      std::size_t end = cx + 1;
+      if (mergeable(v))
+        while (end < sx && std::max<int>(cells[cy * sx + end], -127) == l && ((kx + std::int32_t(end - cx)) >> kBrickBits) == (kx >> kBrickBits))
+          ++end;
+      leaves.push_back(Leaf{{kx, ky, k0.z}, {kx + std::int32_t(end - cx) - 1, ky, k0.z}, v});
+      cx = end;
+    }
+  std::istringstream is(encodeMap(p, leaves), std::ios::binary);
+  map_ = OccupancyMap::read(is);
+  insertionOptions = io;
+  // Scans inserted later continue on the grid's geometry and plane, as in the grid itself.
+  frame_.x_min = grid.getXMin(), frame_.x_max = grid.getXMax();
+  frame_.y_min = grid.getYMin(), frame_.y_max = grid.getYMax();
+  frame_.resolution = grid.getResolution();
+  frame_.size_x = grid.getSizeX(), frame_.size_y = grid.getSizeY();
+  frame_.has_layer = true;
+  frame_.layer = k0.z;
+  lastInsertStats = totalInsertStats = InsertStats{};
+  invalidRangesSkipped = 0;
+  notifyMapChanged();
+}
+
+bool CRTreeOccupancyGridMap::loadFromBitmapFile(const std::string& file, float resolution,
+                                                const mrpt::math::TPoint2D& origin) {
+  mrpt::maps::COccupancyGridMap2D g;
+  if (!g.loadFromBitmapFile(file, resolution, origin)) return false;
+  loadFromGrid(g);
+  return true;
+}
+
+bool CRTreeOccupancyGridMap::loadFromGridmapFile(const std::string& file) {
+  mrpt::maps::COccupancyGridMap2D g;
+  try {
+    mrpt::io::CFileGZInputStream f;  // zlib reads plain files too
+    if (!f.open(file)) return false;
+    auto ar = mrpt::serialization::archiveFrom(f);
+    ar >> g;
+  } catch (const std::exception&) {
+    return false;  // not a serialized COccupancyGridMap2D
+  }
+  loadFromGrid(g);
+  return true;
+}
+
+}  // namespace rtog

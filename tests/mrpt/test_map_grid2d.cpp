@@ -1,0 +1,311 @@
+// The 2D view of CRTreeOccupancyGridMap and the COccupancyGridMap2D API on it, each cross-checked
+// against a stock COccupancyGridMap2D holding the same cells, on real SENA scans.
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+
+#include <mrpt/maps/COccupancyGridMap2D.h>
+#include <mrpt/maps/CSimplePointsMap.h>
+#include <mrpt/obs/CObservation2DRangeScan.h>
+#include <mrpt/img/CImage.h>
+#include <mrpt/obs/CObservationPointCloud.h>
+
+#include "grid2d_helpers.hpp"
+
+using namespace rtog_test;
+using mrpt::poses::CPose3D;
+
+TEST(MapGrid2D, ViewCellsAreTheBandsHighestLogOdds) {
+  const SenaFixture& f = senaFixture();
+  const auto view = f.map.gridView();
+  const auto& m = f.map.map();
+  const rtog::Box kb = m.keyBounds();
+  ASSERT_FALSE(kb.isEmpty());
+  EXPECT_EQ(view->getSizeX(), kb.extent(0));
+  EXPECT_EQ(view->getSizeY(), kb.extent(1));
+  EXPECT_NEAR(view->getXMin(), kb.min.x * f.map.resolution(), 1e-4);
+  std::size_t known = 0;
+  for (int y = kb.min.y; y <= kb.max.y; y += 3)
+    for (int x = kb.min.x; x <= kb.max.x; x += 3) {
+      float best = -1e9f;
+      bool any = false;
+      for (int z = kb.min.z; z <= kb.max.z; ++z)
+        if (const auto v = m.logOdds(rtog::Key{x, y, z})) best = std::max(best, *v), any = true;
+      // Values that are int8 cells (-l / 16, the mrpt_grid preset's) exactly; others through p2l.
+      const float l = -16.0f * best;
+      const int8_t want = !any ? 0
+                          : l == std::round(l) && std::abs(l) <= 127
+                              ? static_cast<int8_t>(l)
+                              : mrpt::maps::COccupancyGridMap2D::p2l(float(1.0 - rtog::probability(best)));
+      const auto got = view->getRawMap()[(y - kb.min.y) * view->getSizeX() + (x - kb.min.x)];
+      ASSERT_EQ(int(got), int(want)) << "cell " << x << "," << y;
+      known += any;
+    }
+  EXPECT_GT(known, 1000u);
+}
+
+TEST(MapGrid2D, BandAndCacheInvalidation) {
+  const SenaFixture& f = senaFixture();
+  rtog::CRTreeOccupancyGridMap m = f.map;
+  const auto v1 = m.gridView();
+  EXPECT_EQ(m.gridView().get(), v1.get());  // cached
+  EXPECT_GT(m.gridViewCellCounts().occupied, 100u);
+  m.gridViewOptions.gridView_minZ = 50;  // above every cell: all unknown
+  m.gridViewOptions.gridView_maxZ = 60;
+  const auto c = m.gridViewCellCounts();
+  EXPECT_EQ(c.occupied + c.free, 0u);
+  m.gridViewOptions = {};
+  const auto before = m.gridViewCellCounts();
+  auto frames = loadOdometryFrames(dataset(kSena), 60);
+  // notifyMapChanged drops the view
+  ASSERT_TRUE(m.insertObservation(*frames[50].sf->getObservationByClass<mrpt::obs::CObservation2DRangeScan>(),
+                                  frames[50].pose));
+  const auto after = m.gridViewCellCounts();
+  EXPECT_NE(after.free + after.occupied, before.free + before.occupied);
+  EXPECT_NE(m.gridView().get(), v1.get());
+}
+
+TEST(MapGrid2D, ImportedGridmapViewIsBitExact) {
+  const MalagaFixture& g = malagaFixture();
+  const auto view = g.map.gridView();
+  // The view spans the known cells; the file's grid has an unknown border around them.
+  const float res = g.grid.getResolution();
+  const int ox = int(std::lround((view->getXMin() - g.grid.getXMin()) / res));
+  const int oy = int(std::lround((view->getYMin() - g.grid.getYMin()) / res));
+  ASSERT_GE(ox, 0);
+  ASSERT_GE(oy, 0);
+  ASSERT_LE(ox + view->getSizeX(), g.grid.getSizeX());
+  ASSERT_LE(oy + view->getSizeY(), g.grid.getSizeY());
+  std::size_t known = 0, mismatches = 0;
+  for (unsigned y = 0; y < g.grid.getSizeY(); ++y)
+    for (unsigned x = 0; x < g.grid.getSizeX(); ++x) {
+      const int vx = int(x) - ox, vy = int(y) - oy;
+      const bool inside = vx >= 0 && vy >= 0 && vx < int(view->getSizeX()) && vy < int(view->getSizeY());
+      // -128, which the file holds in places, is -127 to MRPT (l2p reads both as its lowest value)
+      // and to the mrpt_grid preset, whose cells saturate there.
+      const auto want = static_cast<int8_t>(std::max<int>(g.grid.getRawMap()[y * g.grid.getSizeX() + x], -127));
+      const auto got = inside ? view->getRawMap()[vy * view->getSizeX() + vx] : int8_t(0);
+      mismatches += got != want;
+      known += want != 0;
+    }
+  EXPECT_EQ(mismatches, 0u);
+  EXPECT_GT(known, 100000u);
+  EXPECT_LT(g.map.map().leafCount(), g.grid.getRawMap().size() / 2);  // runs merged
+}
+
+TEST(MapGrid2D, AllSevenMethodsEqualStockGridAndPeakAtTruePose) {
+  const SenaFixture& f = senaFixture();
+  rtog::CRTreeOccupancyGridMap m = f.map;
+  // The view grows to hold the scan's end points at the poses asked (as a stock grid built by
+  // insertion does); the stock copy is taken once it has.
+  for (const CPose3D& q : displaced(f.pose)) (void)m.computeObservationLikelihood(*f.scan, q);
+  const mrpt::maps::COccupancyGridMap2D stock0 = stockCopy(*m.gridView());
+  using G = mrpt::maps::COccupancyGridMap2D;
+  for (int method = 0; method <= 6; ++method) {
+    // A fresh copy per method: MRPT's MI writes the scan into the grid it scores on.
+    mrpt::maps::COccupancyGridMap2D stock = stockCopy(stock0);
+    m.likelihoodOptions.likelihoodMethod = static_cast<rtog::CRTreeOccupancyGridMap::TLikelihoodMethod>(method);
+    stock.likelihoodOptions.likelihoodMethod = static_cast<G::TLikelihoodMethod>(method);
+    const double at = m.computeObservationLikelihood(*f.scan, f.pose);
+    // MRPT 2.5.8's MI counts no updated cell (its scan insertion bypasses updateCell): log(0).
+    if (method != G::lmMeanInformation) {
+      ASSERT_TRUE(std::isfinite(at)) << "method " << method;
+    }
+    double worst = 0;
+    for (const CPose3D& q : displaced(f.pose)) {
+      const double ours = m.computeObservationLikelihood(*f.scan, q);
+      const double ref = stock.computeObservationLikelihood(*f.scan, q);
+      worst = std::max(worst, ours == ref ? 0.0 : std::abs(ours - ref) / std::max(1e-12, std::abs(ref)));
+    }
+    const double ref = stock.computeObservationLikelihood(*f.scan, f.pose);
+    worst = std::max(worst, at == ref ? 0.0 : std::abs(at - ref) / std::max(1e-12, std::abs(ref)));
+    EXPECT_LE(worst, 0.01) << "method " << method;
+    std::printf("[ method %d ] at pose %.6g, stock %.6g, max rel. difference %.3g\n", method, at, ref, worst);
+  }
+}
+
+TEST(MapGrid2D, OptionsReachTheView) {
+  // LF options changed between calls must not reuse MRPT's per-cell likelihood cache.
+  const SenaFixture& f = senaFixture();
+  rtog::CRTreeOccupancyGridMap m = f.map;
+  mrpt::maps::COccupancyGridMap2D stock = stockCopy(*m.gridView());
+  (void)m.computeObservationLikelihood(*f.scan, f.pose);
+  m.likelihoodOptions.LF_stdHit = stock.likelihoodOptions.LF_stdHit = 0.1f;
+  m.likelihoodOptions.LF_decimation = stock.likelihoodOptions.LF_decimation = 1;
+  const double ref = stock.computeObservationLikelihood(*f.scan, f.pose);
+  EXPECT_NEAR(m.computeObservationLikelihood(*f.scan, f.pose), ref, 1e-6 * std::abs(ref));
+}
+
+TEST(MapGrid2D, NativePathsStayFor3DAndOnRequest) {
+  const SenaFixture& f = senaFixture();
+  rtog::CRTreeOccupancyGridMap m = f.map;
+  mrpt::maps::CSimplePointsMap pts;
+  pts.insertObservation(*f.scan);
+  mrpt::obs::CObservationPointCloud pc;
+  pc.pointcloud = mrpt::maps::CSimplePointsMap::Create(pts);
+  const double lf = m.computeObservationLikelihood(pc, f.pose);
+  // Methods MRPT defines on planar scans only score 3D observations by the native likelihood field.
+  for (auto method : {rtog::CRTreeOccupancyGridMap::lmMeanInformation, rtog::CRTreeOccupancyGridMap::lmConsensus,
+                      rtog::CRTreeOccupancyGridMap::lmCellsDifference, rtog::CRTreeOccupancyGridMap::lmConsensusOWA,
+                      rtog::CRTreeOccupancyGridMap::lmLikelihoodField_II}) {
+    m.likelihoodOptions.likelihoodMethod = method;
+    EXPECT_DOUBLE_EQ(m.computeObservationLikelihood(pc, f.pose), lf) << int(method);
+  }
+  m.likelihoodOptions.likelihoodMethod = rtog::CRTreeOccupancyGridMap::lmLikelihoodField_Thrun;
+  const double viewLf = m.computeObservationLikelihood(*f.scan, f.pose);
+  m.likelihoodOptions.scanLikelihoodOnGridView = false;
+  const double nativeLf = m.computeObservationLikelihood(*f.scan, f.pose);
+  EXPECT_NE(viewLf, nativeLf);
+  EXPECT_LT(m.computeObservationLikelihood(*f.scan, f.pose + CPose3D(0.3, 0, 0, 0, 0, 0)), nativeLf);
+}
+
+
+TEST(MapGrid2D, GridApiEqualsStockGrid) {
+  const SenaFixture& f = senaFixture();
+  const rtog::CRTreeOccupancyGridMap& m = f.map;
+  const mrpt::maps::COccupancyGridMap2D stock = stockCopy(*m.gridView());
+  mrpt::maps::COccupancyGridMap2D::TEntropyInfo a, b;
+  m.computeEntropy(a);
+  stock.computeEntropy(b);
+  EXPECT_DOUBLE_EQ(a.H, b.H);
+  EXPECT_EQ(a.effectiveMappedCells, b.effectiveMappedCells);
+  EXPECT_GT(a.effectiveMappedCells, 10000u);
+  EXPECT_DOUBLE_EQ(m.getArea(), stock.getArea());
+  const mrpt::poses::CPose2D p2(f.pose);
+  mrpt::obs::CObservation2DRangeScan s1 = *f.scan, s2 = *f.scan;
+  m.laserScanSimulator(s1, p2, 0.5f, 361);
+  stock.laserScanSimulator(s2, p2, 0.5f, 361);
+  ASSERT_EQ(s1.getScanSize(), s2.getScanSize());
+  std::size_t valid = 0;
+  for (std::size_t i = 0; i < s1.getScanSize(); ++i) {
+    EXPECT_EQ(s1.getScanRange(i), s2.getScanRange(i));
+    valid += s1.getScanRangeValidity(i);
+  }
+  EXPECT_GT(valid, 100u);
+  // Native 3D ray casting agrees with the 2D simulation to about a cell along most beams.
+  const CPose3D sensor = f.pose + f.scan->sensorPose;
+  std::size_t close = 0, n = 0;
+  for (double ang = -1.5; ang <= 1.5; ang += 0.05) {
+    float r2 = 0;
+    bool ok = false;
+    stock.simulateScanRay(sensor.x(), sensor.y(), sensor.yaw() + ang, r2, ok, 20.0, 0.5f);
+    float r1 = 0;
+    bool ok1 = false;
+    m.simulateScanRay(sensor.x(), sensor.y(), sensor.yaw() + ang, r1, ok1, 20.0, 0.5f);
+    EXPECT_EQ(r1, r2);
+    const auto hit = m.castRay({sensor.x(), sensor.y(), sensor.z()},
+                               {std::cos(sensor.yaw() + ang), std::sin(sensor.yaw() + ang), 0.0}, 20.0);
+    if (!ok || !hit) continue;
+    ++n;
+    close += std::abs(*hit - r2) < 0.15;
+  }
+  EXPECT_GT(n, 20u);
+  EXPECT_GE(close, n * 8 / 10);
+  // Clearance (the view) and the native nearest obstacle, at the robot's position.
+  const float c1 = m.computeClearance(float(sensor.x()), float(sensor.y()), 3.0f);
+  EXPECT_EQ(c1, stock.computeClearance(float(sensor.x()), float(sensor.y()), 3.0f));
+  const auto d = m.nearestObstacleDistance({sensor.x(), sensor.y(), sensor.z()}, 3.0);
+  ASSERT_TRUE(d.has_value());
+  EXPECT_NEAR(*d, c1, 2 * m.resolution());
+  // Cell counts, image and bitmap round trip.
+  const auto c = m.gridViewCellCounts();
+  std::size_t fr = 0, oc = 0;
+  for (auto l : stock.getRawMap()) fr += l > 0, oc += l < 0;
+  EXPECT_EQ(c.free, fr);
+  EXPECT_EQ(c.occupied, oc);
+  mrpt::img::CImage i1, i2;
+  m.getAsImage(i1);
+  stock.getAsImage(i2);
+  ASSERT_EQ(i1.getWidth(), i2.getWidth());
+  ASSERT_EQ(i1.getHeight(), i2.getHeight());
+  const std::string png = "/tmp/rtog_test_grid2d_view.png";
+  ASSERT_TRUE(m.saveAsBitmapFile(png));
+  rtog::CRTreeOccupancyGridMap fromPng(0.1);
+  ASSERT_TRUE(fromPng.loadFromBitmapFile(png, stock.getResolution()));
+  mrpt::maps::COccupancyGridMap2D stockPng;
+  ASSERT_TRUE(stockPng.loadFromBitmapFile(png, stock.getResolution()));
+  EXPECT_EQ(fromPng.gridViewCellCounts().occupied, [&] {
+    std::size_t k = 0;
+    for (auto l : stockPng.getRawMap()) k += l < 0;
+    return k;
+  }());
+  std::remove(png.c_str());
+}
+
+TEST(MapGrid2D, MalagaGridmapQueriesEqualStock) {
+  // Against a stock grid of the view's extent: MRPT's computeEntropy counts unknown cells as
+  // mapped (its table zeroes the entropy of cell value 0), so the file's wider grid differs.
+  const MalagaFixture& g = malagaFixture();
+  const mrpt::maps::COccupancyGridMap2D stock = stockCopy(*g.map.gridView());
+  mrpt::maps::COccupancyGridMap2D::TEntropyInfo a, b;
+  g.map.computeEntropy(a);
+  stock.computeEntropy(b);
+  EXPECT_EQ(a.effectiveMappedCells, b.effectiveMappedCells);
+  EXPECT_NEAR(a.H, b.H, 1e-6 * std::abs(b.H));
+  for (float x = 0; x < 100; x += 9.7f)
+    for (float y = -100; y < 80; y += 11.3f) {
+      float r1, r2;
+      bool v1, v2;
+      g.map.simulateScanRay(x, y, 0.3, r1, v1, 30.0, 0.5f);
+      stock.simulateScanRay(x, y, 0.3, r2, v2, 30.0, 0.5f);
+      EXPECT_EQ(r1, r2);
+      EXPECT_EQ(g.map.computeClearance(x, y, 2.0f), stock.computeClearance(x, y, 2.0f));
+    }
+}
+
+TEST(MapGrid2D, LikelihoodFieldSpeedVsStock) {
+  // A figure, not an assertion on time: LF on the view, native LF, stock LF, same scan.
+  const SenaFixture& f = senaFixture();
+  rtog::CRTreeOccupancyGridMap m = f.map;
+  const mrpt::maps::COccupancyGridMap2D stock = stockCopy(*m.gridView());
+  const auto poses = displaced(f.pose);
+  const auto time = [&](auto&& fn) {
+    double sum = 0;
+    for (const auto& q : poses) sum += fn(q);  // warm caches
+    const auto t0 = std::chrono::steady_clock::now();
+    for (int it = 0; it < 300; ++it)
+      for (const auto& q : poses) sum += fn(q);
+    EXPECT_TRUE(std::isfinite(sum));
+    return std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count() / (300.0 * poses.size());
+  };
+  const double tStock = time([&](const CPose3D& q) { return stock.computeObservationLikelihood(*f.scan, q); });
+  const double tView = time([&](const CPose3D& q) { return m.computeObservationLikelihood(*f.scan, q); });
+  m.likelihoodOptions.scanLikelihoodOnGridView = false;
+  const double tNative = time([&](const CPose3D& q) { return m.computeObservationLikelihood(*f.scan, q); });
+  std::printf("[ LF speed ] per scan: stock %.1f us, view %.1f us (x%.2f), native %.1f us (x%.2f)\n", tStock, tView,
+              tView / tStock, tNative, tNative / tStock);
+}
+
+// The peak at the true pose, over every frame not inserted into the fixture's map (the odd ones
+// of the first 40, at their odometry poses): the true pose must beat each displacement on most of
+// them. MRPT 2.5.8's MI (log 0) and ConsensusOWA (a constant for 2D scans) carry no peak; LF_II
+// rewards end points moved into unknown space, so its forward/backward displacements are left out.
+TEST(MapGrid2D, MethodsPeakAtTheTruePoseOnMostFrames) {
+  const SenaFixture& f = senaFixture();
+  auto frames = loadOdometryFrames(dataset(kSena), 40);
+  using G = mrpt::maps::COccupancyGridMap2D;
+  for (int method : {G::lmRayTracing, G::lmConsensus, G::lmCellsDifference, G::lmLikelihoodField_Thrun,
+                     G::lmLikelihoodField_II}) {
+    rtog::CRTreeOccupancyGridMap m = f.map;
+    m.likelihoodOptions.likelihoodMethod = static_cast<rtog::CRTreeOccupancyGridMap::TLikelihoodMethod>(method);
+    std::size_t probes = 0, peaked = 0;
+    for (std::size_t i = 15; i < frames.size(); i += 2) {
+      const auto scan = frames[i].sf->getObservationByClass<mrpt::obs::CObservation2DRangeScan>();
+      if (!scan) continue;
+      const double at = m.computeObservationLikelihood(*scan, frames[i].pose);
+      bool best = true;
+      for (const CPose3D& q : displaced(frames[i].pose)) {
+        if (method == G::lmLikelihoodField_II && std::abs((q - frames[i].pose).x()) > 0.1) continue;
+        best = best && m.computeObservationLikelihood(*scan, q) <= at;
+      }
+      ++probes, peaked += best;
+    }
+    std::printf("[ method %d ] true pose best on %zu of %zu frames\n", method, peaked, probes);
+    ASSERT_GE(probes, 10u);
+    // MRPT's ray tracing on this odometry-built map peaks on fewer frames, on the stock grid with
+    // the same cells alike (the values are equal, above): reported, not asserted.
+    if (method != G::lmRayTracing) EXPECT_GE(3 * peaked, 2 * probes) << "method " << method;
+  }
+}
