@@ -79,8 +79,10 @@ void CRTreeOccupancyGridMap::TInsertionOptions::saveToConfigFile(mrpt::config::C
   c.write(sec, "discretize", discretize);
   c.write(sec, "threads", threads);
   c.write(sec, "planarCache", planarCache);
-  c.write(sec, "rotatingScan_minElevation_deg", rotatingScan_minElevation_deg);
-  c.write(sec, "rotatingScan_maxElevation_deg", rotatingScan_maxElevation_deg);
+  if (!std::isnan(rotatingScan_minElevation_deg)) {  // unset is no key: a written "nan" may not read back
+    c.write(sec, "rotatingScan_minElevation_deg", rotatingScan_minElevation_deg);
+    c.write(sec, "rotatingScan_maxElevation_deg", rotatingScan_maxElevation_deg);
+  }
 }
 
 void CRTreeOccupancyGridMap::TInsertionOptions::validate() const {
@@ -100,8 +102,11 @@ void CRTreeOccupancyGridMap::TInsertionOptions::validate() const {
   if (decimation < 1) badOption(sec, "decimation", "must be >= 1");
   if (decimation_3d_range < 1 || decimation_3d_range > 255) badOption(sec, "decimation_3d_range", "must be in [1, 255]");
   if (threads < 1 || threads > 256) badOption(sec, "threads", "must be in [1, 256]");
-  if (!(rotatingScan_minElevation_deg <= rotatingScan_maxElevation_deg) ||
-      std::abs(rotatingScan_minElevation_deg) > 90 || std::abs(rotatingScan_maxElevation_deg) > 90)
+  const bool minSet = !std::isnan(rotatingScan_minElevation_deg), maxSet = !std::isnan(rotatingScan_maxElevation_deg);
+  if (minSet != maxSet)
+    badOption(sec, "rotatingScan_min/maxElevation_deg", "set both (explicit ring elevations) or neither");
+  if (minSet && (!(rotatingScan_minElevation_deg <= rotatingScan_maxElevation_deg) ||
+                 !(std::abs(rotatingScan_minElevation_deg) <= 90) || !(std::abs(rotatingScan_maxElevation_deg) <= 90)))
     badOption(sec, "rotatingScan_min/maxElevation_deg", "need -90 <= min <= max <= 90");
   toMapParams(0.1).validate();
 }

@@ -10,6 +10,7 @@
 #include <mrpt/obs/CObservationVelodyneScan.h>
 
 #include "rtog/mrpt/CRTreeOccupancyGridMap.h"
+#include "rotating_scan.hpp"
 
 namespace rtog {
 
@@ -187,25 +188,11 @@ bool CRTreeOccupancyGridMap::extractBeams(const mrpt::obs::CObservation& obs, co
   }
   if (const auto* rot = dynamic_cast<const CObservationRotatingScan*>(&obs)) {
     const CPose3D sensor = robotPose + rot->sensorPose;
-    const Frame frame(sensor);
     setOrigin(sensor, out);
-    const std::size_t rows = rot->rangeImage.rows(), cols = rot->rangeImage.cols();
-    const double el0 = insertionOptions.rotatingScan_minElevation_deg * M_PI / 180.0;
-    const double el1 = insertionOptions.rotatingScan_maxElevation_deg * M_PI / 180.0;
-    for (std::size_t r = 0; r < rows; ++r) {
-      const double el = rows > 1 ? el0 + (el1 - el0) * double(r) / double(rows - 1) : 0.0;
-      const double ce = std::cos(el), se = std::sin(el);
-      for (std::size_t c = 0; c < cols; c += dec) {
-        const uint16_t raw = rot->rangeImage(r, c);
-        const double range = raw * rot->rangeResolution;
-        if (raw == 0 || range < rot->minRange || range > rot->maxRange) {
-          ++out.invalid;
-          continue;
-        }
-        const double az = rot->startAzimuth + (cols > 1 ? rot->azimuthSpan * double(c) / double(cols - 1) : 0.0);
-        addLocalPoint(frame, range * ce * std::cos(az), range * ce * std::sin(az), range * se, out);
-      }
-    }
+    local.clear();
+    detail::decodeRotatingScan(*rot, dec, insertionOptions.rotatingScan_minElevation_deg,
+                               insertionOptions.rotatingScan_maxElevation_deg, local, out.invalid);
+    addLocalPoints(sensor, local, out);
     return true;
   }
   if (const auto* depth = dynamic_cast<const CObservation3DRangeScan*>(&obs)) {

@@ -1,4 +1,5 @@
 // rtog::CRTreeOccupancyGridMap: versioned CSerializable and files.
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 
@@ -16,8 +17,9 @@ namespace rtog {
 
 // Version 0: genericMapParams, insertion and likelihood options, then the core map's own
 // binary format (doc/format.md) as a length-prefixed byte block. Version 1 adds
-// insertionOptions.planarCache after the rotating-scan elevations.
-uint8_t CRTreeOccupancyGridMap::serializeGetVersion() const { return 1; }
+// insertionOptions.planarCache after the rotating-scan elevations. Version 2: the elevations may
+// be NaN (unset: the lidar's calibration decides).
+uint8_t CRTreeOccupancyGridMap::serializeGetVersion() const { return 2; }
 
 void CRTreeOccupancyGridMap::serializeTo(mrpt::serialization::CArchive& out) const {
   out << genericMapParams;
@@ -40,7 +42,8 @@ void CRTreeOccupancyGridMap::serializeTo(mrpt::serialization::CArchive& out) con
 void CRTreeOccupancyGridMap::serializeFrom(mrpt::serialization::CArchive& in, uint8_t version) {
   switch (version) {
     case 0:
-    case 1: {
+    case 1:
+    case 2: {
       in >> genericMapParams;
       auto& io = insertionOptions;
       int32_t threads = 1;
@@ -49,6 +52,10 @@ void CRTreeOccupancyGridMap::serializeFrom(mrpt::serialization::CArchive& in, ui
           io.decimation_3d_range >> io.mergePolicy >> io.discretize >> threads >> io.rotatingScan_minElevation_deg >>
           io.rotatingScan_maxElevation_deg;
       io.threads = threads;
+      // Before version 2 the elevations were always stored, -15/15 being the defaults that stood
+      // for "no calibration known": unset, so that the calibration now decides.
+      if (version < 2 && io.rotatingScan_minElevation_deg == -15.0f && io.rotatingScan_maxElevation_deg == 15.0f)
+        io.rotatingScan_minElevation_deg = io.rotatingScan_maxElevation_deg = std::numeric_limits<float>::quiet_NaN();
       io.planarCache = true;
       if (version >= 1) in >> io.planarCache;
       auto& lo = likelihoodOptions;

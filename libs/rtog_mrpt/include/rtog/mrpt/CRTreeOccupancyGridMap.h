@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -84,10 +85,12 @@ class CRTreeOccupancyGridMap : public mrpt::maps::CMetricMap {
     /// 2D scans update dense per-brick layers in place and become leaves when the map is next
     /// read, not at every scan (the cells are the same either way). (Default: true)
     bool planarCache{true};
-    /// Lowest / highest elevation [deg] of the rings of a CObservationRotatingScan (MRPT 2.5 carries
-    /// no ring calibration): row r is at min + r*(max-min)/(rows-1). (Default: -15 / 15, a VLP-16)
-    float rotatingScan_minElevation_deg{-15.0f};
-    float rotatingScan_maxElevation_deg{15.0f};
+    /// Explicit ring elevations [deg] of a CObservationRotatingScan: if both are set, row r is at
+    /// min + r*(max-min)/(rows-1). Unset (NaN), rings come from the lidar's calibration (MRPT's
+    /// default table for VLP-16 / HDL-32E / HDL-64; MRPT 2.5's rotating scans carry none), and a
+    /// multi-row scan of an unknown lidar is refused. (Default: NaN / NaN, unset)
+    float rotatingScan_minElevation_deg{std::numeric_limits<float>::quiet_NaN()};
+    float rotatingScan_maxElevation_deg{std::numeric_limits<float>::quiet_NaN()};
 
     MapParams toMapParams(double resolution) const;
   };
