@@ -265,6 +265,8 @@ void CRTreeOccupancyGridMap::internal_clear() {
   totalInsertStats = InsertStats{};
   invalidRangesSkipped = 0;
   notifyMapChanged();
+  std::lock_guard<std::mutex> lk(caches_.mutex);
+  caches_.local_valid = false;
 }
 
 bool CRTreeOccupancyGridMap::isEmpty() const { return map_.leafCount() == 0; }

@@ -10,6 +10,7 @@
 #include <mrpt/obs/CObservationVelodyneScan.h>
 
 #include "rtog/mrpt/CRTreeOccupancyGridMap.h"
+#include "fingerprint.hpp"
 #include "rotating_scan.hpp"
 
 namespace rtog {
@@ -68,6 +69,37 @@ void addLocalPoints(const CPose3D& sensor, const std::vector<Eigen::Vector3f>& l
   for (const auto& p : local) addLocalPoint(f, p.x(), p.y(), p.z(), out);
 }
 
+// Keys of the sensor-frame point cache: everything the decoded points depend on.
+std::uint64_t keyVelodyne(const mrpt::obs::CObservationVelodyneScan& v, std::size_t dec) {
+  detail::Fingerprint f;
+  f.value(std::uint32_t{2});
+  f.value(dec);
+  f.value(v.minRange);
+  f.value(v.maxRange);
+  f.vector(v.point_cloud.x);
+  f.vector(v.point_cloud.y);
+  f.vector(v.point_cloud.z);
+  f.vector(v.scan_packets);
+  f.vector(v.calibration.laser_corrections);
+  return f.digest();
+}
+
+std::uint64_t keyDepth(const mrpt::obs::CObservation3DRangeScan& d, std::size_t dec) {
+  detail::Fingerprint f;
+  f.value(std::uint32_t{4});
+  f.value(dec);
+  f.value(d.rangeImage.rows());
+  f.value(d.rangeImage.cols());
+  f.bytes(d.rangeImage.data(), std::size_t(d.rangeImage.rows()) * std::size_t(d.rangeImage.cols()) * 2);
+  f.value(d.rangeUnits);
+  f.value(d.range_is_depth);
+  const auto& c = d.cameraParams;
+  for (double v : {c.fx(), c.fy(), c.cx(), c.cy()}) f.value(v);
+  f.value(c.nrows);
+  f.value(c.ncols);
+  return f.digest();
+}
+
 }  // namespace
 
 std::shared_ptr<const CRTreeOccupancyGridMap::Caches::ScanAngles> CRTreeOccupancyGridMap::scanAngles(
@@ -93,13 +125,11 @@ std::shared_ptr<const CRTreeOccupancyGridMap::Caches::ScanAngles> CRTreeOccupanc
 }
 
 template <class Decode>
-void CRTreeOccupancyGridMap::localPointsCached(const mrpt::obs::CObservation& obs, std::size_t decimation,
-                                               Decode&& decode, std::vector<Eigen::Vector3f>& pts,
+void CRTreeOccupancyGridMap::localPointsCached(std::uint64_t key, Decode&& decode, std::vector<Eigen::Vector3f>& pts,
                                                std::size_t& invalid) const {
-  const std::int64_t stamp = obs.timestamp.time_since_epoch().count();
   {
     std::lock_guard<std::mutex> lk(caches_.mutex);
-    if (caches_.local_obs == &obs && caches_.local_stamp == stamp && caches_.local_decimation == decimation) {
+    if (caches_.local_valid && caches_.local_key == key) {
       pts = caches_.local_points;
       invalid = caches_.local_invalid;
       return;
@@ -109,9 +139,8 @@ void CRTreeOccupancyGridMap::localPointsCached(const mrpt::obs::CObservation& ob
   invalid = 0;
   decode(pts, invalid);
   std::lock_guard<std::mutex> lk(caches_.mutex);
-  caches_.local_obs = &obs;
-  caches_.local_stamp = stamp;
-  caches_.local_decimation = decimation;
+  caches_.local_valid = true;
+  caches_.local_key = key;
   caches_.local_points = pts;
   caches_.local_invalid = invalid;
 }
@@ -131,24 +160,22 @@ bool CRTreeOccupancyGridMap::extractBeams(const mrpt::obs::CObservation& obs, co
   if (const auto* scan = dynamic_cast<const CObservation2DRangeScan*>(&obs)) {
     const CPose3D sensor = robotPose + scan->sensorPose;
     setOrigin(sensor, out);
-    // Sensor-frame points once per scan: a particle filter evaluates the same scan at every
-    // particle's pose.
-    localPointsCached(
-        obs, dec,
-        [&](std::vector<Eigen::Vector3f>& pts, std::size_t& invalid) {
-          const std::size_t n = scan->getScanSize();
-          const auto angles = scanAngles(*scan);
-          pts.reserve(n / dec + 1);
-          for (std::size_t i = 0; i < n; i += dec) {
-            const float r = scan->getScanRange(i);
-            if (!scan->getScanRangeValidity(i) || !std::isfinite(r) || !(r > 0.0f)) {
-              ++invalid;
-              continue;
-            }
-            pts.emplace_back(static_cast<float>(r * angles->cos[i]), static_cast<float>(r * angles->sin[i]), 0.0f);
-          }
-        },
-        local, out.invalid);
+    // Decoded at every call, not cached: the beam angles' cos/sin are cached, and fingerprinting
+    // the ranges would cost as much as this loop.
+    {
+      const std::size_t n = scan->getScanSize();
+      const auto angles = scanAngles(*scan);
+      local.clear();
+      local.reserve(n / dec + 1);
+      for (std::size_t i = 0; i < n; i += dec) {
+        const float r = scan->getScanRange(i);
+        if (!scan->getScanRangeValidity(i) || !std::isfinite(r) || !(r > 0.0f)) {
+          ++out.invalid;
+          continue;
+        }
+        local.emplace_back(static_cast<float>(r * angles->cos[i]), static_cast<float>(r * angles->sin[i]), 0.0f);
+      }
+    }
     addLocalPoints(sensor, local, out);
     return true;
   }
@@ -164,7 +191,7 @@ bool CRTreeOccupancyGridMap::extractBeams(const mrpt::obs::CObservation& obs, co
     const CPose3D sensor = robotPose + velo->sensorPose;
     setOrigin(sensor, out);
     localPointsCached(
-        obs, dec,
+        keyVelodyne(*velo, dec),
         [&](std::vector<Eigen::Vector3f>& pts, std::size_t& invalid) {
           CObservationVelodyneScan tmp;
           const CObservationVelodyneScan* src = velo;
@@ -189,6 +216,7 @@ bool CRTreeOccupancyGridMap::extractBeams(const mrpt::obs::CObservation& obs, co
   if (const auto* rot = dynamic_cast<const CObservationRotatingScan*>(&obs)) {
     const CPose3D sensor = robotPose + rot->sensorPose;
     setOrigin(sensor, out);
+    // Not cached: fingerprinting the whole range image costs more than decoding it.
     local.clear();
     detail::decodeRotatingScan(*rot, dec, insertionOptions.rotatingScan_minElevation_deg,
                                insertionOptions.rotatingScan_maxElevation_deg, local, out.invalid);
@@ -218,7 +246,7 @@ bool CRTreeOccupancyGridMap::extractBeams(const mrpt::obs::CObservation& obs, co
     // per observation; then the sensor pose on the robot and the robot pose.
     const std::size_t ddec = forInsertion ? insertionOptions.decimation_3d_range : std::min<std::size_t>(dec, 255);
     localPointsCached(
-        obs, ddec,
+        keyDepth(*depth, ddec),
         [&](std::vector<Eigen::Vector3f>& pts, std::size_t& invalid) {
           mrpt::maps::CSimplePointsMap pm;
           mrpt::obs::T3DPointsProjectionParams pp;

@@ -222,10 +222,11 @@ class CRTreeOccupancyGridMap : public mrpt::maps::CMetricMap {
   /// (capped) through the field's Gaussian-plus-uniform mixture. With the cache on, per lattice
   /// cell, as COccupancyGridMap2D's precomputed field. The caller holds caches_.mutex.
   float fieldTermLocked(const Eigen::Vector3d& p, const FieldParams& f) const;
-  /// Sensor-frame points of `obs` (decoded by `decode` once per observation and decimation).
+  /// Sensor-frame points decoded by `decode`, or the last ones if `key` (a fingerprint of
+  /// everything they depend on: the observation's data, geometry and decimation) is the last one's.
   template <class Decode>
-  void localPointsCached(const mrpt::obs::CObservation& obs, std::size_t decimation, Decode&& decode,
-                         std::vector<Eigen::Vector3f>& pts, std::size_t& invalid) const;
+  void localPointsCached(std::uint64_t key, Decode&& decode, std::vector<Eigen::Vector3f>& pts,
+                         std::size_t& invalid) const;
 
   /// Derived data; copies start empty (a copy rebuilds them on demand).
   struct Caches {
@@ -235,10 +236,10 @@ class CRTreeOccupancyGridMap : public mrpt::maps::CMetricMap {
     bool points_dirty{true};
     mrpt::maps::CSimplePointsMap occupied_points;
     /// Sensor-frame points of the last decoded observation (Velodyne raw packets, depth image),
-    /// so that evaluating one observation at many poses (particle filters) decodes it once.
-    const void* local_obs{nullptr};
-    std::int64_t local_stamp{0};
-    std::size_t local_decimation{0};
+    /// so that evaluating one observation at many poses (particle filters) decodes it once. Keyed
+    /// by content: addresses and timestamps are reused by different scans.
+    bool local_valid{false};
+    std::uint64_t local_key{0};
     std::vector<Eigen::Vector3f> local_points;
     std::size_t local_invalid{0};
     /// cos/sin of the beam angles of the last 2D scan geometry (a log's scans share one), so
@@ -257,7 +258,7 @@ class CRTreeOccupancyGridMap : public mrpt::maps::CMetricMap {
       lf.clear();
       lf_params.reset();
       points_dirty = true;
-      local_obs = nullptr;
+      local_valid = false;
       return *this;
     }
   };
