@@ -13,6 +13,18 @@
 
 namespace rtog {
 
+namespace {
+// The log-likelihood of an observation from a non-finite pose: impossible, below any real score
+// (a scan's sum is bounded by beams * log(LF_zRandom/LF_maxRange)), yet finite, because MRPT's
+// particle filters assert finite log-likelihoods and subtract the maximum before exp().
+constexpr double kImpossibleLogLik = -1e30;
+
+bool finitePose(const mrpt::poses::CPose3D& p) {
+  return std::isfinite(p.x()) && std::isfinite(p.y()) && std::isfinite(p.z()) && std::isfinite(p.yaw()) &&
+         std::isfinite(p.pitch()) && std::isfinite(p.roll());
+}
+}  // namespace
+
 bool CRTreeOccupancyGridMap::internal_canComputeObservationLikelihood(const mrpt::obs::CObservation& obs) const {
   using namespace mrpt::obs;
   if (isEmpty()) return false;
@@ -25,12 +37,14 @@ double CRTreeOccupancyGridMap::internal_computeObservationLikelihood(const mrpt:
                                                                      const mrpt::poses::CPose3D& takenFrom) const {
   // Per thread and kept: a particle filter calls this for every particle.
   thread_local ObservationBeams beams;
+  if (!finitePose(takenFrom)) return kImpossibleLogLik;
   if (!extractBeams(obs, takenFrom, beams, false)) return 0.0;  // no information: neutral
   return beamsLikelihood(beams);
 }
 
 double CRTreeOccupancyGridMap::beamsLikelihood(const ObservationBeams& b) const {
   likelihoodOptions.validate();
+  if (!b.origin.allFinite()) return kImpossibleLogLik;  // e.g. a NaN sensor pose on the robot
   return likelihoodOptions.likelihoodMethod == lmRayTracing ? rayTracing(b) : likelihoodField(b);
 }
 
