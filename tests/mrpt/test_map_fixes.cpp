@@ -4,9 +4,13 @@
 #include <cmath>
 #include <limits>
 
+#include <mrpt/config/CConfigFileMemory.h>
+#include <mrpt/io/CMemoryStream.h>
+#include <mrpt/maps/CMultiMetricMap.h>
 #include <mrpt/maps/CSimplePointsMap.h>
 #include <mrpt/obs/CObservation2DRangeScan.h>
 #include <mrpt/poses/CPose2D.h>
+#include <mrpt/serialization/CArchive.h>
 #include <mrpt/tfest/TMatchingPair.h>
 
 #include "rtog/mrpt/CRTreeOccupancyGridMap.h"
@@ -78,4 +82,107 @@ TEST(MapFixes, NonFinitePoseIsImpossibleForEveryMethod) {
     broken.sensorPose = CPose3D(nan, 0, 0, 0, 0, 0);
     EXPECT_LE(map.computeObservationLikelihood(broken, good), -1e29) << m.name;
   }
+}
+
+namespace {
+
+// A 3D map holding the SENA scans twice: at their height and, turned and shifted, 2 m above (a
+// second level whose walls are not the first level's).
+CRTreeOccupancyGridMap::Ptr twoLevelMap(const std::string& matchingSection) {
+  mrpt::config::CConfigFileMemory cfg(
+      "[map]\nrtreeOccupancyGrid_count=1\n[map_rtreeOccupancyGrid_00_creationOpts]\nresolution=0.05\n" +
+      matchingSection);
+  mrpt::maps::TSetOfMetricMapInitializers inits;
+  inits.loadFromConfigFile(cfg, "map");
+  auto mm = std::make_shared<mrpt::maps::CMultiMetricMap>();
+  mm->setListOfMaps(inits);
+  auto m = mm->mapByClass<CRTreeOccupancyGridMap>();
+  const auto& s = sena();
+  const CPose3D upper(0.7, -0.4, 2.0, 0.6, 0, 0);
+  for (std::size_t i = 0; i < 10; ++i) {
+    s.frames[i].sf->insertObservationsInto(*m, s.frames[i].pose);
+    s.frames[i].sf->insertObservationsInto(*m, upper + s.frames[i].pose);
+  }
+  return m;
+}
+
+}  // namespace
+
+TEST(MapFixes, Matching2DUsesOnlyTheHeightBand) {
+  const auto& s = sena();
+  const auto scan = scanOf(s.frames[5]);
+  const double zs = scan->sensorPose.z();
+  ASSERT_LT(std::abs(zs), 0.5);
+  auto m = twoLevelMap("[map_rtreeOccupancyGrid_00_matchingOpts]\nmatching2D_minZ=-1\nmatching2D_maxZ=1\n");
+  ASSERT_EQ(m->map().keyBounds().extent(2) > 1, true);  // two levels
+  EXPECT_FLOAT_EQ(m->matchingOptions.matching2D_maxZ, 1.0f);
+
+  mrpt::maps::CSimplePointsMap local;
+  local.insertObservation(*scan);
+  mrpt::tfest::TMatchingPairList pairs;
+  mrpt::maps::TMatchingParams params;
+  params.maxDistForCorrespondence = 0.5f;
+  mrpt::maps::TMatchingExtraResults extra;
+  m->determineMatching2D(&local, mrpt::poses::CPose2D(s.frames[5].pose), pairs, params, extra);
+  ASSERT_GT(pairs.size(), 50u);
+  const auto outside = [&] {
+    std::size_t n = 0;
+    for (const auto& p : pairs) n += !(p.global.z >= -1 && p.global.z <= 1);
+    return n;
+  };
+  EXPECT_EQ(outside(), 0u) << "of " << pairs.size() << " pairs";
+  // Where the scan lies on the upper level's walls: still only cells of the band.
+  const CPose3D upper(0.7, -0.4, 2.0, 0.6, 0, 0);
+  m->determineMatching2D(&local, mrpt::poses::CPose2D(upper + s.frames[5].pose), pairs, params, extra);
+  EXPECT_EQ(outside(), 0u) << "of " << pairs.size() << " pairs";
+
+  // A wall of the upper level, far from every wall of the lower one, is no correspondence.
+  mrpt::maps::CSimplePointsMap lower;
+  const auto& occ = m->occupiedCellCenters();
+  for (std::size_t i = 0; i < occ.size(); ++i) {
+    mrpt::math::TPoint3D p;
+    occ.getPoint(i, p);
+    if (p.z < 1) lower.insertPoint(p.x, p.y, p.z);
+  }
+  std::size_t probes = 0;
+  for (std::size_t i = 0; i < occ.size() && probes < 20; i += 7) {
+    mrpt::math::TPoint3D p;
+    occ.getPoint(i, p);
+    if (p.z < 1) continue;
+    const float dLower = lower.squareDistanceToClosestCorrespondence(float(p.x), float(p.y));
+    if (dLower < 1.0f) continue;
+    ++probes;
+    EXPECT_FLOAT_EQ(m->squareDistanceToClosestCorrespondence(float(p.x), float(p.y)), dLower);
+  }
+  EXPECT_GT(probes, 5u);
+
+  // The band is stored with the map.
+  mrpt::io::CMemoryStream buf;
+  auto ar = mrpt::serialization::archiveFrom(buf);
+  ar << *m;
+  buf.Seek(0);
+  CRTreeOccupancyGridMap back;
+  ar >> back;
+  EXPECT_FLOAT_EQ(back.matchingOptions.matching2D_minZ, -1.0f);
+  EXPECT_FLOAT_EQ(back.matchingOptions.matching2D_maxZ, 1.0f);
+}
+
+// On a flat 2D log the default band holds every cell: matching is what it was on all of them.
+TEST(MapFixes, Matching2DDefaultsKeepFlatLogs) {
+  const auto& s = sena();
+  const auto scan = scanOf(s.frames[5]);
+  mrpt::maps::CSimplePointsMap local;
+  local.insertObservation(*scan);
+  mrpt::tfest::TMatchingPairList a, b;
+  mrpt::maps::TMatchingParams params;
+  params.maxDistForCorrespondence = 0.5f;
+  mrpt::maps::TMatchingExtraResults ea, eb;
+  const mrpt::poses::CPose2D pose(s.frames[5].pose);
+  s.map.determineMatching2D(&local, pose, a, params, ea);
+  s.map.occupiedCellCenters().determineMatching2D(&local, pose, b, params, eb);
+  ASSERT_GT(a.size(), 50u);
+  EXPECT_EQ(a.size(), b.size());
+  EXPECT_DOUBLE_EQ(ea.sumSqrDist, eb.sumSqrDist);
+  EXPECT_FLOAT_EQ(s.map.squareDistanceToClosestCorrespondence(1.0f, 2.0f),
+                  s.map.occupiedCellCenters().squareDistanceToClosestCorrespondence(1.0f, 2.0f));
 }

@@ -189,6 +189,30 @@ void CRTreeOccupancyGridMap::TLikelihoodOptions::validate() const {
   if (rayTracing_decimation < 1) badOption(sec, "rayTracing_decimation", "must be >= 1");
 }
 
+// ---- TMatchingOptions --------------------------------------------------------------------
+
+void CRTreeOccupancyGridMap::TMatchingOptions::loadFromConfigFile(const mrpt::config::CConfigFileBase& s,
+                                                                 const std::string& sec) {
+  matching2D_minZ = s.read_float(sec, "matching2D_minZ", matching2D_minZ);
+  matching2D_maxZ = s.read_float(sec, "matching2D_maxZ", matching2D_maxZ);
+  try {
+    validate();
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(std::string(e.what()) + " (section [" + sec + "])");
+  }
+}
+
+void CRTreeOccupancyGridMap::TMatchingOptions::saveToConfigFile(mrpt::config::CConfigFileBase& c,
+                                                               const std::string& sec) const {
+  c.write(sec, "matching2D_minZ", matching2D_minZ);
+  c.write(sec, "matching2D_maxZ", matching2D_maxZ);
+}
+
+void CRTreeOccupancyGridMap::TMatchingOptions::validate() const {
+  if (!(std::isfinite(matching2D_minZ) && std::isfinite(matching2D_maxZ) && matching2D_minZ <= matching2D_maxZ))
+    badOption("matchingOpts", "matching2D_minZ/matching2D_maxZ", "need finite minZ <= maxZ");
+}
+
 // ---- TMapDefinition ----------------------------------------------------------------------
 
 CRTreeOccupancyGridMap::TMapDefinition::TMapDefinition() = default;
@@ -203,6 +227,7 @@ void CRTreeOccupancyGridMap::TMapDefinition::loadFromConfigFile_map_specific(
       badOption(sec, "resolution", "must lie in [1e-4, 1e3] m, got " + std::to_string(resolution));
     insertionOpts.loadFromConfigFile(source, sectionNamePrefix + "_insertOpts");
     likelihoodOpts.loadFromConfigFile(source, sectionNamePrefix + "_likelihoodOpts");
+    matchingOpts.loadFromConfigFile(source, sectionNamePrefix + "_matchingOpts");
   } catch (const std::exception& e) {
     loadError = e.what();
   }
@@ -212,6 +237,7 @@ void CRTreeOccupancyGridMap::TMapDefinition::dumpToTextStream_map_specific(std::
   out << "resolution = " << resolution << "\n";
   insertionOpts.dumpToTextStream(out);
   likelihoodOpts.dumpToTextStream(out);
+  matchingOpts.dumpToTextStream(out);
 }
 
 mrpt::maps::CMetricMap* CRTreeOccupancyGridMap::internal_CreateFromMapDefinition(
@@ -220,6 +246,7 @@ mrpt::maps::CMetricMap* CRTreeOccupancyGridMap::internal_CreateFromMapDefinition
   if (!d.loadError.empty()) throw std::invalid_argument(d.loadError);
   auto* m = new CRTreeOccupancyGridMap(d.resolution, d.insertionOpts);
   m->likelihoodOptions = d.likelihoodOpts;
+  m->matchingOptions = d.matchingOpts;
   m->genericMapParams = d.genericMapParams;
   return m;
 }
@@ -257,6 +284,7 @@ void CRTreeOccupancyGridMap::notifyMapChanged() {
   std::lock_guard<std::mutex> lk(caches_.mutex);
   caches_.lf.clear();
   caches_.points_dirty = true;
+  caches_.band_points_dirty = true;
 }
 
 void CRTreeOccupancyGridMap::internal_clear() {

@@ -18,7 +18,7 @@ namespace rtog {
 // Version 0: genericMapParams, insertion and likelihood options, then the core map's own
 // binary format (doc/format.md) as a length-prefixed byte block. Version 1 adds
 // insertionOptions.planarCache after the rotating-scan elevations. Version 2: the elevations may
-// be NaN (unset: the lidar's calibration decides).
+// be NaN (unset: the lidar's calibration decides); matchingOptions after the likelihood options.
 uint8_t CRTreeOccupancyGridMap::serializeGetVersion() const { return 2; }
 
 void CRTreeOccupancyGridMap::serializeTo(mrpt::serialization::CArchive& out) const {
@@ -32,6 +32,7 @@ void CRTreeOccupancyGridMap::serializeTo(mrpt::serialization::CArchive& out) con
   out << static_cast<int32_t>(lo.likelihoodMethod) << lo.LF_stdHit << lo.LF_zHit << lo.LF_zRandom << lo.LF_maxRange
       << lo.LF_decimation << lo.LF_maxCorrsDistance << lo.LF_useSquareDist << lo.enableLikelihoodCache
       << lo.rayTracing_decimation << lo.rayTracing_stdHit;
+  out << matchingOptions.matching2D_minZ << matchingOptions.matching2D_maxZ;
   std::ostringstream os(std::ios::binary);
   map_.write(os);
   const std::string bytes = os.str();
@@ -66,6 +67,8 @@ void CRTreeOccupancyGridMap::serializeFrom(mrpt::serialization::CArchive& in, ui
       if (method != lmLikelihoodField_Thrun && method != lmRayTracing)
         throw std::runtime_error("rtog::CRTreeOccupancyGridMap: corrupt stream (likelihood method)");
       lo.likelihoodMethod = static_cast<TLikelihoodMethod>(method);
+      matchingOptions = TMatchingOptions();
+      if (version >= 2) in >> matchingOptions.matching2D_minZ >> matchingOptions.matching2D_maxZ;
       const uint64_t n = in.ReadAs<uint64_t>();
       if (n > (uint64_t{1} << 40)) throw std::runtime_error("rtog::CRTreeOccupancyGridMap: corrupt stream (size)");
       std::string bytes(static_cast<std::size_t>(n), '\0');

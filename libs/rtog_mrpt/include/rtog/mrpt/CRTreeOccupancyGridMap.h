@@ -127,6 +127,19 @@ class CRTreeOccupancyGridMap : public mrpt::maps::CMetricMap {
     float rayTracing_stdHit{1.0f};
   };
 
+  /// Options for ICP against the map ([<prefix>_matchingOpts]).
+  struct TMatchingOptions : public mrpt::config::CLoadableOptions {
+    void loadFromConfigFile(const mrpt::config::CConfigFileBase& source, const std::string& section) override;
+    void saveToConfigFile(mrpt::config::CConfigFileBase& target, const std::string& section) const override;
+    void validate() const;
+
+    /// Height band [m]: determineMatching2D and squareDistanceToClosestCorrespondence pair 2D
+    /// points only with occupied cells whose centre z lies in [matching2D_minZ, matching2D_maxZ]
+    /// (a 3D map's floor and ceiling are not walls of a 2D scan). (Default: -1000)
+    float matching2D_minZ{-1000.0f};
+    float matching2D_maxZ{1000.0f};  ///< (Default: 1000)
+  };
+
   /// How getVisualizationInto draws the map.
   struct TRenderingOptions {
     bool showOccupied{true};    ///< Draw occupied cuboids. (Default: true)
@@ -140,6 +153,7 @@ class CRTreeOccupancyGridMap : public mrpt::maps::CMetricMap {
 
   TInsertionOptions insertionOptions;
   TLikelihoodOptions likelihoodOptions;
+  TMatchingOptions matchingOptions;
   TRenderingOptions renderingOptions;
 
   /// The wrapped core map. Changing it directly does not invalidate the caches: call
@@ -190,6 +204,7 @@ class CRTreeOccupancyGridMap : public mrpt::maps::CMetricMap {
   double resolution{0.10};
   rtog::CRTreeOccupancyGridMap::TInsertionOptions insertionOpts;
   rtog::CRTreeOccupancyGridMap::TLikelihoodOptions likelihoodOpts;
+  rtog::CRTreeOccupancyGridMap::TMatchingOptions matchingOpts;
   /// A bad .ini value found while loading, raised when the map is created: MRPT leaks the
   /// definition if loading itself throws.
   std::string loadError;
@@ -218,6 +233,9 @@ class CRTreeOccupancyGridMap : public mrpt::maps::CMetricMap {
              squareDist == o.squareDist;
     }
   };
+  /// Occupied cell centres within matchingOptions' height band (cached until the map or the
+  /// band changes; the whole cloud when the band holds every cell).
+  const mrpt::maps::CSimplePointsMap& occupiedCellCentersForMatching2D() const;
   /// The log-likelihood term of an end point at p: its distance to the nearest occupied cuboid
   /// (capped) through the field's Gaussian-plus-uniform mixture. With the cache on, per lattice
   /// cell, as COccupancyGridMap2D's precomputed field. The caller holds caches_.mutex.
@@ -235,6 +253,9 @@ class CRTreeOccupancyGridMap : public mrpt::maps::CMetricMap {
     std::optional<FieldParams> lf_params;  ///< what the terms in `lf` were computed with
     bool points_dirty{true};
     mrpt::maps::CSimplePointsMap occupied_points;
+    bool band_points_dirty{true};
+    float band_lo{0}, band_hi{0};  ///< the band `band_points` holds
+    mrpt::maps::CSimplePointsMap band_points;
     /// Sensor-frame points of the last decoded observation (Velodyne raw packets, depth image),
     /// so that evaluating one observation at many poses (particle filters) decodes it once. Keyed
     /// by content: addresses and timestamps are reused by different scans.
@@ -258,6 +279,7 @@ class CRTreeOccupancyGridMap : public mrpt::maps::CMetricMap {
       lf.clear();
       lf_params.reset();
       points_dirty = true;
+      band_points_dirty = true;
       local_valid = false;
       return *this;
     }
