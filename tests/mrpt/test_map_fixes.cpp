@@ -186,3 +186,25 @@ TEST(MapFixes, Matching2DDefaultsKeepFlatLogs) {
   EXPECT_FLOAT_EQ(s.map.squareDistanceToClosestCorrespondence(1.0f, 2.0f),
                   s.map.occupiedCellCenters().squareDistanceToClosestCorrespondence(1.0f, 2.0f));
 }
+
+// A planar scan from a sensor a hair off a cell face: origin and end points in one z-layer (the
+// origin is double, the end points float).
+TEST(MapFixes, PlanarScanStaysInOneLayerAtACellFace) {
+  const auto& s = sena();
+  CObservation2DRangeScan scan = *scanOf(s.frames[3]);
+  scan.sensorPose = CPose3D(0.1, 0, 0, 0, 0, 0);
+  for (double face : {0.3, 0.7, -0.7}) {
+    for (double hair : {-1e-9, 1e-9}) {
+      const double z = face + hair;
+      CRTreeOccupancyGridMap m(0.1);
+      const CPose3D pose(1.0, 2.0, z, 0.4, 0, 0);
+      rtog::ObservationBeams b;
+      ASSERT_TRUE(m.extractBeams(scan, pose, b, true));
+      std::size_t other = 0;
+      for (const auto& p : b.points) other += double(p.z()) != b.origin.z();
+      EXPECT_EQ(other, 0u) << "z " << z;
+      ASSERT_TRUE(m.insertObservation(scan, pose));
+      EXPECT_EQ(m.map().keyBounds().extent(2), 1) << "z " << z;
+    }
+  }
+}

@@ -160,6 +160,11 @@ bool CRTreeOccupancyGridMap::extractBeams(const mrpt::obs::CObservation& obs, co
   if (const auto* scan = dynamic_cast<const CObservation2DRangeScan*>(&obs)) {
     const CPose3D sensor = robotPose + scan->sensorPose;
     setOrigin(sensor, out);
+    // A level scan's end points all get the float of the sensor z; the origin gets the same
+    // value, so that a sensor a hair off a cell face does not trace from the layer next to its
+    // end points'.
+    const auto R = sensor.getRotationMatrix();
+    if (R(2, 0) == 0.0 && R(2, 1) == 0.0) out.origin.z() = static_cast<double>(static_cast<float>(sensor.z()));
     // Decoded at every call, not cached: the beam angles' cos/sin are cached, and fingerprinting
     // the ranges would cost as much as this loop.
     {
