@@ -90,6 +90,8 @@ void CRTreeOccupancyGridMap::determineMatching3D(const CMetricMap* otherMap, con
     extraResults.sumSqrDist += pair.errorSquareAfterTransformation;
     correspondences.push_back(pair);
   }
+  // The mean over the pairs, as CPointsMap::determineMatching3D reports it (despite the name).
+  if (!correspondences.empty()) extraResults.sumSqrDist /= static_cast<double>(correspondences.size());
   extraResults.correspondencesRatio = considered ? float(correspondences.size()) / float(considered) : 0.0f;
 }
 
