@@ -129,7 +129,10 @@ int build(const BuildOptions& o, std::ostream& out) {
     ip.threads = io.threads;
     for (std::size_t i = 0; i < seq.frames.size(); ++i) {
       const image::WorldScan scan = image::loadDepthScan(seq.frames[i], seq.intrinsics, o.stride);
-      timed([&] { map->map().insertPointCloud(scan.origin, scan.points, ip); });
+      timed([&] { map->lastInsertStats = map->map().insertPointCloud(scan.origin, scan.points, ip); });
+      // The core map is fed directly here: the figures the summary prints are kept by hand.
+      map->totalInsertStats += map->lastInsertStats;
+      map->invalidRangesSkipped += scan.pixels_without_depth;
       map->notifyMapChanged();
       ++scans;
       points += scan.points.size();

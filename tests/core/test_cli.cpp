@@ -12,12 +12,14 @@
 
 #include <unistd.h>
 
+#include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 
 #include "commands.hpp"
 #include "rtog/core/mesh_export.hpp"
 #include "rtog/core/octomap_export.hpp"
 #include "rtog/image/slice.hpp"
+#include "rtog/image/tum_dataset.hpp"
 
 namespace {
 
@@ -49,6 +51,69 @@ TEST(Cli, BuildsFromBundledTumDataAndReportsInfo) {
   const rtog::ClassCover cover = loaded.classCover();
   EXPECT_LT(cover.leaves(), loaded.leafCount());
   EXPECT_NE(out.find("\"occupied\": " + std::to_string(cover.occupied)), std::string::npos) << out;
+}
+
+// `build --tum` reports what it skipped: a copy of the bundled data with a block of pixels
+// without depth in the first frame and the second frame's camera at the edge of the key range,
+// looking out of it.
+TEST(Cli, TumBuildReportsSkippedBeams) {
+  const std::string dir = ::testing::TempDir() + "/rtog_tum_skips_" + std::to_string(getpid());
+  ASSERT_EQ(std::system(("rm -rf " + dir + " && mkdir -p " + dir + "/depth").c_str()), 0);
+  std::ifstream in(std::string(RTOG_TEST_TUM_DIR) + "/groundtruth_poses.txt");
+  std::ofstream poses(dir + "/groundtruth_poses.txt");
+  std::string line;
+  int frames = 0;
+  while (std::getline(in, line) && frames < 2) {
+    if (line.empty() || line[0] == '#') continue;
+    std::istringstream ls(line);
+    std::string rgb, depth;
+    double t[3], q[4];
+    ls >> rgb >> depth >> t[0] >> t[1] >> t[2] >> q[0] >> q[1] >> q[2] >> q[3];
+    cv::Mat img = cv::imread(std::string(RTOG_TEST_TUM_DIR) + "/" + depth, cv::IMREAD_ANYDEPTH);
+    ASSERT_FALSE(img.empty());
+    if (frames == 0) img(cv::Rect(100, 100, 120, 80)).setTo(0);
+    if (frames == 1) {
+      // Which way along x the camera looks: its end points beyond the edge have no key.
+      rtog::image::DepthFrame f;
+      f.depth_path = std::string(RTOG_TEST_TUM_DIR) + "/" + depth;
+      f.camera_to_world.linear() = Eigen::Quaterniond(q[3], q[0], q[1], q[2]).toRotationMatrix();
+      f.camera_to_world.translation() = Eigen::Vector3d(t[0], t[1], t[2]);
+      const auto scan = rtog::image::loadDepthScan(f, {}, 4);
+      double dx = 0;
+      for (const auto& p : scan.points) dx += p.x() - t[0];
+      t[0] = (dx > 0 ? 1.0 : -1.0) * (rtog::kKeyMax * 0.1 - 1.0);  // keys span +-2^20 cells
+    }
+    ASSERT_TRUE(cv::imwrite(dir + "/" + depth, img));
+    poses << rgb << " " << depth << " " << t[0] << " " << t[1] << " " << t[2] << " " << q[0] << " " << q[1] << " "
+          << q[2] << " " << q[3] << "\n";
+    ++frames;
+  }
+  poses.close();
+  ASSERT_EQ(frames, 2);
+  // What the two frames hold, at the stride the build uses.
+  const rtog::image::DepthSequence seq = rtog::image::readTumSequence(dir);
+  std::size_t without = 0, far = 0;
+  const rtog::Lattice lattice(0.1);
+  for (std::size_t i = 0; i < seq.frames.size(); ++i) {
+    const auto scan = rtog::image::loadDepthScan(seq.frames[i], seq.intrinsics, 4);
+    without += scan.pixels_without_depth;
+    rtog::Key k;
+    for (const auto& p : scan.points) far += !lattice.tryKey(p.cast<double>(), k);
+  }
+  ASSERT_GT(without, 600u);
+  ASSERT_GT(far, 1000u);
+  std::string out;
+  ASSERT_EQ(run("build --tum " + dir + " --resolution 0.1 --stride 4", &out), 0) << out;
+  const std::size_t at = out.find("skipped: ");
+  ASSERT_NE(at, std::string::npos) << out;
+  std::size_t nonFinite = 0, zero = 0, range = 0, invalid = 0;
+  ASSERT_EQ(std::sscanf(out.c_str() + at, "skipped: %zu non-finite, %zu zero-length, %zu out of range, %zu invalid",
+                        &nonFinite, &zero, &range, &invalid),
+            4)
+      << out;
+  EXPECT_EQ(range, far) << out;
+  EXPECT_EQ(invalid, without) << out;
+  std::system(("rm -rf " + dir).c_str());
 }
 
 TEST(Cli, BuildsFromMrptLogsWithAnIniMapDefinition) {

@@ -46,7 +46,8 @@ TEST(MapInsert, RotatingScan) {
   m.insertionOptions.decimation = 4;
   EXPECT_TRUE(m.insertObservation(*obs));
   const std::size_t beams = m.lastInsertStats.raysTotal() + m.invalidRangesSkipped;
-  EXPECT_EQ(beams, std::size_t(rot->rowCount) * ((rot->columnCount + 3) / 4));
+  // fromVelodyne fills columnCount/rowCount columns, one per firing sequence.
+  EXPECT_EQ(beams, std::size_t(rot->rowCount) * ((rot->columnCount / rot->rowCount + 3) / 4));
   EXPECT_GT(m.lastInsertStats.rays_hit, 3000u);
   EXPECT_GT(m.invalidRangesSkipped, 0u);  // zero ranges are counted, not inserted
   EXPECT_GT(m.map().statistics().occupied_cells, 1000);

@@ -106,8 +106,10 @@ void CRTreeOccupancyGridMap::TInsertionOptions::saveToConfigFile(mrpt::config::C
   c.write(sec, "discretize", discretize);
   c.write(sec, "threads", threads);
   c.write(sec, "planarCache", planarCache);
-  c.write(sec, "rotatingScan_minElevation_deg", rotatingScan_minElevation_deg);
-  c.write(sec, "rotatingScan_maxElevation_deg", rotatingScan_maxElevation_deg);
+  if (!std::isnan(rotatingScan_minElevation_deg)) {  // unset is no key: a written "nan" may not read back
+    c.write(sec, "rotatingScan_minElevation_deg", rotatingScan_minElevation_deg);
+    c.write(sec, "rotatingScan_maxElevation_deg", rotatingScan_maxElevation_deg);
+  }
 }
 
 void CRTreeOccupancyGridMap::TInsertionOptions::validate() const {
@@ -142,8 +144,11 @@ void CRTreeOccupancyGridMap::TInsertionOptions::validate() const {
   if (decimation < 1) badOption(sec, "decimation", "must be >= 1");
   if (decimation_3d_range < 1 || decimation_3d_range > 255) badOption(sec, "decimation_3d_range", "must be in [1, 255]");
   if (threads < 1 || threads > 256) badOption(sec, "threads", "must be in [1, 256]");
-  if (!(rotatingScan_minElevation_deg <= rotatingScan_maxElevation_deg) ||
-      std::abs(rotatingScan_minElevation_deg) > 90 || std::abs(rotatingScan_maxElevation_deg) > 90)
+  const bool minSet = !std::isnan(rotatingScan_minElevation_deg), maxSet = !std::isnan(rotatingScan_maxElevation_deg);
+  if (minSet != maxSet)
+    badOption(sec, "rotatingScan_min/maxElevation_deg", "set both (explicit ring elevations) or neither");
+  if (minSet && (!(rotatingScan_minElevation_deg <= rotatingScan_maxElevation_deg) ||
+                 !(std::abs(rotatingScan_minElevation_deg) <= 90) || !(std::abs(rotatingScan_maxElevation_deg) <= 90)))
     badOption(sec, "rotatingScan_min/maxElevation_deg", "need -90 <= min <= max <= 90");
   toMapParams(0.1).validate();
 }
@@ -228,6 +233,30 @@ void CRTreeOccupancyGridMap::TLikelihoodOptions::validate() const {
   if (consensus_takeEachRange < 1) badOption(sec, "consensus_takeEachRange", "must be >= 1");
 }
 
+// ---- TMatchingOptions --------------------------------------------------------------------
+
+void CRTreeOccupancyGridMap::TMatchingOptions::loadFromConfigFile(const mrpt::config::CConfigFileBase& s,
+                                                                 const std::string& sec) {
+  matching2D_minZ = s.read_float(sec, "matching2D_minZ", matching2D_minZ);
+  matching2D_maxZ = s.read_float(sec, "matching2D_maxZ", matching2D_maxZ);
+  try {
+    validate();
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(std::string(e.what()) + " (section [" + sec + "])");
+  }
+}
+
+void CRTreeOccupancyGridMap::TMatchingOptions::saveToConfigFile(mrpt::config::CConfigFileBase& c,
+                                                               const std::string& sec) const {
+  c.write(sec, "matching2D_minZ", matching2D_minZ);
+  c.write(sec, "matching2D_maxZ", matching2D_maxZ);
+}
+
+void CRTreeOccupancyGridMap::TMatchingOptions::validate() const {
+  if (!(std::isfinite(matching2D_minZ) && std::isfinite(matching2D_maxZ) && matching2D_minZ <= matching2D_maxZ))
+    badOption("matchingOpts", "matching2D_minZ/matching2D_maxZ", "need finite minZ <= maxZ");
+}
+
 // ---- TMapDefinition ----------------------------------------------------------------------
 
 CRTreeOccupancyGridMap::TMapDefinition::TMapDefinition() = default;
@@ -245,6 +274,7 @@ void CRTreeOccupancyGridMap::TMapDefinition::loadFromConfigFile_map_specific(
     insertionOpts.loadFromConfigFile(source, sectionNamePrefix + "_insertOpts");
     likelihoodOpts.loadFromConfigFile(source, sectionNamePrefix + "_likelihoodOpts");
     gridViewOpts.loadFromConfigFile(source, sec);
+    matchingOpts.loadFromConfigFile(source, sectionNamePrefix + "_matchingOpts");
   } catch (const std::exception& e) {
     loadError = e.what();
   }
@@ -255,6 +285,7 @@ void CRTreeOccupancyGridMap::TMapDefinition::dumpToTextStream_map_specific(std::
   insertionOpts.dumpToTextStream(out);
   likelihoodOpts.dumpToTextStream(out);
   gridViewOpts.dumpToTextStream(out);
+  matchingOpts.dumpToTextStream(out);
 }
 
 mrpt::maps::CMetricMap* CRTreeOccupancyGridMap::internal_CreateFromMapDefinition(
@@ -265,6 +296,7 @@ mrpt::maps::CMetricMap* CRTreeOccupancyGridMap::internal_CreateFromMapDefinition
   m->setGridFrame(d.min_x, d.max_x, d.min_y, d.max_y);
   m->likelihoodOptions = d.likelihoodOpts;
   m->gridViewOptions = d.gridViewOpts;
+  m->matchingOptions = d.matchingOpts;
   m->genericMapParams = d.genericMapParams;
   return m;
 }
@@ -306,6 +338,7 @@ void CRTreeOccupancyGridMap::notifyMapChanged() {
   caches_.lf.clear();
   caches_.points_dirty = true;
   caches_.grid_view.reset();
+  caches_.band_points_dirty = true;
 }
 
 void CRTreeOccupancyGridMap::internal_clear() {
@@ -315,6 +348,8 @@ void CRTreeOccupancyGridMap::internal_clear() {
   totalInsertStats = InsertStats{};
   invalidRangesSkipped = 0;
   notifyMapChanged();
+  std::lock_guard<std::mutex> lk(caches_.mutex);
+  caches_.local_valid = false;
 }
 
 bool CRTreeOccupancyGridMap::isEmpty() const { return map_.leafCount() == 0; }

@@ -205,10 +205,13 @@ std::optional<double> CRTreeOccupancyGridMap::gridViewLikelihood(const mrpt::obs
   if (!likelihoodOptions.scanLikelihoodOnGridView) return std::nullopt;
   const auto* scan = dynamic_cast<const mrpt::obs::CObservation2DRangeScan*>(&obs);
   if (!scan) return std::nullopt;
-  // Non-finite poses and tilted scans are left to the native 3D path.
-  if (!(std::isfinite(pose.x()) && std::isfinite(pose.y()) && std::isfinite(pose.z()) && std::isfinite(pose.yaw()) &&
-        std::isfinite(pose.pitch()) && std::isfinite(pose.roll())))
-    return std::nullopt;
+  // Non-finite poses (of the robot or of the sensor on it) and tilted scans are left to the
+  // native 3D path, which scores the former as impossible.
+  const mrpt::poses::CPose3D sensor = pose + scan->sensorPose;
+  for (const mrpt::poses::CPose3D* p : {&pose, &sensor})
+    if (!(std::isfinite(p->x()) && std::isfinite(p->y()) && std::isfinite(p->z()) && std::isfinite(p->yaw()) &&
+          std::isfinite(p->pitch()) && std::isfinite(p->roll())))
+      return std::nullopt;
   likelihoodOptions.validate();
   if (!scan->isPlanarScan(mrpt::maps::COccupancyGridMap2D::TInsertionOptions().horizontalTolerance))
     return std::nullopt;
@@ -219,6 +222,13 @@ std::optional<double> CRTreeOccupancyGridMap::gridViewLikelihood(const mrpt::obs
     if (scan->getScanRangeValidity(i)) r = std::max<double>(r, scan->getScanRange(i));
   r += std::hypot(scan->sensorPose.x(), scan->sensorPose.y()) + 1.0;  // + OWA / LF_II windows
   const double need[4] = {pose.x() - r, pose.y() - r, pose.x() + r, pose.y() + r};
+  // A pose whose scan cannot reach the map's cells is left to the native path: growing the view
+  // there would cost memory without bound (a particle flung kilometres away).
+  const Box kb = map_.keyBounds();
+  if (kb.isEmpty()) return std::nullopt;
+  const Eigen::Vector3d lo = map_.lattice().boxMin(kb), hi = map_.lattice().boxMax(kb);
+  if (need[0] < lo.x() - r || need[1] < lo.y() - r || need[2] > hi.x() + r || need[3] > hi.y() + r)
+    return std::nullopt;
   const auto v = gridViewShared(need);
   std::lock_guard<std::mutex> lk(v->mutex);
   v->setOptions(likelihoodOptions, insertionOptions);

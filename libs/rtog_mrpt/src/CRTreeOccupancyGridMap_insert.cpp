@@ -10,6 +10,8 @@
 #include <mrpt/obs/CObservationVelodyneScan.h>
 
 #include "rtog/mrpt/CRTreeOccupancyGridMap.h"
+#include "fingerprint.hpp"
+#include "rotating_scan.hpp"
 
 namespace rtog {
 
@@ -67,6 +69,37 @@ void addLocalPoints(const CPose3D& sensor, const std::vector<Eigen::Vector3f>& l
   for (const auto& p : local) addLocalPoint(f, p.x(), p.y(), p.z(), out);
 }
 
+// Keys of the sensor-frame point cache: everything the decoded points depend on.
+std::uint64_t keyVelodyne(const mrpt::obs::CObservationVelodyneScan& v, std::size_t dec) {
+  detail::Fingerprint f;
+  f.value(std::uint32_t{2});
+  f.value(dec);
+  f.value(v.minRange);
+  f.value(v.maxRange);
+  f.vector(v.point_cloud.x);
+  f.vector(v.point_cloud.y);
+  f.vector(v.point_cloud.z);
+  f.vector(v.scan_packets);
+  f.vector(v.calibration.laser_corrections);
+  return f.digest();
+}
+
+std::uint64_t keyDepth(const mrpt::obs::CObservation3DRangeScan& d, std::size_t dec) {
+  detail::Fingerprint f;
+  f.value(std::uint32_t{4});
+  f.value(dec);
+  f.value(d.rangeImage.rows());
+  f.value(d.rangeImage.cols());
+  f.bytes(d.rangeImage.data(), std::size_t(d.rangeImage.rows()) * std::size_t(d.rangeImage.cols()) * 2);
+  f.value(d.rangeUnits);
+  f.value(d.range_is_depth);
+  const auto& c = d.cameraParams;
+  for (double v : {c.fx(), c.fy(), c.cx(), c.cy()}) f.value(v);
+  f.value(c.nrows);
+  f.value(c.ncols);
+  return f.digest();
+}
+
 }  // namespace
 
 std::shared_ptr<const CRTreeOccupancyGridMap::Caches::ScanAngles> CRTreeOccupancyGridMap::scanAngles(
@@ -92,13 +125,11 @@ std::shared_ptr<const CRTreeOccupancyGridMap::Caches::ScanAngles> CRTreeOccupanc
 }
 
 template <class Decode>
-void CRTreeOccupancyGridMap::localPointsCached(const mrpt::obs::CObservation& obs, std::size_t decimation,
-                                               Decode&& decode, std::vector<Eigen::Vector3f>& pts,
+void CRTreeOccupancyGridMap::localPointsCached(std::uint64_t key, Decode&& decode, std::vector<Eigen::Vector3f>& pts,
                                                std::size_t& invalid) const {
-  const std::int64_t stamp = obs.timestamp.time_since_epoch().count();
   {
     std::lock_guard<std::mutex> lk(caches_.mutex);
-    if (caches_.local_obs == &obs && caches_.local_stamp == stamp && caches_.local_decimation == decimation) {
+    if (caches_.local_valid && caches_.local_key == key) {
       pts = caches_.local_points;
       invalid = caches_.local_invalid;
       return;
@@ -108,9 +139,8 @@ void CRTreeOccupancyGridMap::localPointsCached(const mrpt::obs::CObservation& ob
   invalid = 0;
   decode(pts, invalid);
   std::lock_guard<std::mutex> lk(caches_.mutex);
-  caches_.local_obs = &obs;
-  caches_.local_stamp = stamp;
-  caches_.local_decimation = decimation;
+  caches_.local_valid = true;
+  caches_.local_key = key;
   caches_.local_points = pts;
   caches_.local_invalid = invalid;
 }
@@ -130,24 +160,27 @@ bool CRTreeOccupancyGridMap::extractBeams(const mrpt::obs::CObservation& obs, co
   if (const auto* scan = dynamic_cast<const CObservation2DRangeScan*>(&obs)) {
     const CPose3D sensor = robotPose + scan->sensorPose;
     setOrigin(sensor, out);
-    // Sensor-frame points once per scan: a particle filter evaluates the same scan at every
-    // particle's pose.
-    localPointsCached(
-        obs, dec,
-        [&](std::vector<Eigen::Vector3f>& pts, std::size_t& invalid) {
-          const std::size_t n = scan->getScanSize();
-          const auto angles = scanAngles(*scan);
-          pts.reserve(n / dec + 1);
-          for (std::size_t i = 0; i < n; i += dec) {
-            const float r = scan->getScanRange(i);
-            if (!scan->getScanRangeValidity(i) || !std::isfinite(r) || !(r > 0.0f)) {
-              ++invalid;
-              continue;
-            }
-            pts.emplace_back(static_cast<float>(r * angles->cos[i]), static_cast<float>(r * angles->sin[i]), 0.0f);
-          }
-        },
-        local, out.invalid);
+    // A level scan's end points all get the float of the sensor z; the origin gets the same
+    // value, so that a sensor a hair off a cell face does not trace from the layer next to its
+    // end points'.
+    const auto R = sensor.getRotationMatrix();
+    if (R(2, 0) == 0.0 && R(2, 1) == 0.0) out.origin.z() = static_cast<double>(static_cast<float>(sensor.z()));
+    // Decoded at every call, not cached: the beam angles' cos/sin are cached, and fingerprinting
+    // the ranges would cost as much as this loop.
+    {
+      const std::size_t n = scan->getScanSize();
+      const auto angles = scanAngles(*scan);
+      local.clear();
+      local.reserve(n / dec + 1);
+      for (std::size_t i = 0; i < n; i += dec) {
+        const float r = scan->getScanRange(i);
+        if (!scan->getScanRangeValidity(i) || !std::isfinite(r) || !(r > 0.0f)) {
+          ++out.invalid;
+          continue;
+        }
+        local.emplace_back(static_cast<float>(r * angles->cos[i]), static_cast<float>(r * angles->sin[i]), 0.0f);
+      }
+    }
     addLocalPoints(sensor, local, out);
     return true;
   }
@@ -163,7 +196,7 @@ bool CRTreeOccupancyGridMap::extractBeams(const mrpt::obs::CObservation& obs, co
     const CPose3D sensor = robotPose + velo->sensorPose;
     setOrigin(sensor, out);
     localPointsCached(
-        obs, dec,
+        keyVelodyne(*velo, dec),
         [&](std::vector<Eigen::Vector3f>& pts, std::size_t& invalid) {
           CObservationVelodyneScan tmp;
           const CObservationVelodyneScan* src = velo;
@@ -187,25 +220,12 @@ bool CRTreeOccupancyGridMap::extractBeams(const mrpt::obs::CObservation& obs, co
   }
   if (const auto* rot = dynamic_cast<const CObservationRotatingScan*>(&obs)) {
     const CPose3D sensor = robotPose + rot->sensorPose;
-    const Frame frame(sensor);
     setOrigin(sensor, out);
-    const std::size_t rows = rot->rangeImage.rows(), cols = rot->rangeImage.cols();
-    const double el0 = insertionOptions.rotatingScan_minElevation_deg * M_PI / 180.0;
-    const double el1 = insertionOptions.rotatingScan_maxElevation_deg * M_PI / 180.0;
-    for (std::size_t r = 0; r < rows; ++r) {
-      const double el = rows > 1 ? el0 + (el1 - el0) * double(r) / double(rows - 1) : 0.0;
-      const double ce = std::cos(el), se = std::sin(el);
-      for (std::size_t c = 0; c < cols; c += dec) {
-        const uint16_t raw = rot->rangeImage(r, c);
-        const double range = raw * rot->rangeResolution;
-        if (raw == 0 || range < rot->minRange || range > rot->maxRange) {
-          ++out.invalid;
-          continue;
-        }
-        const double az = rot->startAzimuth + (cols > 1 ? rot->azimuthSpan * double(c) / double(cols - 1) : 0.0);
-        addLocalPoint(frame, range * ce * std::cos(az), range * ce * std::sin(az), range * se, out);
-      }
-    }
+    // Not cached: fingerprinting the whole range image costs more than decoding it.
+    local.clear();
+    detail::decodeRotatingScan(*rot, dec, insertionOptions.rotatingScan_minElevation_deg,
+                               insertionOptions.rotatingScan_maxElevation_deg, local, out.invalid);
+    addLocalPoints(sensor, local, out);
     return true;
   }
   if (const auto* depth = dynamic_cast<const CObservation3DRangeScan*>(&obs)) {
@@ -231,7 +251,7 @@ bool CRTreeOccupancyGridMap::extractBeams(const mrpt::obs::CObservation& obs, co
     // per observation; then the sensor pose on the robot and the robot pose.
     const std::size_t ddec = forInsertion ? insertionOptions.decimation_3d_range : std::min<std::size_t>(dec, 255);
     localPointsCached(
-        obs, ddec,
+        keyDepth(*depth, ddec),
         [&](std::vector<Eigen::Vector3f>& pts, std::size_t& invalid) {
           mrpt::maps::CSimplePointsMap pm;
           mrpt::obs::T3DPointsProjectionParams pp;

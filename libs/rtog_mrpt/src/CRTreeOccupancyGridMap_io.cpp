@@ -1,4 +1,5 @@
 // rtog::CRTreeOccupancyGridMap: versioned CSerializable and files.
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 
@@ -18,9 +19,10 @@ namespace rtog {
 // binary format (doc/format.md) as a length-prefixed byte block. Version 1 adds
 // insertionOptions.planarCache after the rotating-scan elevations. Version 2 adds the update
 // preset with the mrpt_grid options and the grid geometry (TGridFrame2D) (older maps were built
-// with OctoMap's rule and load as the octomap preset), numbers the likelihood method as
-// COccupancyGridMap2D (0 was the likelihood field before) and adds the options of its methods
-// and the 2D view's band after the likelihood options.
+// with OctoMap's rule and load as the octomap preset), lets the elevations be NaN (unset: the
+// lidar's calibration decides), numbers the likelihood method as COccupancyGridMap2D (0 was the
+// likelihood field before) and adds the options of its methods, the 2D view's band and
+// matchingOptions after the likelihood options.
 uint8_t CRTreeOccupancyGridMap::serializeGetVersion() const { return 2; }
 
 void CRTreeOccupancyGridMap::serializeTo(mrpt::serialization::CArchive& out) const {
@@ -41,6 +43,7 @@ void CRTreeOccupancyGridMap::serializeTo(mrpt::serialization::CArchive& out) con
   out << lo.LF_alternateAverageMethod << lo.MI_exponent << lo.MI_skip_rays << lo.MI_ratio_max_distance
       << lo.rayTracing_useDistanceFilter << lo.consensus_takeEachRange << lo.consensus_pow << lo.OWA_weights
       << lo.scanLikelihoodOnGridView << gridViewOptions.gridView_minZ << gridViewOptions.gridView_maxZ;
+  out << matchingOptions.matching2D_minZ << matchingOptions.matching2D_maxZ;
   std::ostringstream os(std::ios::binary);
   map_.write(os);
   const std::string bytes = os.str();
@@ -61,6 +64,10 @@ void CRTreeOccupancyGridMap::serializeFrom(mrpt::serialization::CArchive& in, ui
           io.decimation_3d_range >> io.mergePolicy >> io.discretize >> threads >> io.rotatingScan_minElevation_deg >>
           io.rotatingScan_maxElevation_deg;
       io.threads = threads;
+      // Before version 2 the elevations were always stored, -15/15 being the defaults that stood
+      // for "no calibration known": unset, so that the calibration now decides.
+      if (version < 2 && io.rotatingScan_minElevation_deg == -15.0f && io.rotatingScan_maxElevation_deg == 15.0f)
+        io.rotatingScan_minElevation_deg = io.rotatingScan_maxElevation_deg = std::numeric_limits<float>::quiet_NaN();
       io.planarCache = true;
       if (version >= 1) in >> io.planarCache;
       TGridFrame2D frame;
@@ -96,6 +103,8 @@ void CRTreeOccupancyGridMap::serializeFrom(mrpt::serialization::CArchive& in, ui
       if (method < lmMeanInformation || method > lmConsensusOWA)
         throw std::runtime_error("rtog::CRTreeOccupancyGridMap: corrupt stream (likelihood method)");
       lo.likelihoodMethod = static_cast<TLikelihoodMethod>(method);
+      matchingOptions = TMatchingOptions();
+      if (version >= 2) in >> matchingOptions.matching2D_minZ >> matchingOptions.matching2D_maxZ;
       const uint64_t n = in.ReadAs<uint64_t>();
       if (n > (uint64_t{1} << 40)) throw std::runtime_error("rtog::CRTreeOccupancyGridMap: corrupt stream (size)");
       std::string bytes(static_cast<std::size_t>(n), '\0');

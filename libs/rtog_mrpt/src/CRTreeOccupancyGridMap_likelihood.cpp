@@ -13,6 +13,18 @@
 
 namespace rtog {
 
+namespace {
+// The log-likelihood of an observation from a non-finite pose: impossible, below any real score
+// (a scan's sum is bounded by beams * log(LF_zRandom/LF_maxRange)), yet finite, because MRPT's
+// particle filters assert finite log-likelihoods and subtract the maximum before exp().
+constexpr double kImpossibleLogLik = -1e30;
+
+bool finitePose(const mrpt::poses::CPose3D& p) {
+  return std::isfinite(p.x()) && std::isfinite(p.y()) && std::isfinite(p.z()) && std::isfinite(p.yaw()) &&
+         std::isfinite(p.pitch()) && std::isfinite(p.roll());
+}
+}  // namespace
+
 bool CRTreeOccupancyGridMap::internal_canComputeObservationLikelihood(const mrpt::obs::CObservation& obs) const {
   using namespace mrpt::obs;
   if (isEmpty()) return false;
@@ -23,6 +35,8 @@ bool CRTreeOccupancyGridMap::internal_canComputeObservationLikelihood(const mrpt
 
 double CRTreeOccupancyGridMap::internal_computeObservationLikelihood(const mrpt::obs::CObservation& obs,
                                                                      const mrpt::poses::CPose3D& takenFrom) const {
+  // First: a non-finite pose would also grow the 2D view without bound.
+  if (!finitePose(takenFrom)) return kImpossibleLogLik;
   // Planar 2D scans: MRPT's own method on the 2D view (see scanLikelihoodOnGridView).
   if (const std::optional<double> l = gridViewLikelihood(obs, takenFrom)) return *l;
   // Per thread and kept: a particle filter calls this for every particle.
@@ -33,6 +47,7 @@ double CRTreeOccupancyGridMap::internal_computeObservationLikelihood(const mrpt:
 
 double CRTreeOccupancyGridMap::beamsLikelihood(const ObservationBeams& b) const {
   likelihoodOptions.validate();
+  if (!b.origin.allFinite()) return kImpossibleLogLik;  // e.g. a NaN sensor pose on the robot
   // 3D beams: the native ray tracing, or the native likelihood field for every other method
   // (MRPT defines those on planar scans only).
   return likelihoodOptions.likelihoodMethod == lmRayTracing ? rayTracing(b) : likelihoodField(b);

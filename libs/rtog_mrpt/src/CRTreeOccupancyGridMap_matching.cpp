@@ -1,6 +1,7 @@
 // rtog::CRTreeOccupancyGridMap: ICP support (correspondences against occupied cells).
 #include <algorithm>
 #include <limits>
+#include <mutex>
 
 #include <mrpt/maps/CPointsMap.h>
 #include <mrpt/poses/CPose2D.h>
@@ -11,15 +12,40 @@ namespace rtog {
 
 using namespace mrpt::maps;
 
-// Correspondences pair each point of `otherMap` with the centre of an occupied cell; the work is
-// done by MRPT's points-map matcher on the cached cloud of occupied cell centres.
+const CSimplePointsMap& CRTreeOccupancyGridMap::occupiedCellCentersForMatching2D() const {
+  const float lo = matchingOptions.matching2D_minZ, hi = matchingOptions.matching2D_maxZ;
+  const Box kb = map_.keyBounds();
+  const Lattice& lat = map_.lattice();
+  if (kb.isEmpty() || (lat.cellCenter(kb.min).z() >= lo && lat.cellCenter(kb.max).z() <= hi))
+    return occupiedCellCenters();  // the band holds every cell
+  const CSimplePointsMap& all = occupiedCellCenters();
+  std::lock_guard<std::mutex> lk(caches_.mutex);
+  if (caches_.band_points_dirty || caches_.band_lo != lo || caches_.band_hi != hi) {
+    auto& pts = caches_.band_points;
+    pts.clear();
+    const auto& xs = all.getPointsBufferRef_x();
+    const auto& ys = all.getPointsBufferRef_y();
+    const auto& zs = all.getPointsBufferRef_z();
+    for (std::size_t i = 0; i < xs.size(); ++i)
+      if (zs[i] >= lo && zs[i] <= hi) pts.insertPointFast(xs[i], ys[i], zs[i]);
+    pts.mark_as_modified();
+    caches_.band_lo = lo;
+    caches_.band_hi = hi;
+    caches_.band_points_dirty = false;
+  }
+  return caches_.band_points;
+}
+
+// Correspondences pair each point of `otherMap` with the centre of an occupied cell within the
+// 2D height band; the work is done by MRPT's points-map matcher on the cached cloud of those
+// cell centres.
 void CRTreeOccupancyGridMap::determineMatching2D(const CMetricMap* otherMap, const mrpt::poses::CPose2D& otherMapPose,
                                                  mrpt::tfest::TMatchingPairList& correspondences,
                                                  const TMatchingParams& params,
                                                  TMatchingExtraResults& extraResults) const {
   correspondences.clear();
   extraResults = TMatchingExtraResults();
-  const CSimplePointsMap& occ = occupiedCellCenters();
+  const CSimplePointsMap& occ = occupiedCellCentersForMatching2D();
   if (occ.empty() || !otherMap || otherMap->isEmpty()) return;
   occ.determineMatching2D(otherMap, otherMapPose, correspondences, params, extraResults);
 }
@@ -64,6 +90,8 @@ void CRTreeOccupancyGridMap::determineMatching3D(const CMetricMap* otherMap, con
     extraResults.sumSqrDist += pair.errorSquareAfterTransformation;
     correspondences.push_back(pair);
   }
+  // The mean over the pairs, as CPointsMap::determineMatching3D reports it (despite the name).
+  if (!correspondences.empty()) extraResults.sumSqrDist /= static_cast<double>(correspondences.size());
   extraResults.correspondencesRatio = considered ? float(correspondences.size()) / float(considered) : 0.0f;
 }
 
@@ -87,7 +115,7 @@ float CRTreeOccupancyGridMap::compute3DMatchingRatio(const CMetricMap* otherMap,
 }
 
 float CRTreeOccupancyGridMap::squareDistanceToClosestCorrespondence(float x0, float y0) const {
-  const CSimplePointsMap& occ = occupiedCellCenters();
+  const CSimplePointsMap& occ = occupiedCellCentersForMatching2D();
   if (occ.empty()) return std::numeric_limits<float>::max();
   return occ.squareDistanceToClosestCorrespondence(x0, y0);
 }

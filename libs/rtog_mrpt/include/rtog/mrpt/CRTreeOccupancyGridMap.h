@@ -121,10 +121,12 @@ class CRTreeOccupancyGridMap : public mrpt::maps::CMetricMap {
     /// 2D scans update dense per-brick layers in place and become leaves when the map is next
     /// read, not at every scan (the cells are the same either way). (Default: true)
     bool planarCache{true};
-    /// Lowest / highest elevation [deg] of the rings of a CObservationRotatingScan (MRPT 2.5 carries
-    /// no ring calibration): row r is at min + r*(max-min)/(rows-1). (Default: -15 / 15, a VLP-16)
-    float rotatingScan_minElevation_deg{-15.0f};
-    float rotatingScan_maxElevation_deg{15.0f};
+    /// Explicit ring elevations [deg] of a CObservationRotatingScan: if both are set, row r is at
+    /// min + r*(max-min)/(rows-1). Unset (NaN), rings come from the lidar's calibration (MRPT's
+    /// default table for VLP-16 / HDL-32E / HDL-64; MRPT 2.5's rotating scans carry none), and a
+    /// multi-row scan of an unknown lidar is refused. (Default: NaN / NaN, unset)
+    float rotatingScan_minElevation_deg{std::numeric_limits<float>::quiet_NaN()};
+    float rotatingScan_maxElevation_deg{std::numeric_limits<float>::quiet_NaN()};
 
     MapParams toMapParams(double resolution) const;
     bool mrptGrid() const { return sensorModelPreset == "mrpt_grid"; }
@@ -194,6 +196,19 @@ class CRTreeOccupancyGridMap : public mrpt::maps::CMetricMap {
     float gridView_maxZ{1000.0f};
   };
 
+  /// Options for ICP against the map ([<prefix>_matchingOpts]).
+  struct TMatchingOptions : public mrpt::config::CLoadableOptions {
+    void loadFromConfigFile(const mrpt::config::CConfigFileBase& source, const std::string& section) override;
+    void saveToConfigFile(mrpt::config::CConfigFileBase& target, const std::string& section) const override;
+    void validate() const;
+
+    /// Height band [m]: determineMatching2D and squareDistanceToClosestCorrespondence pair 2D
+    /// points only with occupied cells whose centre z lies in [matching2D_minZ, matching2D_maxZ]
+    /// (a 3D map's floor and ceiling are not walls of a 2D scan). (Default: -1000)
+    float matching2D_minZ{-1000.0f};
+    float matching2D_maxZ{1000.0f};  ///< (Default: 1000)
+  };
+
   /// How getVisualizationInto draws the map.
   struct TRenderingOptions {
     bool showOccupied{true};    ///< Draw occupied cuboids. (Default: true)
@@ -208,6 +223,7 @@ class CRTreeOccupancyGridMap : public mrpt::maps::CMetricMap {
   TInsertionOptions insertionOptions;
   TLikelihoodOptions likelihoodOptions;
   TGridViewOptions gridViewOptions;
+  TMatchingOptions matchingOptions;
   TRenderingOptions renderingOptions;
 
   /// The wrapped core map. Changing it directly does not invalidate the caches: call
@@ -318,6 +334,7 @@ class CRTreeOccupancyGridMap : public mrpt::maps::CMetricMap {
   rtog::CRTreeOccupancyGridMap::TInsertionOptions insertionOpts;
   rtog::CRTreeOccupancyGridMap::TLikelihoodOptions likelihoodOpts;
   rtog::CRTreeOccupancyGridMap::TGridViewOptions gridViewOpts;  ///< read from _creationOpts
+  rtog::CRTreeOccupancyGridMap::TMatchingOptions matchingOpts;
   /// A bad .ini value found while loading, raised when the map is created: MRPT leaks the
   /// definition if loading itself throws.
   std::string loadError;
@@ -351,14 +368,18 @@ class CRTreeOccupancyGridMap : public mrpt::maps::CMetricMap {
              squareDist == o.squareDist;
     }
   };
+  /// Occupied cell centres within matchingOptions' height band (cached until the map or the
+  /// band changes; the whole cloud when the band holds every cell).
+  const mrpt::maps::CSimplePointsMap& occupiedCellCentersForMatching2D() const;
   /// The log-likelihood term of an end point at p: its distance to the nearest occupied cuboid
   /// (capped) through the field's Gaussian-plus-uniform mixture. With the cache on, per lattice
   /// cell, as COccupancyGridMap2D's precomputed field. The caller holds caches_.mutex.
   float fieldTermLocked(const Eigen::Vector3d& p, const FieldParams& f) const;
-  /// Sensor-frame points of `obs` (decoded by `decode` once per observation and decimation).
+  /// Sensor-frame points decoded by `decode`, or the last ones if `key` (a fingerprint of
+  /// everything they depend on: the observation's data, geometry and decimation) is the last one's.
   template <class Decode>
-  void localPointsCached(const mrpt::obs::CObservation& obs, std::size_t decimation, Decode&& decode,
-                         std::vector<Eigen::Vector3f>& pts, std::size_t& invalid) const;
+  void localPointsCached(std::uint64_t key, Decode&& decode, std::vector<Eigen::Vector3f>& pts,
+                         std::size_t& invalid) const;
 
   /// Derived data; copies start empty (a copy rebuilds them on demand).
   struct Caches {
@@ -367,11 +388,14 @@ class CRTreeOccupancyGridMap : public mrpt::maps::CMetricMap {
     std::optional<FieldParams> lf_params;  ///< what the terms in `lf` were computed with
     bool points_dirty{true};
     mrpt::maps::CSimplePointsMap occupied_points;
+    bool band_points_dirty{true};
+    float band_lo{0}, band_hi{0};  ///< the band `band_points` holds
+    mrpt::maps::CSimplePointsMap band_points;
     /// Sensor-frame points of the last decoded observation (Velodyne raw packets, depth image),
-    /// so that evaluating one observation at many poses (particle filters) decodes it once.
-    const void* local_obs{nullptr};
-    std::int64_t local_stamp{0};
-    std::size_t local_decimation{0};
+    /// so that evaluating one observation at many poses (particle filters) decodes it once. Keyed
+    /// by content: addresses and timestamps are reused by different scans.
+    bool local_valid{false};
+    std::uint64_t local_key{0};
     std::vector<Eigen::Vector3f> local_points;
     std::size_t local_invalid{0};
     /// cos/sin of the beam angles of the last 2D scan geometry (a log's scans share one), so
@@ -391,7 +415,8 @@ class CRTreeOccupancyGridMap : public mrpt::maps::CMetricMap {
       lf.clear();
       lf_params.reset();
       points_dirty = true;
-      local_obs = nullptr;
+      band_points_dirty = true;
+      local_valid = false;
       grid_view.reset();
       return *this;
     }
