@@ -23,9 +23,14 @@ TEST(MapGrid2D, ViewCellsAreTheBandsHighestLogOdds) {
   const auto& m = f.map.map();
   const rtog::Box kb = m.keyBounds();
   ASSERT_FALSE(kb.isEmpty());
-  EXPECT_EQ(view->getSizeX(), kb.extent(0));
-  EXPECT_EQ(view->getSizeY(), kb.extent(1));
-  EXPECT_NEAR(view->getXMin(), kb.min.x * f.map.resolution(), 1e-4);
+  // mrpt_grid: the view is the grid the scans were stepped in (its geometry, margins included).
+  const rtog::TGridFrame2D& fr = f.map.gridFrame();
+  EXPECT_EQ(view->getXMin(), fr.x_min);
+  EXPECT_EQ(view->getYMax(), fr.y_max);
+  EXPECT_EQ(view->getSizeX(), fr.size_x);
+  EXPECT_EQ(view->getSizeY(), fr.size_y);
+  const auto gx0 = std::lround(double(view->getXMin()) / view->getResolution());
+  const auto gy0 = std::lround(double(view->getYMin()) / view->getResolution());
   std::size_t known = 0;
   for (int y = kb.min.y; y <= kb.max.y; y += 3)
     for (int x = kb.min.x; x <= kb.max.x; x += 3) {
@@ -39,7 +44,7 @@ TEST(MapGrid2D, ViewCellsAreTheBandsHighestLogOdds) {
                           : l == std::round(l) && std::abs(l) <= 127
                               ? static_cast<int8_t>(l)
                               : mrpt::maps::COccupancyGridMap2D::p2l(float(1.0 - rtog::probability(best)));
-      const auto got = view->getRawMap()[(y - kb.min.y) * view->getSizeX() + (x - kb.min.x)];
+      const auto got = view->getRawMap()[(y - gy0) * view->getSizeX() + (x - gx0)];
       ASSERT_EQ(int(got), int(want)) << "cell " << x << "," << y;
       known += any;
     }
@@ -100,6 +105,8 @@ TEST(MapGrid2D, AllSevenMethodsEqualStockGridAndPeakAtTruePose) {
   rtog::CRTreeOccupancyGridMap m = f.map;
   // The view grows to hold the scan's end points at the poses asked (as a stock grid built by
   // insertion does); the stock copy is taken once it has.
+  // (Consensus is one of the methods the view grows for.)
+  m.likelihoodOptions.likelihoodMethod = rtog::CRTreeOccupancyGridMap::lmConsensus;
   for (const CPose3D& q : displaced(f.pose)) (void)m.computeObservationLikelihood(*f.scan, q);
   const mrpt::maps::COccupancyGridMap2D stock0 = stockCopy(*m.gridView());
   using G = mrpt::maps::COccupancyGridMap2D;

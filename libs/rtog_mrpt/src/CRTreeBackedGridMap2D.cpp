@@ -1,6 +1,7 @@
 // rtog::CRTreeBackedGridMap2D: a COccupancyGridMap2D view of an R-tree map.
 #include "rtog/mrpt/CRTreeBackedGridMap2D.h"
 
+#include "CRTreeOccupancyGridMap_grid2d.hpp"
 #include "mrpt_grid.hpp"
 #include "options_check.hpp"
 
@@ -156,16 +157,9 @@ void CRTreeBackedGridMap2D::refreshRegion(double x0, double y0, double x1, doubl
   if (!(zlo <= zhi) || !lat.tryKey(Eigen::Vector3d(0, 0, zlo), z0) || !lat.tryKey(Eigen::Vector3d(0, 0, zhi), z1))
     return;
   const Box region{Key{k0.x, k0.y, z0.z}, Key{k1.x, k1.y, z1.z}};
-  const std::int64_t nx = region.extent(0), ny = region.extent(1);
-  std::vector<float> best(static_cast<std::size_t>(nx * ny), std::numeric_limits<float>::quiet_NaN());
-  m.forEachLeafIn(region, [&](const Box& b, float v) {
-    const Box c = b.intersection(region);
-    for (std::int32_t y = c.min.y; y <= c.max.y; ++y)
-      for (std::int32_t x = c.min.x; x <= c.max.x; ++x) {
-        float& dst = best[static_cast<std::size_t>((y - region.min.y) * nx + (x - region.min.x))];
-        if (std::isnan(dst) || v > dst) dst = v;
-      }
-  });
+  const std::int64_t nx = region.extent(0);
+  std::vector<float> best;
+  bandMaxima(m, region, best);
   // Sample the band at each 2D cell centre (the grid's cells need not align with the lattice).
   const int cx0 = std::max(0, x2idx(x0)), cx1 = std::min<int>(static_cast<int>(getSizeX()) - 1, x2idx(x1));
   const int cy0 = std::max(0, y2idx(y0)), cy1 = std::min<int>(static_cast<int>(getSizeY()) - 1, y2idx(y1));

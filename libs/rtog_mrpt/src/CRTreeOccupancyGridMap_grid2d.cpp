@@ -1,6 +1,7 @@
 // rtog::CRTreeOccupancyGridMap: the 2D view (a COccupancyGridMap2D of a height band), the
 // likelihood of planar scans on it, and the grid queries MRPT users call on a 2D grid.
 #include "CRTreeOccupancyGridMap_grid2d.hpp"
+#include "mrpt_grid.hpp"
 
 #include <cmath>
 #include <limits>
@@ -97,11 +98,27 @@ int8_t toMrptCell(float v) {
 
 // ---- the view ----------------------------------------------------------------------------
 
-CRTreeOccupancyGridMap::GridView::GridView(const OccupancyMap& m, float lo, float hi, const std::optional<Rect>& ex)
+CRTreeOccupancyGridMap::GridView::GridView(const OccupancyMap& m, float lo, float hi, const std::optional<Rect>& ex,
+                                           const TGridFrame2D* frame)
     : minZ(lo), maxZ(hi), extra(ex) {
   const double res = m.resolution();
   const auto fres = static_cast<float>(res);
   const Box kb = m.keyBounds();
+  if (frame) {
+    // The geometry of the grid the scans were stepped in, so that the view is that grid: MRPT's
+    // methods then read the same cells at the same indices, margins included.
+    const double fx0 = mrpt_grid::keyOffsetX(*frame), fy0 = mrpt_grid::keyOffsetY(*frame);
+    const bool holds = kb.isEmpty() || (kb.min.x >= fx0 && kb.min.y >= fy0 && kb.max.x < fx0 + frame->size_x &&
+                                        kb.max.y < fy0 + frame->size_y);
+    const bool reaches = !extra || ((*extra)[0] >= frame->x_min && (*extra)[1] >= frame->y_min &&
+                                    (*extra)[2] <= frame->x_max && (*extra)[3] <= frame->y_max);
+    if (!(holds && reaches)) frame = nullptr;
+  }
+  if (frame) {
+    grid.setGeometry(*frame);
+    fillCells(m, kb, mrpt_grid::keyOffsetX(*frame), mrpt_grid::keyOffsetY(*frame));
+    return;
+  }
   // The grid's lattice cells: the known cells' columns and `extra`, at least one cell.
   double gx0 = 0, gy0 = 0, gx1 = 0, gy1 = 0;  // inclusive cell keys
   if (!kb.isEmpty()) gx0 = kb.min.x, gy0 = kb.min.y, gx1 = kb.max.x, gy1 = kb.max.y;
@@ -116,17 +133,12 @@ CRTreeOccupancyGridMap::GridView::GridView(const OccupancyMap& m, float lo, floa
   // Cell k of the lattice is cell k - g*0 of the grid: setSize keeps multiples of res.
   grid.setSize(static_cast<float>(gx0 * res), static_cast<float>((gx1 + 1) * res), static_cast<float>(gy0 * res),
                static_cast<float>((gy1 + 1) * res), fres, 0.5f);
-  if (kb.isEmpty()) return;
-  grid.setNonEmpty();
-  const auto sx = static_cast<std::int64_t>(grid.getSizeX()), sy = static_cast<std::int64_t>(grid.getSizeY());
-  // z-layers whose interval [k*res, (k+1)*res) meets the band.
-  const double z0 = std::max<double>(kb.min.z, std::floor(double(lo) / res));
-  const double z1 = std::min<double>(kb.max.z, std::floor(double(hi) / res));
-  if (!(z0 <= z1)) return;  // band outside the map: all unknown
-  const Box region{Key{kb.min.x, kb.min.y, static_cast<std::int32_t>(z0)},
-                   Key{kb.max.x, kb.max.y, static_cast<std::int32_t>(z1)}};
-  const std::int64_t nx = kb.extent(0), ny = kb.extent(1);
-  std::vector<float> best(static_cast<std::size_t>(nx * ny), std::numeric_limits<float>::quiet_NaN());
+  fillCells(m, kb, gx0, gy0);
+}
+
+void bandMaxima(const OccupancyMap& m, const Box& region, std::vector<float>& best) {
+  const std::int64_t nx = region.extent(0), ny = region.extent(1);
+  best.assign(static_cast<std::size_t>(nx * ny), std::numeric_limits<float>::quiet_NaN());
   m.forEachLeafIn(region, [&](const Box& b, float v) {
     const Box c = b.intersection(region);
     for (std::int32_t y = c.min.y; y <= c.max.y; ++y)
@@ -135,6 +147,22 @@ CRTreeOccupancyGridMap::GridView::GridView(const OccupancyMap& m, float lo, floa
         if (!(dst >= v)) dst = v;  // NaN (unknown) or lower
       }
   });
+}
+
+void CRTreeOccupancyGridMap::GridView::fillCells(const OccupancyMap& m, const Box& kb, double gx0, double gy0) {
+  if (kb.isEmpty()) return;
+  grid.setNonEmpty();
+  const double res = m.resolution();
+  const auto sx = static_cast<std::int64_t>(grid.getSizeX()), sy = static_cast<std::int64_t>(grid.getSizeY());
+  // z-layers whose interval [k*res, (k+1)*res) meets the band.
+  const double z0 = std::max<double>(kb.min.z, std::floor(double(minZ) / res));
+  const double z1 = std::min<double>(kb.max.z, std::floor(double(maxZ) / res));
+  if (!(z0 <= z1)) return;  // band outside the map: all unknown
+  const Box region{Key{kb.min.x, kb.min.y, static_cast<std::int32_t>(z0)},
+                   Key{kb.max.x, kb.max.y, static_cast<std::int32_t>(z1)}};
+  const std::int64_t nx = kb.extent(0), ny = kb.extent(1);
+  std::vector<float> best;
+  bandMaxima(m, region, best);
   auto& cells = grid.cells();
   const auto ox = static_cast<std::int64_t>(kb.min.x - gx0), oy = static_cast<std::int64_t>(kb.min.y - gy0);
   for (std::int64_t y = 0; y < ny && y + oy < sy; ++y)
@@ -181,17 +209,22 @@ std::shared_ptr<CRTreeOccupancyGridMap::GridView> CRTreeOccupancyGridMap::gridVi
   auto& v = caches_.grid_view;
   const bool same = v && v->minZ == lo && v->maxZ == hi;
   if (same && (!need || v->covers({need[0], need[1], need[2], need[3]}))) return v;
+  // In the mrpt_grid preset the view is the grid the scans were stepped in, which is what the
+  // stock grid would hold, as long as what is asked lies within it; else grown beyond it.
+  const bool on_frame = insertionOptions.mrptGrid() && frame_.has_layer &&
+                        (!need || (need[0] >= frame_.x_min && need[1] >= frame_.y_min && need[2] <= frame_.x_max &&
+                                   need[3] <= frame_.y_max));
   std::optional<GridView::Rect> extra;
-  if (need) {
+  if (need && !on_frame) {
     // Grown with a margin, so that particles wandering out of it rebuild it rarely.
     constexpr double kMargin = 5.0;
     extra = GridView::Rect{need[0] - kMargin, need[1] - kMargin, need[2] + kMargin, need[3] + kMargin};
     if (same && v->extra)
       for (int i = 0; i < 4; ++i) (*extra)[i] = i < 2 ? std::min((*extra)[i], (*v->extra)[i]) : std::max((*extra)[i], (*v->extra)[i]);
-  } else if (same) {
+  } else if (same && !on_frame) {
     extra = v->extra;
   }
-  v = std::make_shared<GridView>(map_, lo, hi, extra);
+  v = std::make_shared<GridView>(map_, lo, hi, extra, on_frame ? &frame_ : nullptr);
   return v;
 }
 
@@ -215,24 +248,29 @@ std::optional<double> CRTreeOccupancyGridMap::gridViewLikelihood(const mrpt::obs
   likelihoodOptions.validate();
   if (!scan->isPlanarScan(mrpt::maps::COccupancyGridMap2D::TInsertionOptions().horizontalTolerance))
     return std::nullopt;
-  // MRPT's methods read cells without bounds checks (lmConsensus) or fail (OWA, LF_II) for end
-  // points off the grid; a stock grid grown by insertion holds them, so the view is grown too.
-  double r = 0;
-  for (std::size_t i = 0; i < scan->getScanSize(); ++i)
-    if (scan->getScanRangeValidity(i)) r = std::max<double>(r, scan->getScanRange(i));
-  r += std::hypot(scan->sensorPose.x(), scan->sensorPose.y()) + 1.0;  // + OWA / LF_II windows
-  const double need[4] = {pose.x() - r, pose.y() - r, pose.x() + r, pose.y() + r};
-  // A pose whose scan cannot reach the map's cells is left to the native path: growing the view
-  // there would cost memory without bound (a particle flung kilometres away).
-  const Box kb = map_.keyBounds();
-  if (kb.isEmpty()) return std::nullopt;
-  const Eigen::Vector3d lo = map_.lattice().boxMin(kb), hi = map_.lattice().boxMax(kb);
-  if (need[0] < lo.x() - r || need[1] < lo.y() - r || need[2] > hi.x() + r || need[3] > hi.y() + r)
-    return std::nullopt;
-  const auto v = gridViewShared(need);
+  // MRPT's lmConsensus reads the cells of end points without a bounds check: for it the view
+  // is grown to hold them (beyond the stock grid, where that grid's result is undefined). The
+  // others check bounds (getCell, or the field's own test) and run on the view as it is.
+  const auto method = likelihoodOptions.likelihoodMethod;
+  std::optional<std::array<double, 4>> need;
+  if (method == lmConsensus) {
+    double r = 0;
+    for (std::size_t i = 0; i < scan->getScanSize(); ++i)
+      if (scan->getScanRangeValidity(i)) r = std::max<double>(r, scan->getScanRange(i));
+    r += std::hypot(scan->sensorPose.x(), scan->sensorPose.y()) + 1.0;
+    need = std::array<double, 4>{pose.x() - r, pose.y() - r, pose.x() + r, pose.y() + r};
+    // A pose whose scan cannot reach the map's cells is left to the native path: growing the
+    // view there would cost memory without bound (a particle flung kilometres away).
+    const Box kb = map_.keyBounds();
+    if (kb.isEmpty()) return std::nullopt;
+    const Eigen::Vector3d lo = map_.lattice().boxMin(kb), hi = map_.lattice().boxMax(kb);
+    if ((*need)[0] < lo.x() - r || (*need)[1] < lo.y() - r || (*need)[2] > hi.x() + r || (*need)[3] > hi.y() + r)
+      return std::nullopt;
+  }
+  const auto v = gridViewShared(need ? need->data() : nullptr);
   std::lock_guard<std::mutex> lk(v->mutex);
   v->setOptions(likelihoodOptions, insertionOptions);
-  if (likelihoodOptions.likelihoodMethod == lmMeanInformation) {
+  if (method == lmMeanInformation) {
     // MRPT's MI "inserts" the scan counting information, but its scan insertion writes (and may
     // resize) the grid all the same: run it on a copy, so that the view stays the map's.
     GridView::Grid scratch = v->grid;

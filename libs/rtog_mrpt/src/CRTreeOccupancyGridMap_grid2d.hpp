@@ -29,6 +29,10 @@ void saveGridLikelihoodKeys(const CRTreeOccupancyGridMap::TLikelihoodOptions& o,
 /// -16 v when that is an MRPT value, else MRPT's own p2l of P(free).
 int8_t toMrptCell(float v);
 
+/// The highest log-odds of each (x, y) column of `region` over its z-range, row by row (x
+/// fastest), NaN where no cell is known: what a 2D view of a height band shows.
+void bandMaxima(const OccupancyMap& m, const Box& region, std::vector<float>& best);
+
 struct CRTreeOccupancyGridMap::GridView {
   /// A COccupancyGridMap2D whose cells and caches the view may set directly.
   class Grid : public mrpt::maps::COccupancyGridMap2D {
@@ -36,14 +40,26 @@ struct CRTreeOccupancyGridMap::GridView {
     std::vector<cellType>& cells() { return m_map; }
     void setNonEmpty() { m_is_empty = false; }
     void invalidateLikelihoodCache() { m_likelihoodCacheOutDated = true; }
+    /// The geometry as is (setSize() would round it again), all cells unknown.
+    void setGeometry(const TGridFrame2D& f) {
+      m_resolution = f.resolution;
+      m_xMin = f.x_min, m_xMax = f.x_max, m_yMin = f.y_min, m_yMax = f.y_max;
+      m_size_x = f.size_x, m_size_y = f.size_y;
+      m_map.assign(std::size_t{f.size_x} * f.size_y, 0);
+      m_likelihoodCacheOutDated = true;
+    }
   };
   /// A metric rectangle [m]: x0, y0, x1, y1.
   using Rect = std::array<double, 4>;
-  /// Built from the map's cells within [minZ, maxZ], covering the known cells and `extra`.
-  GridView(const OccupancyMap& m, float minZ, float maxZ, const std::optional<Rect>& extra);
+  /// Built from the map's cells within [minZ, maxZ], covering the known cells and `extra`; on
+  /// `frame`'s geometry (the grid the mrpt_grid preset follows) if given and it holds them.
+  GridView(const OccupancyMap& m, float minZ, float maxZ, const std::optional<Rect>& extra,
+           const TGridFrame2D* frame = nullptr);
   bool covers(const Rect& r) const {
     return r[0] >= grid.getXMin() && r[1] >= grid.getYMin() && r[2] <= grid.getXMax() && r[3] <= grid.getYMax();
   }
+  /// Writes the band's cells of the known columns `kb`, lattice column gx0/gy0 being grid cell 0.
+  void fillCells(const OccupancyMap& m, const Box& kb, double gx0, double gy0);
   /// Copies the likelihood (and the insertion options MRPT's methods read) to the grid, dropping
   /// MRPT's likelihood-field cache when its parameters changed. The caller holds `mutex`.
   void setOptions(const TLikelihoodOptions& lo, const TInsertionOptions& io);
