@@ -192,6 +192,12 @@ void CRTreeOccupancyGridMap::TLikelihoodOptions::loadFromConfigFile(const mrpt::
   rayTracing_decimation = s.read_int(sec, "rayTracing_decimation", rayTracing_decimation);
   rayTracing_stdHit = s.read_float(sec, "rayTracing_stdHit", rayTracing_stdHit);
   loadGridLikelihoodKeys(*this, s, sec);
+  reportUnknownKeys(s, sec,
+                    {"likelihoodMethod", "LF_stdHit", "LF_zHit", "LF_zRandom", "LF_maxRange", "LF_decimation",
+                     "LF_maxCorrsDistance", "LF_useSquareDist", "LF_alternateAverageMethod", "enableLikelihoodCache",
+                     "rayTracing_decimation", "rayTracing_stdHit", "rayTracing_useDistanceFilter", "MI_exponent",
+                     "MI_skip_rays", "MI_ratio_max_distance", "consensus_takeEachRange", "consensus_pow",
+                     "OWA_weights", "scanLikelihoodOnGridView"});
   try {
     validate();
   } catch (const std::invalid_argument& e) {
@@ -270,7 +276,9 @@ void CRTreeOccupancyGridMap::TMapDefinition::loadFromConfigFile_map_specific(
     if (!(std::isfinite(resolution) && resolution >= 1e-4 && resolution <= 1e3))
       badOption(sec, "resolution", "must lie in [1e-4, 1e3] m, got " + std::to_string(resolution));
     readGridExtent(source, sec, min_x, max_x, min_y, max_y);
-    reportUnknownKeys(source, sec, {"resolution", "min_x", "max_x", "min_y", "max_y", "disableSaveAs3DObject"});
+    reportUnknownKeys(source, sec,
+                      {"resolution", "min_x", "max_x", "min_y", "max_y", "gridView_minZ", "gridView_maxZ",
+                       "disableSaveAs3DObject"});
     insertionOpts.loadFromConfigFile(source, sectionNamePrefix + "_insertOpts");
     likelihoodOpts.loadFromConfigFile(source, sectionNamePrefix + "_likelihoodOpts");
     gridViewOpts.loadFromConfigFile(source, sec);
