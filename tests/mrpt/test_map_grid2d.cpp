@@ -7,6 +7,7 @@
 #include <cstdio>
 
 #include <mrpt/maps/COccupancyGridMap2D.h>
+#include <mrpt/maps/CSimpleMap.h>
 #include <mrpt/maps/CSimplePointsMap.h>
 #include <mrpt/obs/CObservation2DRangeScan.h>
 #include <mrpt/img/CImage.h>
@@ -316,5 +317,46 @@ TEST(MapGrid2D, MethodsPeakAtTheTruePoseOnMostFrames) {
     if (method != G::lmRayTracing) {
       EXPECT_GE(3 * peaked, 2 * probes) << "method " << method;
     }
+  }
+}
+
+// The same on a map whose poses are SLAM-corrected (the Malaga simplemap): every other keyframe
+// builds the map, the ones between are the probes, at their corrected poses. Ray tracing is
+// held to the majority here too.
+TEST(MapGrid2D, MethodsPeakAtTheTruePoseOnASlamMap) {
+  mrpt::maps::CSimpleMap sm;
+  ASSERT_TRUE(sm.loadFromFile(dataset("malaga-cs-fac-building.simplemap.gz")));
+  rtog::CRTreeOccupancyGridMap map(0.05);
+  std::vector<std::pair<CPose3D, mrpt::obs::CObservation2DRangeScan::Ptr>> probes;
+  std::size_t k = 0;
+  for (const auto& kf : sm) {
+    const CPose3D pose = kf.pose->getMeanVal();
+    if (k++ % 2 == 0) {
+      kf.sf->insertObservationsInto(map, pose);
+    } else if (auto scan = kf.sf->getObservationByClass<mrpt::obs::CObservation2DRangeScan>()) {
+      probes.emplace_back(pose, scan);
+    }
+  }
+  ASSERT_GE(probes.size(), 30u);
+  using G = mrpt::maps::COccupancyGridMap2D;
+  for (int method : {G::lmRayTracing, G::lmConsensus, G::lmCellsDifference, G::lmLikelihoodField_Thrun,
+                     G::lmLikelihoodField_II}) {
+    rtog::CRTreeOccupancyGridMap m = map;
+    m.likelihoodOptions.likelihoodMethod = static_cast<rtog::CRTreeOccupancyGridMap::TLikelihoodMethod>(method);
+    std::size_t peaked = 0;
+    for (const auto& [pose, scan] : probes) {
+      const double at = m.computeObservationLikelihood(*scan, pose);
+      bool best = true;
+      // Ray tracing compares ranges with rayTracing_stdHit (default 1 m): displaced by that much.
+      const double scale = method == G::lmRayTracing ? m.likelihoodOptions.rayTracing_stdHit / 0.3 : 1.0;
+      for (const CPose3D& d : displaced(CPose3D())) {
+        const CPose3D q = pose + CPose3D(d.x() * scale, d.y() * scale, 0, d.yaw() * scale, 0, 0);
+        if (method == G::lmLikelihoodField_II && std::abs(d.x()) > 0.1) continue;
+        best = best && m.computeObservationLikelihood(*scan, q) <= at;
+      }
+      peaked += best;
+    }
+    std::printf("[ method %d ] true (SLAM) pose best on %zu of %zu frames\n", method, peaked, probes.size());
+    EXPECT_GE(3 * peaked, 2 * probes.size()) << "method " << method;
   }
 }
