@@ -21,6 +21,7 @@
 
 #include "rtog/core/detail/flat_hash_map.hpp"
 #include "rtog/core/occupancy_map.hpp"
+#include "rtog/mrpt/map_types.h"
 
 namespace mrpt::obs {
 class CObservation2DRangeScan;
@@ -28,39 +29,6 @@ class CObservationRange;
 }
 
 namespace rtog {
-
-/// Beams of one observation in the map frame, ready for the core map.
-struct ObservationBeams {
-  Eigen::Vector3d origin = Eigen::Vector3d::Zero();  ///< sensor position (map frame)
-  std::vector<Eigen::Vector3f> points;               ///< beam end points (map frame)
-  std::vector<std::uint8_t> is_hit;                  ///< 1: return, 0: no-return beam
-  std::vector<float> ranges;                         ///< measured range of each beam [m]
-  std::size_t invalid = 0;                           ///< beams dropped as invalid (no range)
-  /// Empties, keeping the buffers' capacity for the next observation.
-  void clear() {
-    origin.setZero();
-    points.clear();
-    is_hit.clear();
-    ranges.clear();
-    invalid = 0;
-  }
-};
-
-/// The geometry a COccupancyGridMap2D would have grown to from the same observations (the
-/// mrpt_grid preset keeps it: the grid's float extent decides the cell a point falls in).
-struct TGridFrame2D {
-  float x_min{-10.0f}, x_max{10.0f}, y_min{-10.0f}, y_max{10.0f};
-  float resolution{0.10f};
-  std::uint32_t size_x{0}, size_y{0};
-  /// The grid is one plane: every 2D scan steps the cells of one z-layer of the lattice, the
-  /// layer of the first one's sensor height.
-  bool has_layer{false};
-  std::int32_t layer{0};
-  bool sameGeometry(const TGridFrame2D& o) const {
-    return x_min == o.x_min && x_max == o.x_max && y_min == o.y_min && y_max == o.y_max &&
-           resolution == o.resolution && size_x == o.size_x && size_y == o.size_y;
-  }
-};
 
 class CRTreeOccupancyGridMap : public mrpt::maps::CMetricMap {
   DEFINE_SERIALIZABLE(CRTreeOccupancyGridMap, rtog)
