@@ -1,11 +1,63 @@
 // Ordered per-beam steps (StepRule) into the planar cache: the update rule of grids that step
 // every cell a beam touches, beam by beam (MRPT's COccupancyGridMap2D).
 #include <algorithm>
+#include <cstring>
+#include <limits>
 #include <stdexcept>
 
 #include "rtog/core/occupancy_map.hpp"
 
 namespace rtog {
+namespace {
+
+std::uint32_t bitsOf(float v) {
+  std::uint32_t u;
+  std::memcpy(&u, &v, sizeof u);
+  return u;
+}
+
+/// The steps of one stretch of a run: `n` cells in one brick z-layer (`value`, `known`), from
+/// fixed-point (fx, fy) by (dx, dy). Returns the cells left unchanged (saturated).
+/// Compiled per kind and per whether the layer is already all known, as the rule's branch would
+/// otherwise sit in the loop. The rule is a bit select, not a branch: whether a cell has
+/// saturated follows no pattern along a beam. Equal is compared on the bits, as the value is
+/// never NaN and the float compare of a NaN-aware `==` costs a parity test.
+template <bool Occupied, bool AllKnown>
+std::size_t stepStretch(float* value, std::uint64_t* known, std::int32_t& fx_io, std::int32_t& fy_io,
+                        std::int32_t dx, std::int32_t dy, std::uint32_t n, float delta, float limit, float bound,
+                        std::vector<float>* after) {
+  constexpr int F = OccupancyMap::kRunFracBits;
+  constexpr int M = kBrickSize - 1;
+  const std::uint32_t bound_bits = bitsOf(bound);
+  std::int32_t fx = fx_io, fy = fy_io;
+  int word = -1;
+  std::uint64_t mask = 0;
+  std::size_t same = 0;
+  for (std::uint32_t c = 0; c < n; ++c, fx += dx, fy += dy) {
+    const int cell = (((fy >> F) & M) << kBrickBits) | ((fx >> F) & M);
+    const float prev = value[cell];
+    const std::uint32_t take = 0u - static_cast<std::uint32_t>(Occupied ? prev < limit : prev > limit);
+    const std::uint32_t prev_bits = bitsOf(prev);
+    const std::uint32_t v_bits = (bitsOf(prev + delta) & take) | (bound_bits & ~take);  // StepRule::apply
+    float v;
+    std::memcpy(&v, &v_bits, sizeof v);
+    value[cell] = v;
+    same += v_bits == prev_bits;
+    if (after) after->push_back(v);
+    if (!AllKnown) {
+      if ((cell >> 6) != word) {
+        if (word >= 0) known[word] |= mask;
+        word = cell >> 6, mask = 0;
+      }
+      mask |= std::uint64_t{1} << (cell & 63);
+    }
+  }
+  if (!AllKnown && word >= 0) known[word] |= mask;
+  fx_io = fx, fy_io = fy;
+  return same;
+}
+
+}  // namespace
 
 InsertStats OccupancyMap::applyStepRuns(std::int32_t z, const StepRun* runs, std::size_t n, const StepRule& rule,
                                         std::vector<float>* after) {
@@ -54,23 +106,34 @@ InsertStats OccupancyMap::applyStepRuns(std::int32_t z, const StepRun* runs, std
     }
     return l;
   };
-  // The walk of forEachRunCell, with the rule's constants of the run's kind hoisted and the
-  // layer kept while the walk stays in its brick: this loop is the whole cost of a 2D scan.
-  std::int32_t cur_bx = 0, cur_by = 0;
-  PlanarLayer* layer = nullptr;
+  // The walk of forEachRunCell, cut into the stretches a run spends in one brick: this loop is
+  // the whole cost of a 2D scan. Within a stretch the layer is fixed, and the known bits and the
+  // count of unchanged cells stay in registers: as memory read-modify-writes, one per step, they
+  // would chain every step to the store of the step before.
   std::size_t unchanged = 0, free_steps = 0, occupied_steps = 0;
-  const auto step = [&](std::int32_t x, std::int32_t y, bool occupied, float delta, float limit, float bound) {
-    if (!layer || (x >> kBrickBits) != cur_bx || (y >> kBrickBits) != cur_by) {
-      cur_bx = x >> kBrickBits, cur_by = y >> kBrickBits;
-      layer = layerAt(x, y);
-    }
-    const int cell = ((y & (kBrickSize - 1)) << kBrickBits) | (x & (kBrickSize - 1));
-    float& v = layer->value[static_cast<std::size_t>(cell)];
-    const float prev = v;
-    v = (occupied ? prev < limit : prev > limit) ? prev + delta : bound;  // StepRule::apply
-    layer->known[static_cast<std::size_t>(cell >> 6)] |= std::uint64_t{1} << (cell & 63);
-    unchanged += v == prev;
-    if (after) after->push_back(v);
+  constexpr std::int32_t kBrickFrac = kRunFracBits + kBrickBits;
+  // Steps that fixed-point coordinate `f`, moving by `d`, takes before it leaves its brick.
+  const auto stepsInBrick = [](std::int32_t f, std::int32_t d) -> std::int64_t {
+    if (d == 0) return std::numeric_limits<std::int64_t>::max();
+    const std::int64_t b = f >> kBrickFrac;
+    constexpr std::int64_t kSpan = std::int64_t{1} << kBrickFrac;
+    if (d > 0) return ((b + 1) * kSpan - f + d - 1) / d;
+    return (f - b * kSpan) / -d + 1;
+  };
+  const auto stretch = [&](std::int32_t& fx, std::int32_t& fy, std::int32_t dx, std::int32_t dy, std::uint32_t m,
+                           bool occupied, float delta, float limit, float bound) {
+    PlanarLayer& layer = *layerAt(fx >> kRunFracBits, fy >> kRunFracBits);
+    std::uint64_t all = ~std::uint64_t{0};
+    for (const std::uint64_t w : layer.known) all &= w;
+    float* const v = layer.value.data();
+    std::uint64_t* const k = layer.known.data();
+    const bool full = all == ~std::uint64_t{0};
+    if (occupied)
+      unchanged += full ? stepStretch<true, true>(v, k, fx, fy, dx, dy, m, delta, limit, bound, after)
+                        : stepStretch<true, false>(v, k, fx, fy, dx, dy, m, delta, limit, bound, after);
+    else
+      unchanged += full ? stepStretch<false, true>(v, k, fx, fy, dx, dy, m, delta, limit, bound, after)
+                        : stepStretch<false, false>(v, k, fx, fy, dx, dy, m, delta, limit, bound, after);
   };
   for (std::size_t i = 0; i < n; ++i) {
     const StepRun& r = runs[i];
@@ -78,12 +141,17 @@ InsertStats OccupancyMap::applyStepRuns(std::int32_t z, const StepRun* runs, std
     const float delta = rule.delta[k], limit = rule.limit[k], bound = rule.bound[k];
     const bool occ = r.kind == StepKind::Occupied;
     std::int32_t fx = r.x * (1 << kRunFracBits), fy = r.y * (1 << kRunFracBits);
-    for (std::uint32_t c = 0; c < r.count; ++c, fx += r.dx, fy += r.dy)
-      step(fx >> kRunFracBits, fy >> kRunFracBits, occ, delta, limit, bound);
+    for (std::uint32_t left = r.count; left > 0;) {
+      const auto m = static_cast<std::uint32_t>(
+          std::min<std::int64_t>({left, stepsInBrick(fx, r.dx), stepsInBrick(fy, r.dy)}));
+      stretch(fx, fy, r.dx, r.dy, m, occ, delta, limit, bound);
+      left -= m;
+    }
     (occ ? occupied_steps : free_steps) += r.count;
     if (r.end) {
       const auto o = static_cast<std::size_t>(StepKind::Occupied);
-      step(r.end_x, r.end_y, true, rule.delta[o], rule.limit[o], rule.bound[o]);
+      std::int32_t ex = r.end_x * (1 << kRunFracBits), ey = r.end_y * (1 << kRunFracBits);
+      stretch(ex, ey, 0, 0, 1, true, rule.delta[o], rule.limit[o], rule.bound[o]);
       ++occupied_steps;
     }
   }
