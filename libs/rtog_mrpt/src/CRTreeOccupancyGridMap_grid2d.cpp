@@ -195,7 +195,8 @@ void CRTreeOccupancyGridMap::GridView::setOptions(const TLikelihoodOptions& o, c
   g.rayTracing_stdHit = o.rayTracing_stdHit;
   g.consensus_takeEachRange = o.consensus_takeEachRange;
   g.consensus_pow = o.consensus_pow;
-  if (g.OWA_weights != o.OWA_weights) g.OWA_weights = o.OWA_weights;
+  // Only lmConsensusOWA reads the weights (a hundred by default): not compared per call otherwise.
+  if (o.likelihoodMethod == lmConsensusOWA && g.OWA_weights != o.OWA_weights) g.OWA_weights = o.OWA_weights;
   g.enableLikelihoodCache = o.enableLikelihoodCache;
   // MI and ray tracing read the grid's insertion range.
   grid.insertionOptions.maxDistanceInsertion = io.maxDistanceInsertion;
@@ -240,14 +241,15 @@ std::optional<double> CRTreeOccupancyGridMap::gridViewLikelihood(const mrpt::obs
   if (!scan) return std::nullopt;
   // Non-finite poses (of the robot or of the sensor on it) and tilted scans are left to the
   // native 3D path, which scores the former as impossible.
-  const mrpt::poses::CPose3D sensor = pose + scan->sensorPose;
-  for (const mrpt::poses::CPose3D* p : {&pose, &sensor})
+  // Both poses checked apart, not composed: a particle filter calls this for every particle, and
+  // reading the angles of a composed pose costs more than the rest of this wrapper.
+  for (const mrpt::poses::CPose3D* p : {&pose, &scan->sensorPose})
     if (!(std::isfinite(p->x()) && std::isfinite(p->y()) && std::isfinite(p->z()) && std::isfinite(p->yaw()) &&
           std::isfinite(p->pitch()) && std::isfinite(p->roll())))
       return std::nullopt;
   likelihoodOptions.validate();
-  if (!scan->isPlanarScan(mrpt::maps::COccupancyGridMap2D::TInsertionOptions().horizontalTolerance))
-    return std::nullopt;
+  static const float kPlanarTolerance = mrpt::maps::COccupancyGridMap2D::TInsertionOptions().horizontalTolerance;
+  if (!scan->isPlanarScan(kPlanarTolerance)) return std::nullopt;
   // MRPT's lmConsensus reads the cells of end points without a bounds check: for it the view
   // is grown to hold them (beyond the stock grid, where that grid's result is undefined). The
   // others check bounds (getCell, or the field's own test) and run on the view as it is.
