@@ -8,6 +8,8 @@
 #include <utility>
 #include <vector>
 
+#include <Eigen/Core>
+
 #include "rtog/core/occupancy_map.hpp"
 
 using namespace rtog;
@@ -56,7 +58,9 @@ std::vector<OccupancyMap::StepRun> randomRuns(std::mt19937& rng, std::size_t n) 
 
 }  // namespace
 
-TEST(StepRuns, EqualBruteForceCellByCellAndStepByStep) {
+// `seed_cloud` first puts values of the other update rule (OctoMap's, not whole sixteenths) into
+// the layer the runs then step.
+void checkAgainstBruteForce(bool seed_cloud) {
   const StepRule rule = testRule();
   std::mt19937 rng(1234);
   MapParams p;
@@ -67,6 +71,20 @@ TEST(StepRuns, EqualBruteForceCellByCellAndStepByStep) {
   OccupancyMap map(p);
   const float prior = map.logOddsModel().prior();
   Cells ref;
+  if (seed_cloud) {
+    // A planar fan from the origin: OctoMap-rule values (not whole sixteenths) in layer 0.
+    std::vector<Eigen::Vector3f> pts;
+    for (int a = 0; a < 90; ++a)
+      pts.emplace_back(0.8f * std::cos(a * 0.07f), 0.8f * std::sin(a * 0.07f), 0.025f);
+    map.insertPointCloud(Eigen::Vector3d(0.01, 0.01, 0.025), pts);
+    map.flush();
+    map.forEachLeaf([&](const Box& b, float v) {
+      for (auto x = b.min.x; x <= b.max.x; ++x)
+        for (auto y = b.min.y; y <= b.max.y; ++y)
+          if (b.min.z <= 0 && b.max.z >= 0) ref[{x, y}] = v;
+    });
+    ASSERT_GT(ref.size(), 100u);
+  }
   for (int batch = 0; batch < 30; ++batch) {
     const std::vector<OccupancyMap::StepRun> runs = randomRuns(rng, 200);
     const std::int32_t z = batch % 3 - 1;
@@ -109,6 +127,9 @@ TEST(StepRuns, EqualBruteForceCellByCellAndStepByStep) {
   for (const auto& [xy, v] : ref) saturated += v == rule.bound[0] || v == rule.bound[2];
   EXPECT_GT(saturated, 10u);
 }
+
+TEST(StepRuns, EqualBruteForceCellByCellAndStepByStep) { checkAgainstBruteForce(false); }
+TEST(StepRuns, EqualBruteForceOverCellsOfTheOtherRule) { checkAgainstBruteForce(true); }
 
 TEST(StepRuns, ACellOutsideTheKeyRangeChangesNothing) {
   OccupancyMap map{MapParams{}};
