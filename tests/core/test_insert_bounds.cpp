@@ -33,9 +33,9 @@ TEST(InsertBounds, HundredKilometreBeamsAreSkippedAndCounted) {
   for (const bool planar : {true, false}) {
     SCOPED_TRACE(planar ? "planar scan" : "3D scan");
     rtog::MapParams p;
-    p.resolution = 0.05;
+    p.resolution = 0.1;  // 100 km are 10^6 cells, within the key range (+-104 km)
     rtog::OccupancyMap map(p);
-    const Eigen::Vector3d origin(0.025, 0.025, 0.025);
+    const Eigen::Vector3d origin(0.05, 0.05, 0.05);
     map.insertPointCloud(origin, fan(origin, 360, 8.0, planar));  // some real content first
     const std::string before = bytesOf(map);
     const auto t0 = std::chrono::steady_clock::now();

@@ -66,16 +66,18 @@ TEST(HostileFiles, LengthFieldsAllocateNothingTheyPromise) {
   std::string owa = archiveBytes(CRTreeOccupancyGridMap(0.1));
   std::string weights(4, '\0');
   poke(weights, 0, std::uint32_t{100});
-  poke(owa, owa.find(weights + std::string("\x0a\xd7\x23\x3c", 4)), std::uint32_t{0xffffffffu});
+  poke(owa, owa.find(weights + std::string("\x0a\xd7\x23\x3c", 4)), std::uint32_t{1} << 28);
   const struct {
     const char* name;
     std::string file;
     const char* message;
   } cases[] = {
       {"block", hugeBlockFile(std::uint64_t{1} << 40), "truncated stream (map block: 1099511627776 bytes announced"},
-      {"block32", hugeBlockFile(std::uint64_t{1} << 32), "truncated stream (map block: 4294967296 bytes announced"},
-      {"string", hugeStringFile(0xfffffff0u), "corrupt stream (sensorModel: a 4294967280-byte string"},
-      {"owa", gzip(owa), "corrupt stream (OWA_weights: 4294967295 values"},
+      // 1 GiB each: enough to see, not enough to take the machine down if a change brings the
+      // allocation back.
+      {"block30", hugeBlockFile(std::uint64_t{1} << 30), "truncated stream (map block: 1073741824 bytes announced"},
+      {"string", hugeStringFile(1u << 30), "corrupt stream (sensorModel: a 1073741824-byte string"},
+      {"owa", gzip(owa), "corrupt stream (OWA_weights: 268435456 values"},
   };
   const CRTreeOccupancyGridMap before = senaMap(3);
   const std::string before_bytes = archiveBytes(before);
