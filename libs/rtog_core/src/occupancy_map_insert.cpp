@@ -91,11 +91,11 @@ inline BeamEnd endOfBeam(const Lattice& lattice, const Eigen::Vector3d& origin, 
       returned = false;
     }
   }
+  if (!lattice.tryKey(end, end_key)) return BeamEnd::OutOfRange;
   if (ip.max_ray_cells > 0) {
     const double longest = ip.max_ray_cells * lattice.resolution();
     if ((end - origin).squaredNorm() > longest * longest) return BeamEnd::TooLong;
   }
-  if (!lattice.tryKey(end, end_key)) return BeamEnd::OutOfRange;
   return returned ? BeamEnd::Hit : BeamEnd::Truncated;
 }
 
