@@ -132,17 +132,30 @@ std::ostream& OutputSet::add(const std::string& option, const std::string& path)
   auto o = std::make_unique<Output>();
   o->option = option;
   o->path = path;
-  o->target = followLinks(what, path);
+  // What the path names, as the kernel resolves it (this also follows /proc's magic links,
+  // such as /dev/stdout on a pipe, which have no path to resolve by hand).
   struct stat st {};
-  const bool exists = ::stat(o->target.c_str(), &st) == 0;
+  const bool exists = ::stat(path.c_str(), &st) == 0;
   if (!exists && errno != ENOENT) throw systemError(what, errno);
+  o->target = path;
+  int held = -1;  // this process's stdout or stderr, if the output is that file
   if (exists) {
     if (S_ISDIR(st.st_mode)) throw std::invalid_argument(what + " is a directory (give a file name)");
     if (S_ISSOCK(st.st_mode)) throw std::invalid_argument(what + " is a socket (give a file name)");
     o->special = S_ISCHR(st.st_mode) || S_ISBLK(st.st_mode) || S_ISFIFO(st.st_mode);
+    // `--ply /dev/stdout > file`: the shell holds the file open; replacing it would leave the
+    // shell's (and the summary's) writes in an unlinked file. Written through that descriptor.
+    for (const int fd : {STDOUT_FILENO, STDERR_FILENO}) {
+      struct stat fst {};
+      if (!o->special && held < 0 && ::fstat(fd, &fst) == 0 && fst.st_dev == st.st_dev && fst.st_ino == st.st_ino)
+        held = fd;
+    }
+    o->special = o->special || held >= 0;
+    if (!o->special) o->target = followLinks(what, path);  // the temporary goes beside the target
     o->dev = st.st_dev, o->ino = st.st_ino;
     o->existed = true;
   } else {
+    o->target = followLinks(what, path);  // a dangling symlink: the file it names is created
     struct stat dir {};
     const std::string d = directoryOf(o->target);
     if (::stat(d.c_str(), &dir) != 0) throw systemError(what, errno);
@@ -163,9 +176,9 @@ std::ostream& OutputSet::add(const std::string& option, const std::string& path)
 
   std::string note;
   if (o->special) {
-    // A stream (a terminal, /dev/null, a pipe): there is nothing to replace, and writing
-    // beside it would replace the node itself.
-    o->fd = ::open(o->target.c_str(), O_WRONLY | O_NOCTTY | O_CLOEXEC);
+    // A stream (a terminal, /dev/null, a pipe, the caller's stdout): there is nothing to
+    // replace, and writing beside it would replace the node itself.
+    o->fd = held >= 0 ? ::fcntl(held, F_DUPFD_CLOEXEC, 0) : ::open(path.c_str(), O_WRONLY | O_NOCTTY | O_CLOEXEC);
     if (o->fd < 0) throw systemError(what, errno);
   } else {
     if (exists && ::access(o->target.c_str(), W_OK) != 0) throw systemError(what, errno);

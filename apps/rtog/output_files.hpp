@@ -7,7 +7,8 @@
 //   written completely are they all renamed into place (and the directories fsync'ed): all or
 //   none. A full disk or a size limit therefore leaves the old file intact;
 // - a symlink is followed to its target, which is written (the link stays a link);
-// - a character or block device or a FIFO is written through (a stream has nothing to replace);
+// - a character or block device, a FIFO, or the file behind this process's stdout/stderr
+//   (`--ply /dev/stdout > f`) is written through (a stream has nothing to replace);
 //   a directory, a socket or an empty path is refused.
 // Every error names the option and the path.
 #pragma once

@@ -137,6 +137,22 @@ TEST(CliOutputs, FifosAreWrittenThrough) {
   EXPECT_EQ(entries(d), (std::vector<std::string>{"done", "got", "pipe"}));
 }
 
+// /dev/stdout on a pipe (a /proc magic link with no path behind it) and on a file the shell
+// opened: written through the stream, the file not replaced under the shell. (Not to be run
+// against the old scheme as root: it renamed its temporary over /dev/stdout itself.)
+TEST(CliOutputs, StdoutIsWrittenThroughAsAStream) {
+  const std::string d = scratch("stdout");
+  const std::string ply = plyOf(smallMap());
+  ASSERT_EQ(std::system((exe() + " export " + smallMap() + " --ply /dev/stdout | cat > '" + d + "/piped'").c_str()), 0);
+  ASSERT_EQ(std::system((exe() + " export " + smallMap() + " --ply /dev/stdout > '" + d + "/file'").c_str()), 0);
+  for (const std::string f : {"piped", "file"}) {
+    const std::string got = readAll(d + "/" + f);
+    EXPECT_TRUE(got.compare(0, ply.size(), ply) == 0) << f << ": not the mesh";
+    EXPECT_EQ(got.substr(ply.size()), "wrote /dev/stdout: " + got.substr(ply.size() + 19)) << f;  // then the summary
+  }
+  EXPECT_EQ(entries(d), (std::vector<std::string>{"file", "piped"}));
+}
+
 // Device nodes are streams: written through, never replaced (as root the old scheme replaced
 // /dev/full with a regular file). Made in a scratch directory when the tests run as root, so
 // that the system's own nodes are never at stake.
