@@ -17,6 +17,7 @@
 #include <mrpt/obs/CSensoryFrame.h>
 
 #include "commands.hpp"
+#include "output_files.hpp"
 #include "rtog/image/tum_dataset.hpp"
 #include "rtog/mrpt/CRTreeOccupancyGridMap.h"
 #include "rtog/mrpt/rawlog_poses.h"
@@ -110,6 +111,20 @@ int build(const BuildOptions& o, std::ostream& out) {
   const int sources = !o.tum_dir.empty() + !o.rawlog_path.empty() + !o.simplemap_path.empty();
   if (sources != 1) throw std::invalid_argument("give exactly one of --tum, --rawlog, --simplemap");
   auto map = makeMap(o);
+  // The output is checked and opened before the work: an unwritable path, or one that names an
+  // input (which the save would destroy), fails now and not after the last scan.
+  std::vector<InputFile> inputs;
+  image::DepthSequence seq;
+  if (!o.tum_dir.empty()) {
+    seq = image::readTumSequence(o.tum_dir);
+    inputs.push_back({"--tum", o.tum_dir + "/groundtruth_poses.txt"});
+    for (const auto& f : seq.frames) inputs.push_back({"--tum", f.depth_path});
+  }
+  if (!o.rawlog_path.empty()) inputs.push_back({"--rawlog", o.rawlog_path});
+  if (!o.simplemap_path.empty()) inputs.push_back({"--simplemap", o.simplemap_path});
+  if (!o.ini_path.empty()) inputs.push_back({"--ini", o.ini_path});
+  OutputSet files(std::move(inputs));
+  std::ostream* saved = o.out_path.empty() ? nullptr : &files.add("--out", o.out_path);
   std::size_t scans = 0, points = 0;
   double seconds = 0.0;
   const auto timed = [&](auto&& insert) {
@@ -119,7 +134,6 @@ int build(const BuildOptions& o, std::ostream& out) {
   };
 
   if (!o.tum_dir.empty()) {
-    const image::DepthSequence seq = image::readTumSequence(o.tum_dir);
     Progress progress(out, seq.frames.size(), o.progress_bar);
     const auto& io = map->insertionOptions;
     InsertParams ip;
@@ -175,10 +189,12 @@ int build(const BuildOptions& o, std::ostream& out) {
       << " M beams/s), sensor model " << map->insertionOptions.sensorModel << "\n";
   out.unsetf(std::ios::floatfield);
   out << "skipped: " << st.skipped_non_finite << " non-finite, " << st.skipped_zero_length << " zero-length, "
-      << st.skipped_out_of_range << " out of range, " << map->invalidRangesSkipped << " invalid ranges\n";
+      << st.skipped_out_of_range << " out of range, " << map->invalidRangesSkipped << " invalid ranges, "
+      << st.skipped_too_long << " too long (over " << InsertParams{}.max_ray_cells << " cells)\n";
   printStatistics(map->map(), out);
-  if (!o.out_path.empty()) {
-    saveMap(map->map(), o.out_path);
+  if (saved) {
+    map->map().write(*saved);
+    files.commit();
     out << "saved             " << o.out_path << "\n";
   }
   return 0;

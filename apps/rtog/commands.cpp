@@ -1,4 +1,5 @@
 #include "commands.hpp"
+#include "output_files.hpp"
 
 #include <mrpt/io/CMemoryStream.h>
 #include <mrpt/io/zip.h>
@@ -18,7 +19,6 @@
 #include <fstream>
 #include <iomanip>
 #include <ostream>
-#include <set>
 #include <sstream>
 #include <vector>
 
@@ -31,52 +31,10 @@
 
 namespace rtog::cli {
 
-OccupancyMap loadMap(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw std::runtime_error("cannot open map file '" + path + "'");
-  try {
-    // A gzip stream is the MRPT map's own file (CRTreeOccupancyGridMap::saveToFile, as the
-    // MRPT apps write it); anything else must be the core format.
-    const int b0 = in.get(), b1 = in.get();
-    in.seekg(0);
-    if (b0 == 0x1f && b1 == 0x8b) return CRTreeOccupancyGridMap::loadFromFile(path)->map();
-    return OccupancyMap::read(in);
-  } catch (const std::exception& e) {
-    throw std::runtime_error("'" + path + "': " + e.what());
-  }
-}
-
-PendingFile::PendingFile(std::string path) : path_(std::move(path)), tmp_(path_ + ".partial") {
-  out_ = std::make_unique<std::ofstream>(tmp_, std::ios::binary | std::ios::trunc);
-  if (!*out_)
-    throw std::runtime_error("cannot write '" + path_ + "': cannot create '" + tmp_ + "': " + std::strerror(errno));
-}
-
-PendingFile::~PendingFile() {
-  if (committed_) return;
-  out_.reset();
-  std::remove(tmp_.c_str());
-}
-
-std::ostream& PendingFile::stream() { return *out_; }
-
-void PendingFile::close() {
-  if (!out_->is_open()) return;
-  out_->close();
-  if (!*out_) throw std::runtime_error("writing '" + tmp_ + "' failed");
-}
-
-void PendingFile::commit() {
-  close();
-  if (std::rename(tmp_.c_str(), path_.c_str()) != 0)
-    throw std::runtime_error("cannot rename '" + tmp_ + "' to '" + path_ + "'");
-  committed_ = true;
-}
-
 void saveMap(const OccupancyMap& map, const std::string& path) {
-  PendingFile f(path);
-  map.write(f.stream());
-  f.commit();
+  OutputSet files;
+  map.write(files.add("map", path));
+  files.commit();
 }
 
 void printStatistics(const OccupancyMap& map, std::ostream& out) {
@@ -166,20 +124,15 @@ int exportMap(const ExportOptions& opts, std::ostream& out) {
     throw std::invalid_argument("export: --slice-z is only used with --png FILE");
   if (opts.slice_z && !std::isfinite(*opts.slice_z))
     throw std::invalid_argument("export: --slice-z must be a finite height in metres");
-  {
-    std::set<std::string> seen{opts.map_path};
-    for (const std::string* p : {&opts.ply_path, &opts.bt_path, &opts.png_path, &opts.scene_path})
-      if (!p->empty() && !seen.insert(*p).second)
-        throw std::invalid_argument("export: '" + *p + "' is named twice (or is the input map)");
-  }
+  // Every output checked and opened before the map is read; written to temporaries, and
+  // renamed into place only when all of them succeeded.
+  OutputSet files({{"map", opts.map_path}});
+  std::ostream* png_out = opts.png_path.empty() ? nullptr : &files.add("--png", opts.png_path);
+  std::ostream* scene_out = opts.scene_path.empty() ? nullptr : &files.add("--scene", opts.scene_path);
+  std::ostream* ply_out = opts.ply_path.empty() ? nullptr : &files.add("--ply", opts.ply_path);
+  std::ostream* bt_out = opts.bt_path.empty() ? nullptr : &files.add("--bt", opts.bt_path);
   const OccupancyMap map = loadMap(opts.map_path);
-
-  // Everything is written to FILE.partial first and renamed only when all exports succeeded.
-  std::vector<std::unique_ptr<PendingFile>> files;
   std::vector<std::string> messages;
-  const auto fail = [](const std::string& path, const std::exception& e) {
-    return std::runtime_error("'" + path + "': " + e.what());
-  };
 
   if (!opts.png_path.empty()) {
     const double z = *opts.slice_z;
@@ -192,13 +145,7 @@ int exportMap(const ExportOptions& opts, std::ostream& out) {
     const cv::Mat img = image::rasterizeSliceZ(map, z);
     std::vector<unsigned char> png;
     if (!cv::imencode(".png", img, png)) throw std::runtime_error("'" + opts.png_path + "': PNG encoding failed");
-    files.push_back(std::make_unique<PendingFile>(opts.png_path));
-    try {
-      files.back()->stream().write(reinterpret_cast<const char*>(png.data()), static_cast<std::streamsize>(png.size()));
-      files.back()->close();
-    } catch (const std::exception& e) {
-      throw fail(opts.png_path, e);
-    }
+    png_out->write(reinterpret_cast<const char*>(png.data()), static_cast<std::streamsize>(png.size()));
     messages.push_back("wrote " + opts.png_path + ": slice at z = " + metres(z) + " m, " + std::to_string(img.cols) +
                        " x " + std::to_string(img.rows) + " pixels (one per cell; occupied black, free white, unknown grey)");
   }
@@ -219,44 +166,24 @@ int exportMap(const ExportOptions& opts, std::ostream& out) {
     const std::vector<std::uint8_t> plain(raw, raw + mem.getTotalBytesCount());
     std::vector<std::uint8_t> gz;
     if (!mrpt::io::zip::compress_gz_data_block(plain, gz)) throw std::runtime_error("'" + opts.scene_path + "': gzip failed");
-    files.push_back(std::make_unique<PendingFile>(opts.scene_path));
-    try {
-      files.back()->stream().write(reinterpret_cast<const char*>(gz.data()), static_cast<std::streamsize>(gz.size()));
-      files.back()->close();
-    } catch (const std::exception& e) {
-      throw fail(opts.scene_path, e);
-    }
+    scene_out->write(reinterpret_cast<const char*>(gz.data()), static_cast<std::streamsize>(gz.size()));
     messages.push_back("wrote " + opts.scene_path + ": " + std::to_string(map.statistics().occupied_leaves) +
                        " occupied cuboids (open with SceneViewer3D)");
   }
   if (!opts.ply_path.empty()) {
-    files.push_back(std::make_unique<PendingFile>(opts.ply_path));
-    MeshExportStats st;
-    try {
-      st = writeOccupiedPly(map, files.back()->stream(),
-                            opts.ply_ascii ? PlyEncoding::Ascii : PlyEncoding::BinaryLittleEndian);
-      files.back()->close();
-    } catch (const std::exception& e) {
-      throw fail(opts.ply_path, e);
-    }
+    const MeshExportStats st =
+        writeOccupiedPly(map, *ply_out, opts.ply_ascii ? PlyEncoding::Ascii : PlyEncoding::BinaryLittleEndian);
     messages.push_back("wrote " + opts.ply_path + ": " + std::to_string(st.cuboids) + " occupied cuboids, " +
                        std::to_string(st.vertices) + " vertices, " + std::to_string(st.faces) + " triangles (" +
                        (opts.ply_ascii ? "ASCII" : "binary") + " PLY)");
   }
   if (!opts.bt_path.empty()) {
-    files.push_back(std::make_unique<PendingFile>(opts.bt_path));
-    OctoMapExportStats st;
-    try {
-      st = writeOctoMapBinary(map, files.back()->stream());
-      files.back()->close();
-    } catch (const std::exception& e) {
-      throw fail(opts.bt_path, e);
-    }
+    const OctoMapExportStats st = writeOctoMapBinary(map, *bt_out);
     messages.push_back("wrote " + opts.bt_path + ": OctoMap tree of " + std::to_string(st.nodes) + " nodes (" +
                        std::to_string(st.occupied_leaves) + " occupied and " + std::to_string(st.free_leaves) +
                        " free leaves)");
   }
-  for (auto& f : files) f->commit();
+  files.commit();
   for (const auto& m : messages) out << m << "\n";
   return 0;
 }

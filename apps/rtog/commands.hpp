@@ -19,7 +19,7 @@ struct BuildOptions {
   /// `ini_section` gives resolution and options; the command-line map options are then unused.
   std::string ini_path;
   std::string ini_section = "MappingApplication";  ///< (Default: MappingApplication)
-  std::string out_path;       ///< .rtog file to write; empty: do not save
+  std::string out_path;       ///< .rtog file to write (never one of the inputs); empty: do not save
   MapParams map;              ///< resolution, log-odds, merging (without --ini)
   InsertParams insert;        ///< sensor model, max range, threads (without --ini)
   int stride = 1;             ///< TUM: use every stride-th pixel in each direction (Default: 1)
@@ -46,38 +46,16 @@ struct ExportOptions {
   std::string scene_path;        ///< MRPT .3Dscene (SceneViewer3D) of the occupied cuboids; empty: none
 };
 
-/// Writes the requested exports of a saved map. All outputs are written to `FILE.partial`
-/// first and renamed only when every one succeeded, so a failure leaves no output behind.
-/// Throws std::invalid_argument for bad options and std::runtime_error (naming the file) for
+/// Writes the requested exports of a saved map, all or none (see output_files.hpp): no output
+/// may be the input map or another output, and a failure replaces none of them. Throws
+/// std::invalid_argument for bad options and std::runtime_error (naming the file) for
 /// unreadable maps or failed writes. Returns the process exit code.
 int exportMap(const ExportOptions& opts, std::ostream& out);
 
-/// An output file written to `path + ".partial"` and renamed to `path` by commit(); if it is
-/// destroyed before, the partial file is removed.
-class PendingFile {
- public:
-  /// Throws std::runtime_error if the temporary file cannot be created.
-  explicit PendingFile(std::string path);
-  ~PendingFile();
-  PendingFile(const PendingFile&) = delete;
-  PendingFile& operator=(const PendingFile&) = delete;
-
-  std::ostream& stream();
-  const std::string& path() const { return path_; }
-  /// Flushes and closes; throws std::runtime_error if any write failed.
-  void close();
-  /// close() (if not done), then renames into place; throws std::runtime_error on failure.
-  void commit();
-
- private:
-  std::string path_, tmp_;
-  std::unique_ptr<std::ofstream> out_;
-  bool committed_ = false;
-};
-
-/// Loads a .rtog map; throws std::runtime_error naming the file on failure.
+/// Loads a map file (the core format or the MRPT map's gzip archive), from a file or a pipe;
+/// throws std::runtime_error naming the file on failure, including bytes after the map.
 OccupancyMap loadMap(const std::string& path);
-/// Saves atomically (temporary file, then rename): nothing half-written on failure.
+/// Saves through an OutputSet: the old file stays intact unless the new one was written whole.
 void saveMap(const OccupancyMap& map, const std::string& path);
 
 }  // namespace rtog::cli

@@ -6,8 +6,12 @@
 #include <CLI/CLI.hpp>
 
 #include "commands.hpp"
+#include "option_checks.hpp"
 
 int main(int argc, char** argv) {
+  using rtog::cli::checks::number;
+  using rtog::cli::checks::Sign;
+  const CLI::Validator path = rtog::cli::checks::path();
   CLI::App app{"rtog: R-tree occupancy grids for MRPT"};
   app.require_subcommand(1);
 
@@ -21,31 +25,36 @@ int main(int argc, char** argv) {
   rawlog->excludes(simplemap);
   b->add_option("--ini", build.ini_path, "MRPT .ini with a CMultiMetricMap holding rtreeOccupancyGrid_count=1")->check(CLI::ExistingFile);
   b->add_option("--section", build.ini_section, "Section of the map definition in --ini")->capture_default_str();
-  b->add_option("--out", build.out_path, "Output map (.rtog)");
-  b->add_option("--resolution", build.map.resolution, "Cell size [m]")->capture_default_str()->check(CLI::PositiveNumber);
+  b->add_option("--out", build.out_path, "Output map (.rtog)")->check(path);
+  b->add_option("--resolution", build.map.resolution, "Cell size [m]")->capture_default_str()->check(number(Sign::Positive));
   b->add_option("--model", model, "Sensor model: beam | endpoint")->capture_default_str();
   b->add_option("--merge", merge, "Leaf merging: off | clamped | equal")->capture_default_str();
-  b->add_option("--max-range", build.insert.max_range, "Cut beams longer than this [m] (<= 0: no limit)");
-  b->add_option("--threads", build.insert.threads, "Threads tracing beams")->capture_default_str()->check(CLI::Range(1, 256));
+  build.insert.max_range = 0.0;
+  b->add_option("--max-range", build.insert.max_range,
+                "Cut beams longer than this [m] (0: no cut; beams longer than " +
+                    std::to_string(rtog::InsertParams{}.max_ray_cells) + " cells are skipped and counted either way)")
+      ->capture_default_str()
+      ->check(number(Sign::NonNegative));
+  b->add_option("--threads", build.insert.threads, "Threads tracing beams")->capture_default_str()->check(rtog::cli::checks::integer(1, 256));
   b->add_flag("--discretize", build.insert.discretize, "Trace beams to end-cell centres, once per cell (OctoMap's discretize)");
-  b->add_option("--stride", build.stride, "Use every n-th pixel")->capture_default_str()->check(CLI::PositiveNumber);
+  b->add_option("--stride", build.stride, "Use every n-th pixel")->capture_default_str()->check(rtog::cli::checks::integer(1, 1 << 16));
 
   std::string map_path;
   bool json = false;
   auto* i = app.add_subcommand("info", "Print a map's statistics");
-  i->add_option("map", map_path, "Map file (.rtog)")->required();
+  i->add_option("map", map_path, "Map file (.rtog, or a pipe such as /dev/stdin)")->required()->check(path);
   i->add_flag("--json", json, "JSON output");
 
   rtog::cli::ExportOptions ex;
   double slice_z = 0.0;
   auto* e = app.add_subcommand("export", "Export a map: mesh of occupied cuboids, OctoMap tree, image slice");
-  e->add_option("map", ex.map_path, "Map file (.rtog)")->required();
-  auto* ply = e->add_option("--ply", ex.ply_path, "Occupied cuboids as a triangle mesh (.ply)");
+  e->add_option("map", ex.map_path, "Map file (.rtog, or a pipe such as /dev/stdin)")->required()->check(path);
+  auto* ply = e->add_option("--ply", ex.ply_path, "Occupied cuboids as a triangle mesh (.ply)")->check(path);
   e->add_flag("--ascii", ex.ply_ascii, "Write the PLY as ASCII (default: binary little-endian)")->needs(ply);
-  e->add_option("--bt", ex.bt_path, "OctoMap binary tree (.bt; octovis, OcTree::readBinary)");
-  e->add_option("--scene", ex.scene_path, "MRPT 3D scene of the occupied cuboids (.3Dscene; SceneViewer3D)");
-  auto* png = e->add_option("--png", ex.png_path, "Horizontal slice as an image (.png), with --slice-z");
-  auto* sz = e->add_option("--slice-z", slice_z, "Height of the slice [m]");
+  e->add_option("--bt", ex.bt_path, "OctoMap binary tree (.bt; octovis, OcTree::readBinary)")->check(path);
+  e->add_option("--scene", ex.scene_path, "MRPT 3D scene of the occupied cuboids (.3Dscene; SceneViewer3D)")->check(path);
+  auto* png = e->add_option("--png", ex.png_path, "Horizontal slice as an image (.png), with --slice-z")->check(path);
+  auto* sz = e->add_option("--slice-z", slice_z, "Height of the slice [m]")->check(number(Sign::Any));
   png->needs(sz);
   sz->needs(png);
 

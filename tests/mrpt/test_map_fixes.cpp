@@ -7,6 +7,7 @@
 #include <mrpt/config/CConfigFileMemory.h>
 #include <mrpt/io/CMemoryStream.h>
 #include <mrpt/maps/CMultiMetricMap.h>
+#include <mrpt/maps/COccupancyGridMap2D.h>
 #include <mrpt/maps/CSimplePointsMap.h>
 #include <mrpt/obs/CObservation2DRangeScan.h>
 #include <mrpt/poses/CPose2D.h>
@@ -243,4 +244,36 @@ TEST(MapFixes, Matching3DReportsTheMeanSquaredDistanceAsMrpt) {
   ASSERT_GT(mrptPairs.size(), 50u);
   EXPECT_NEAR(extra.sumSqrDist, mrptExtra.sumSqrDist, 0.5 * mrptExtra.sumSqrDist);
   EXPECT_LT(extra.sumSqrDist, params.maxDistForCorrespondence * params.maxDistForCorrespondence);
+}
+
+// A 1-beam scan (MRPT's getScanAngle() is NaN for it) in the octomap preset: its ray goes where
+// COccupancyGridMap2D casts it, the first ray's angle, and marks that end cell occupied.
+TEST(MapFixes, OneBeamScanIsInsertedWhereTheStockGridCastsIt) {
+  for (const bool right_to_left : {true, false})
+    for (const float aperture : {float(M_PI), 0.5f, float(2 * M_PI)}) {
+      SCOPED_TRACE(std::string(right_to_left ? "right to left" : "left to right") + ", aperture " +
+                   std::to_string(aperture));
+      CObservation2DRangeScan scan;
+      scan.aperture = aperture;
+      scan.rightToLeft = right_to_left;
+      scan.resizeScan(1);
+      scan.setScanRange(0, 3.0f);
+      scan.setScanRangeValidity(0, true);
+      const CPose3D robot(0.05, 0.05, 0, 0.3, 0, 0);
+      mrpt::maps::COccupancyGridMap2D grid(-10, 10, -10, 10, 0.1f);
+      ASSERT_TRUE(grid.insertObservation(scan, robot));
+      // The stock grid's occupied end cell: its most certain one.
+      int bx = 0, by = 0;
+      for (int y = 0; y < int(grid.getSizeY()); ++y)
+        for (int x = 0; x < int(grid.getSizeX()); ++x)
+          if (grid.getCell(x, y) < grid.getCell(bx, by)) bx = x, by = y;
+      ASSERT_LT(grid.getCell(bx, by), 0.5f);
+      CRTreeOccupancyGridMap m(0.1);
+      m.insertionOptions.sensorModelPreset = "octomap";
+      ASSERT_TRUE(m.insertObservation(scan, robot));
+      EXPECT_EQ(m.lastInsertStats.rays_hit, 1u);
+      EXPECT_EQ(m.lastInsertStats.skipped_non_finite, 0u);
+      EXPECT_EQ(m.map().stateAt(Eigen::Vector3d(grid.idx2x(bx), grid.idx2y(by), 0.0)), rtog::CellState::Occupied);
+      EXPECT_EQ(m.map().statistics().occupied_cells, 1);
+    }
 }

@@ -248,3 +248,25 @@ TEST(MrptGridFidelity, PfLocalizationConfigOnLocalizationDemo) {
                         simplemapFrames(dataset("localization_demo.simplemap.gz")),
                         "localization_demo simplemap, pf-localization section", true);
 }
+
+// 1-beam scans: MRPT's getScanAngle() divides by zero for them, but the stock grid casts the
+// one ray at the first ray's angle (-aperture/2 from right to left); both map types must follow.
+TEST(MrptGridFidelity, OneBeamScansOnSena) {
+  std::vector<Frame> frames;
+  for (const auto& f : rawlogFrames(dataset(kSena))) {
+    auto sf = mrpt::obs::CSensoryFrame::Create();
+    for (const auto& o : *f.sf) {
+      const auto* s = dynamic_cast<const mrpt::obs::CObservation2DRangeScan*>(o.get());
+      if (!s) continue;
+      auto one = mrpt::obs::CObservation2DRangeScan::Create(*s);
+      const std::size_t mid = s->getScanSize() / 2;
+      one->resizeScan(1);
+      one->setScanRange(0, s->getScanRange(mid));
+      one->setScanRangeValidity(0, s->getScanRangeValidity(mid));
+      sf->insert(one);
+    }
+    frames.push_back({f.pose, sf});
+  }
+  expectSameAsStockGrid("icp-slam/icp-slam_demo_classic_gridmatch.ini", "MappingApplication", frames,
+                        "SENA, each scan cut to its middle beam");
+}

@@ -73,11 +73,12 @@ std::uint64_t updateLayerWord(float* values, std::uint64_t occupied, std::uint64
 #endif
 }
 
-enum class BeamEnd { Hit, Truncated, NonFinite, ZeroLength, OutOfRange };
+enum class BeamEnd { Hit, Truncated, NonFinite, ZeroLength, OutOfRange, TooLong };
 
 // Where a beam from `origin` to `p` ends (cut at max_range) and its end cell.
 inline BeamEnd endOfBeam(const Lattice& lattice, const Eigen::Vector3d& origin, const Eigen::Vector3d& p,
-                         bool returned, double max_range, Eigen::Vector3d& end, Key& end_key) {
+                         bool returned, const InsertParams& ip, Eigen::Vector3d& end, Key& end_key) {
+  const double max_range = ip.max_range;
   if (!p.allFinite()) return BeamEnd::NonFinite;
   const Eigen::Vector3d diff = p - origin;
   const double dist2 = diff.squaredNorm();
@@ -91,6 +92,10 @@ inline BeamEnd endOfBeam(const Lattice& lattice, const Eigen::Vector3d& origin, 
     }
   }
   if (!lattice.tryKey(end, end_key)) return BeamEnd::OutOfRange;
+  if (ip.max_ray_cells > 0) {
+    const double longest = ip.max_ray_cells * lattice.resolution();
+    if ((end - origin).squaredNorm() > longest * longest) return BeamEnd::TooLong;
+  }
   return returned ? BeamEnd::Hit : BeamEnd::Truncated;
 }
 
@@ -339,13 +344,14 @@ bool OccupancyMap::preparePlanarBeams(const Eigen::Vector3d& origin, const Eigen
   for (std::size_t i = 0; i < count; ++i) {
     PlanarBeam& beam = beams.emplace_back();
     const BeamEnd kind = endOfBeam(lattice_, origin, points[i].cast<double>(), is_hit == nullptr || is_hit[i] != 0,
-                                   ip.max_range, end, beam.end);
+                                   ip, end, beam.end);
     beam.traced = false;
     beam.skip_runs = 0;
     switch (kind) {
       case BeamEnd::NonFinite: ++counts.skipped_non_finite; continue;
       case BeamEnd::ZeroLength: ++counts.skipped_zero_length; continue;
       case BeamEnd::OutOfRange: ++counts.skipped_out_of_range; continue;
+      case BeamEnd::TooLong: ++counts.skipped_too_long; continue;
       default: break;
     }
     if (beam.end.z != origin_key.z) return false;
@@ -381,11 +387,12 @@ void OccupancyMap::traceBeams(const Eigen::Vector3d& origin, const Eigen::Vector
   Key end_key;
   for (std::size_t i = 0; i < count; ++i) {
     const BeamEnd kind =
-        endOfBeam(lattice_, origin, points[i].cast<double>(), is_hit == nullptr || is_hit[i] != 0, ip.max_range, end, end_key);
+        endOfBeam(lattice_, origin, points[i].cast<double>(), is_hit == nullptr || is_hit[i] != 0, ip, end, end_key);
     switch (kind) {
       case BeamEnd::NonFinite: ++stats.skipped_non_finite; continue;
       case BeamEnd::ZeroLength: ++stats.skipped_zero_length; continue;
       case BeamEnd::OutOfRange: ++stats.skipped_out_of_range; continue;
+      case BeamEnd::TooLong: ++stats.skipped_too_long; continue;
       default: break;
     }
     const bool hit = kind == BeamEnd::Hit;

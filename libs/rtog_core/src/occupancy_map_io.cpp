@@ -60,6 +60,21 @@ class Reader {
   Fnv1a sum_;
 };
 
+/// Bytes from the read position to the end, or -1 if the stream cannot tell (a pipe).
+std::int64_t bytesLeft(std::istream& is) {
+  const std::istream::pos_type here = is.tellg();
+  if (here == std::istream::pos_type(-1)) return -1;
+  is.seekg(0, std::ios::end);
+  const std::istream::pos_type end = is.tellg();
+  is.seekg(here);
+  if (end == std::istream::pos_type(-1) || !is) {
+    is.clear();
+    is.seekg(here);
+    return -1;
+  }
+  return static_cast<std::int64_t>(end - here);
+}
+
 }  // namespace
 
 void OccupancyMap::write(std::ostream& os) const {
@@ -123,6 +138,14 @@ OccupancyMap OccupancyMap::read(std::istream& is) {
   }
   const auto count = r.get<std::uint64_t>("leaf count");
   if (count > (std::uint64_t{1} << 36)) throw std::runtime_error("rtog map: implausible leaf count");
+  // Leaves are stored as they are read, so memory follows the bytes present whatever the count
+  // says; a stream that knows its size (a file, a block in memory; not a pipe) refuses a count
+  // it cannot hold before reading any.
+  constexpr std::uint64_t kLeafBytes = 6 * sizeof(std::int32_t) + sizeof(float);
+  if (const std::int64_t left = bytesLeft(is); left >= 0 && count > std::uint64_t(left) / kLeafBytes)
+    throw std::runtime_error("rtog map: the leaf count " + std::to_string(count) + " needs " +
+                             std::to_string(count * kLeafBytes + 8) + " more bytes, the stream holds " +
+                             std::to_string(left) + " (truncated or corrupt)");
 
   OccupancyMap map(p);
   for (std::uint64_t i = 0; i < count; ++i) {

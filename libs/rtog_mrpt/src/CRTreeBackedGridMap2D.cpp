@@ -36,11 +36,10 @@ void CRTreeBackedGridMap2D::TMapDefinition::loadFromConfigFile_map_specific(
     reportUnknownKeys(source, sec,
                       {"resolution", "min_x", "max_x", "min_y", "max_y", "gridView_minZ", "gridView_maxZ",
                        "disableSaveAs3DObject"});
-    gridView_minZ = source.read_float(sec, "gridView_minZ", gridView_minZ);
-    gridView_maxZ = source.read_float(sec, "gridView_maxZ", gridView_maxZ);
-    if (!(gridView_minZ <= gridView_maxZ))
-      throw std::invalid_argument("rtog::CRTreeBackedGridMap2D: invalid option [" + sec +
-                                  "] gridView_minZ/gridView_maxZ: need minZ <= maxZ");
+    CRTreeOccupancyGridMap::TGridViewOptions band;  // the same keys and check as the R-tree map's
+    band.gridView_minZ = gridView_minZ, band.gridView_maxZ = gridView_maxZ;
+    band.loadFromConfigFile(source, sec);
+    gridView_minZ = band.gridView_minZ, gridView_maxZ = band.gridView_maxZ;
     insertionOpts.loadFromConfigFile(source, prefix + "_insertOpts");
     likelihoodOpts.loadFromConfigFile(source, prefix + "_likelihoodOpts");
   } catch (const std::exception& e) {
@@ -186,25 +185,6 @@ void CRTreeBackedGridMap2D::refreshGrid() {
           static_cast<float>(hi.y()), static_cast<float>(m.resolution()), 0.5f);
   refreshRegion(lo.x(), lo.y(), hi.x(), hi.y());
   m_is_empty = false;
-}
-
-// Version 0: the COccupancyGridMap2D part (grid and its options), the R-tree map, the band.
-uint8_t CRTreeBackedGridMap2D::serializeGetVersion() const { return 0; }
-
-void CRTreeBackedGridMap2D::serializeTo(mrpt::serialization::CArchive& out) const {
-  COccupancyGridMap2D::serializeTo(out);
-  out << rtree_ << gridView_minZ << gridView_maxZ;
-}
-
-void CRTreeBackedGridMap2D::serializeFrom(mrpt::serialization::CArchive& in, uint8_t version) {
-  switch (version) {
-    case 0:
-      COccupancyGridMap2D::serializeFrom(in, COccupancyGridMap2D::serializeGetVersion());
-      in >> rtree_ >> gridView_minZ >> gridView_maxZ;
-      break;
-    default:
-      MRPT_THROW_UNKNOWN_SERIALIZATION_VERSION(version);
-  }
 }
 
 void CRTreeBackedGridMap2D::saveMetricMapRepresentationToFile(const std::string& prefix) const {

@@ -78,9 +78,18 @@ void CRTreeOccupancyGridMap::TGridViewOptions::loadFromConfigFile(const mrpt::co
                                                                  const std::string& sec) {
   gridView_minZ = s.read_float(sec, "gridView_minZ", gridView_minZ);
   gridView_maxZ = s.read_float(sec, "gridView_maxZ", gridView_maxZ);
+  try {
+    validate();
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(std::string(e.what()) + " (section [" + sec + "])");
+  }
+}
+
+void CRTreeOccupancyGridMap::TGridViewOptions::validate() const {
   if (!(gridView_minZ <= gridView_maxZ))  // also rejects NaN
-    throw std::invalid_argument("rtog::CRTreeOccupancyGridMap: invalid option [" + sec +
-                                "] gridView_minZ/gridView_maxZ: need gridView_minZ <= gridView_maxZ");
+    throw std::invalid_argument(
+        "rtog::CRTreeOccupancyGridMap: invalid option [creationOpts] gridView_minZ/gridView_maxZ: need "
+        "gridView_minZ <= gridView_maxZ");
 }
 
 void CRTreeOccupancyGridMap::TGridViewOptions::saveToConfigFile(mrpt::config::CConfigFileBase& c,

@@ -115,7 +115,10 @@ std::shared_ptr<const CRTreeOccupancyGridMap::Caches::ScanAngles> CRTreeOccupanc
   table->aperture = scan.aperture;
   table->right_to_left = scan.rightToLeft;
   for (std::size_t i = 0; i < n; ++i) {
-    const double a = scan.getScanAngle(i);
+    // MRPT's getScanAngle() divides the aperture by n - 1, which makes the one ray of a 1-beam
+    // scan NaN (and the beam a skip). COccupancyGridMap2D casts it at the first ray's angle, as
+    // getScanAngle(0) would be: -aperture/2 for a scan from right to left, +aperture/2 else.
+    const double a = n == 1 ? (scan.rightToLeft ? -0.5f : 0.5f) * scan.aperture : scan.getScanAngle(i);
     table->cos.push_back(std::cos(a));
     table->sin.push_back(std::sin(a));
   }

@@ -12,6 +12,8 @@
 
 #include "rtog/image/slice.hpp"
 #include "rtog/mrpt/CRTreeOccupancyGridMap.h"
+#include "archive_read.hpp"
+#include "mrpt_grid.hpp"
 
 namespace rtog {
 
@@ -51,73 +53,83 @@ void CRTreeOccupancyGridMap::serializeTo(mrpt::serialization::CArchive& out) con
   out.WriteBuffer(bytes.data(), bytes.size());
 }
 
+// Everything is read into locals, checked as an .ini's values are (the same validate()s), and
+// only then assigned: a stream that fails leaves the map as it was. Lengths are checked before
+// anything is allocated (archive_read.hpp).
 void CRTreeOccupancyGridMap::serializeFrom(mrpt::serialization::CArchive& in, uint8_t version) {
-  switch (version) {
-    case 0:
-    case 1:
-    case 2: {
-      in >> genericMapParams;
-      auto& io = insertionOptions;
-      int32_t threads = 1;
-      in >> io.sensorModel >> io.maxOccupancyUpdateCertainty >> io.maxFreenessUpdateCertainty >> io.clampingMin >>
-          io.clampingMax >> io.occupiedThreshold >> io.maxDistanceInsertion >> io.decimation >>
-          io.decimation_3d_range >> io.mergePolicy >> io.discretize >> threads >> io.rotatingScan_minElevation_deg >>
-          io.rotatingScan_maxElevation_deg;
-      io.threads = threads;
-      // Before version 2 the elevations were always stored, -15/15 being the defaults that stood
-      // for "no calibration known": unset, so that the calibration now decides.
-      if (version < 2 && io.rotatingScan_minElevation_deg == -15.0f && io.rotatingScan_maxElevation_deg == 15.0f)
-        io.rotatingScan_minElevation_deg = io.rotatingScan_maxElevation_deg = std::numeric_limits<float>::quiet_NaN();
-      io.planarCache = true;
-      if (version >= 1) in >> io.planarCache;
-      TGridFrame2D frame;
-      if (version >= 2) {
-        in >> io.sensorModelPreset >> io.maxFreenessInvalidRanges >> io.considerInvalidRangesAsFreeSpace >>
-            io.horizontalTolerance >> io.useMapAltitude >> io.mapAltitude >> io.wideningBeamsWithDistance;
-        in >> frame.x_min >> frame.x_max >> frame.y_min >> frame.y_max >> frame.resolution >> frame.size_x >>
-            frame.size_y >> frame.has_layer >> frame.layer;
-      } else {
-        io.sensorModelPreset = "octomap";
-      }
-      auto& lo = likelihoodOptions;
-      int32_t method = 0;
-      in >> method >> lo.LF_stdHit >> lo.LF_zHit >> lo.LF_zRandom >> lo.LF_maxRange >> lo.LF_decimation >>
-          lo.LF_maxCorrsDistance >> lo.LF_useSquareDist >> lo.enableLikelihoodCache >> lo.rayTracing_decimation >>
-          lo.rayTracing_stdHit;
-      if (version < 2) {  // 0/1: the likelihood field / ray tracing, as COccupancyGridMap3D
-        if (method != 0 && method != 1)
-          throw std::runtime_error("rtog::CRTreeOccupancyGridMap: corrupt stream (likelihood method)");
-        method = method == 0 ? lmLikelihoodField_Thrun : lmRayTracing;
-        const TLikelihoodOptions d;  // options these versions did not have: defaults
-        lo.LF_alternateAverageMethod = d.LF_alternateAverageMethod, lo.MI_exponent = d.MI_exponent;
-        lo.MI_skip_rays = d.MI_skip_rays, lo.MI_ratio_max_distance = d.MI_ratio_max_distance;
-        lo.rayTracing_useDistanceFilter = d.rayTracing_useDistanceFilter;
-        lo.consensus_takeEachRange = d.consensus_takeEachRange, lo.consensus_pow = d.consensus_pow;
-        lo.OWA_weights = d.OWA_weights, lo.scanLikelihoodOnGridView = d.scanLikelihoodOnGridView;
-        gridViewOptions = TGridViewOptions{};
-      } else {
-        in >> lo.LF_alternateAverageMethod >> lo.MI_exponent >> lo.MI_skip_rays >> lo.MI_ratio_max_distance >>
-            lo.rayTracing_useDistanceFilter >> lo.consensus_takeEachRange >> lo.consensus_pow >> lo.OWA_weights >>
-            lo.scanLikelihoodOnGridView >> gridViewOptions.gridView_minZ >> gridViewOptions.gridView_maxZ;
-      }
-      if (method < lmMeanInformation || method > lmConsensusOWA)
-        throw std::runtime_error("rtog::CRTreeOccupancyGridMap: corrupt stream (likelihood method)");
-      lo.likelihoodMethod = static_cast<TLikelihoodMethod>(method);
-      matchingOptions = TMatchingOptions();
-      if (version >= 2) in >> matchingOptions.matching2D_minZ >> matchingOptions.matching2D_maxZ;
-      const uint64_t n = in.ReadAs<uint64_t>();
-      if (n > (uint64_t{1} << 40)) throw std::runtime_error("rtog::CRTreeOccupancyGridMap: corrupt stream (size)");
-      std::string bytes(static_cast<std::size_t>(n), '\0');
-      if (n && in.ReadBuffer(bytes.data(), bytes.size()) != bytes.size())
-        throw std::runtime_error("rtog::CRTreeOccupancyGridMap: truncated stream");
-      std::istringstream is(bytes, std::ios::binary);
-      map_ = OccupancyMap::read(is);
-      frame_ = frame;
-      break;
-    }
-    default:
-      MRPT_THROW_UNKNOWN_SERIALIZATION_VERSION(version);
+  constexpr const char* kWho = "rtog::CRTreeOccupancyGridMap";
+  if (version > 2) MRPT_THROW_UNKNOWN_SERIALIZATION_VERSION(version);
+  mrpt::maps::TMapGenericParams generic;
+  in >> generic;
+  TInsertionOptions io;
+  io.sensorModel = archive::readString(in, archive::kMaxName, kWho, "sensorModel");
+  int32_t threads = 1;
+  in >> io.maxOccupancyUpdateCertainty >> io.maxFreenessUpdateCertainty >> io.clampingMin >> io.clampingMax >>
+      io.occupiedThreshold >> io.maxDistanceInsertion >> io.decimation >> io.decimation_3d_range;
+  io.mergePolicy = archive::readString(in, archive::kMaxName, kWho, "mergePolicy");
+  in >> io.discretize >> threads >> io.rotatingScan_minElevation_deg >> io.rotatingScan_maxElevation_deg;
+  io.threads = threads;
+  // Before version 2 the elevations were always stored, -15/15 being the defaults that stood
+  // for "no calibration known": unset, so that the calibration now decides.
+  if (version < 2 && io.rotatingScan_minElevation_deg == -15.0f && io.rotatingScan_maxElevation_deg == 15.0f)
+    io.rotatingScan_minElevation_deg = io.rotatingScan_maxElevation_deg = std::numeric_limits<float>::quiet_NaN();
+  io.planarCache = true;
+  if (version >= 1) in >> io.planarCache;
+  TGridFrame2D frame;
+  if (version >= 2) {
+    io.sensorModelPreset = archive::readString(in, archive::kMaxName, kWho, "sensorModelPreset");
+    in >> io.maxFreenessInvalidRanges >> io.considerInvalidRangesAsFreeSpace >> io.horizontalTolerance >>
+        io.useMapAltitude >> io.mapAltitude >> io.wideningBeamsWithDistance;
+    in >> frame.x_min >> frame.x_max >> frame.y_min >> frame.y_max >> frame.resolution >> frame.size_x >>
+        frame.size_y >> frame.has_layer >> frame.layer;
+  } else {
+    io.sensorModelPreset = "octomap";
   }
+  TLikelihoodOptions lo;
+  TGridViewOptions gv;
+  int32_t method = 0;
+  in >> method >> lo.LF_stdHit >> lo.LF_zHit >> lo.LF_zRandom >> lo.LF_maxRange >> lo.LF_decimation >>
+      lo.LF_maxCorrsDistance >> lo.LF_useSquareDist >> lo.enableLikelihoodCache >> lo.rayTracing_decimation >>
+      lo.rayTracing_stdHit;
+  if (version < 2) {  // 0/1: the likelihood field / ray tracing, as COccupancyGridMap3D
+    if (method != 0 && method != 1) throw std::runtime_error(std::string(kWho) + ": corrupt stream (likelihood method)");
+    method = method == 0 ? lmLikelihoodField_Thrun : lmRayTracing;  // the others stay defaults
+  } else {
+    in >> lo.LF_alternateAverageMethod >> lo.MI_exponent >> lo.MI_skip_rays >> lo.MI_ratio_max_distance >>
+        lo.rayTracing_useDistanceFilter >> lo.consensus_takeEachRange >> lo.consensus_pow;
+    lo.OWA_weights = archive::readFloats(in, archive::kMaxWeights, kWho, "OWA_weights");
+    in >> lo.scanLikelihoodOnGridView >> gv.gridView_minZ >> gv.gridView_maxZ;
+  }
+  if (method < lmMeanInformation || method > lmConsensusOWA)
+    throw std::runtime_error(std::string(kWho) + ": corrupt stream (likelihood method)");
+  lo.likelihoodMethod = static_cast<TLikelihoodMethod>(method);
+  TMatchingOptions mo;
+  if (version >= 2) in >> mo.matching2D_minZ >> mo.matching2D_maxZ;
+  try {
+    io.validate();
+    lo.validate();
+    gv.validate();
+    mo.validate();
+  } catch (const std::invalid_argument& e) {
+    throw std::runtime_error(std::string(kWho) + ": the stored options are invalid: " + e.what());
+  }
+  const uint64_t n = in.ReadAs<uint64_t>();
+  std::string bytes;
+  archive::readBytes(in, n, bytes, kWho, "map block");
+  std::istringstream is(bytes, std::ios::binary);
+  OccupancyMap map = OccupancyMap::read(is);
+  if (is.peek() != std::char_traits<char>::eof())
+    throw std::runtime_error(std::string(kWho) + ": corrupt stream (" + std::to_string(n - std::uint64_t(is.tellg())) +
+                             " trailing bytes after the map in its block)");
+  if (version >= 2) mrpt_grid::checkFrame(frame, map.resolution());
+
+  genericMapParams = generic;
+  insertionOptions = io;
+  likelihoodOptions = lo;
+  gridViewOptions = gv;
+  matchingOptions = mo;
+  map_ = std::move(map);
+  frame_ = frame;
   lastInsertStats = totalInsertStats = InsertStats{};
   invalidRangesSkipped = 0;
   notifyMapChanged();

@@ -1,6 +1,8 @@
 // The mrpt_grid preset's mirror of COccupancyGridMap2D (see mrpt_grid.hpp). Built with
 // -ffp-contract=off: a fused multiply-add would round where the grid's arithmetic does not.
 #include "mrpt_grid.hpp"
+#include "archive_read.hpp"
+#include "options_check.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -68,10 +70,15 @@ void setSize(TGridFrame2D& f, float xmin, float xmax, float ymin, float ymax, fl
   ymin = res * std::round(ymin / res);
   xmax = res * std::round(xmax / res);
   ymax = res * std::round(ymax / res);
+  const float sx = std::round((xmax - xmin) / res), sy = std::round((ymax - ymin) / res);
+  // (Checked before the casts, which a non-finite or huge extent would make undefined.)
+  if (!(std::isfinite(sx) && std::isfinite(sy) && double{sx} * double{sy} <= double(archive::kMaxGridCells)))
+    throw std::invalid_argument("rtog mrpt_grid: a grid of more than 2^31 cells (COccupancyGridMap2D indexes its "
+                                "cells with an int)");
   f.resolution = res;
   f.x_min = xmin, f.x_max = xmax, f.y_min = ymin, f.y_max = ymax;
-  f.size_x = static_cast<std::uint32_t>(std::round((f.x_max - f.x_min) / f.resolution));
-  f.size_y = static_cast<std::uint32_t>(std::round((f.y_max - f.y_min) / f.resolution));
+  f.size_x = static_cast<std::uint32_t>(sx);
+  f.size_y = static_cast<std::uint32_t>(sy);
 }
 
 void resize(TGridFrame2D& f, float nx0, float nx1, float ny0, float ny1) {
@@ -93,6 +100,25 @@ void resize(TGridFrame2D& f, float nx0, float nx1, float ny0, float ny1) {
   f.size_x = static_cast<std::uint32_t>(std::round((nx1 - nx0) / res));
   f.size_y = static_cast<std::uint32_t>(std::round((ny1 - ny0) / res));
   f.x_min = nx0, f.x_max = nx1, f.y_min = ny0, f.y_max = ny1;
+}
+
+void checkFrame(const TGridFrame2D& f, double resolution) {
+  if (f.size_x == 0 && f.size_y == 0 && !f.has_layer) return;
+  const auto bad = [](const std::string& why) {
+    throw std::runtime_error("rtog::CRTreeOccupancyGridMap: corrupt stream (grid frame: " + why + ")");
+  };
+  try {
+    checkGridExtent("grid frame", f.x_min, f.x_max, f.y_min, f.y_max);
+  } catch (const std::invalid_argument& e) {
+    bad(e.what());
+  }
+  if (f.resolution != static_cast<float>(resolution)) bad("its resolution is not the map's");
+  // As setSize() and resize() compute the sizes (within a cell: the extent is rounded there).
+  const float nx = (f.x_max - f.x_min) / f.resolution, ny = (f.y_max - f.y_min) / f.resolution;
+  if (!(std::fabs(nx - static_cast<float>(f.size_x)) <= 1.0f && std::fabs(ny - static_cast<float>(f.size_y)) <= 1.0f))
+    bad("its size " + std::to_string(f.size_x) + " x " + std::to_string(f.size_y) + " does not match its extent");
+  if (std::uint64_t{f.size_x} * f.size_y > archive::kMaxGridCells) bad("more cells than a 2D grid can index");
+  if (f.has_layer && !(f.layer >= kKeyMin && f.layer <= kKeyMax)) bad("its layer is outside the key range");
 }
 
 std::int32_t keyOffsetX(const TGridFrame2D& f) {

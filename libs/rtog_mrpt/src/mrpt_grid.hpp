@@ -37,6 +37,11 @@ void setSize(TGridFrame2D& f, float x_min, float x_max, float y_min, float y_max
 void resize(TGridFrame2D& f, float x_min, float x_max, float y_min, float y_max);
 inline int x2idx(const TGridFrame2D& f, float x) { return static_cast<int>((x - f.x_min) / f.resolution); }
 inline int y2idx(const TGridFrame2D& f, float y) { return static_cast<int>((y - f.y_min) / f.resolution); }
+/// Throws std::runtime_error unless `f` is a geometry setSize()/resize() could have made for a
+/// map of `resolution` (a loaded map's frame): a finite ordered extent (checkGridExtent), the
+/// map's resolution, sizes that match the extent, at most archive::kMaxGridCells cells. A
+/// frame never set (a map first saved before format version 2: no cells, no layer) passes.
+void checkFrame(const TGridFrame2D& f, double resolution);
 /// Lattice key of the grid's cell 0 along x / y (the grid's minima lie on multiples of its resolution).
 std::int32_t keyOffsetX(const TGridFrame2D& f);
 std::int32_t keyOffsetY(const TGridFrame2D& f);

@@ -33,6 +33,10 @@ void readGridExtent(const mrpt::config::CConfigFileBase& source, const std::stri
   max_x = source.read_float(section, "max_x", max_x);
   min_y = source.read_float(section, "min_y", min_y);
   max_y = source.read_float(section, "max_y", max_y);
+  checkGridExtent(section, min_x, max_x, min_y, max_y);
+}
+
+void checkGridExtent(const std::string& section, float min_x, float max_x, float min_y, float max_y) {
   const auto bad = [&](const char* key) {
     throw std::invalid_argument("rtog: invalid option [" + section + "] " + key +
                                 ": the grid extent needs finite min_x < max_x and min_y < max_y");

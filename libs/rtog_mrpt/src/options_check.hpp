@@ -13,6 +13,10 @@ namespace rtog {
 void reportUnknownKeys(const mrpt::config::CConfigFileBase& source, const std::string& section,
                        std::initializer_list<const char*> known);
 
+/// Throws std::invalid_argument naming `section` unless min_x < max_x and min_y < max_y, all
+/// finite: the check of an .ini's extent and of a loaded map's grid frame.
+void checkGridExtent(const std::string& section, float min_x, float max_x, float min_y, float max_y);
+
 /// Reads COccupancyGridMap2D's creation extent (min_x, max_x, min_y, max_y) from `section`;
 /// throws std::invalid_argument naming the key when it is not a finite, ordered extent.
 void readGridExtent(const mrpt::config::CConfigFileBase& source, const std::string& section, float& min_x,

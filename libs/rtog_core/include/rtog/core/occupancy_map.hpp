@@ -59,6 +59,11 @@ struct InsertParams {
   /// Beams longer than this are cut here: free up to the cut, nothing occupied. <= 0 means
   /// unlimited. (Default: -1)
   double max_range = -1.0;
+  /// Beams longer than this many cells (after the max_range cut) are skipped and counted in
+  /// InsertStats::skipped_too_long: a bound on the cost of one beam, so that garbage ranges
+  /// (a 100 km reading) cannot make one scan take minutes and millions of leaves. 65,536 cells
+  /// are 3.3 km at 5 cm, 655 m at 1 cm. 0: no bound (the caller's call). (Default: 65536)
+  std::uint32_t max_ray_cells = std::uint32_t{1} << 16;
   /// Trace each beam to the centre of its end cell and beams ending in the same cell once
   /// (OctoMap's `discretize`): much faster for dense clouds. (Default: false)
   bool discretize = false;
@@ -70,13 +75,14 @@ struct InsertParams {
   bool planar_cache = true;
 };
 
-/// What one insertion did; every input beam is counted in exactly one of the first five.
+/// What one insertion did; every input beam is counted in exactly one of the first six.
 struct InsertStats {
   std::size_t rays_hit = 0;              ///< beams that marked an occupied end cell
   std::size_t rays_truncated = 0;        ///< beams cut at max_range or flagged as no-return
   std::size_t skipped_non_finite = 0;    ///< NaN/Inf end points
   std::size_t skipped_zero_length = 0;   ///< end point at the origin (no direction)
   std::size_t skipped_out_of_range = 0;  ///< end point outside the key range
+  std::size_t skipped_too_long = 0;      ///< longer than InsertParams::max_ray_cells cells
   std::size_t cells_occupied = 0;        ///< distinct cells updated as occupied
   std::size_t cells_free = 0;            ///< distinct cells updated as free
   std::size_t cells_unchanged = 0;       ///< updates absorbed by clamping
@@ -88,7 +94,8 @@ struct InsertStats {
   std::size_t leaves_split = 0;          ///< merged cuboids split by disagreeing evidence
 
   std::size_t raysTotal() const {
-    return rays_hit + rays_truncated + skipped_non_finite + skipped_zero_length + skipped_out_of_range;
+    return rays_hit + rays_truncated + skipped_non_finite + skipped_zero_length + skipped_out_of_range +
+           skipped_too_long;
   }
   InsertStats& operator+=(const InsertStats& o);
   bool operator==(const InsertStats& o) const;

@@ -158,6 +158,7 @@ class CRTreeOccupancyGridMap : public mrpt::maps::CMetricMap {
   struct TGridViewOptions : public mrpt::config::CLoadableOptions {
     void loadFromConfigFile(const mrpt::config::CConfigFileBase& source, const std::string& section) override;
     void saveToConfigFile(mrpt::config::CConfigFileBase& target, const std::string& section) const override;
+    void validate() const;  ///< throws std::invalid_argument unless gridView_minZ <= gridView_maxZ
     /// A 2D cell takes the highest log-odds among the observed cells of its column whose height
     /// interval meets [gridView_minZ, gridView_maxZ] [m]; unknown if none. (Default: -1000 / 1000)
     float gridView_minZ{-1000.0f};

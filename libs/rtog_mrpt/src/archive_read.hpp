@@ -1,0 +1,36 @@
+// Reading what a CArchive holds without trusting its lengths. MRPT's own operator>> for a
+// std::string or a std::vector allocates (and zero-fills) whatever 32-bit count the stream
+// states before it reads a byte, and a 64-bit block length read into one buffer does the same:
+// a 170-byte file could ask for a terabyte. Here every count is checked against a stated cap
+// before anything is allocated, and blocks grow only as their bytes actually arrive (the
+// remaining size of a gzip stream is unknown until it ends).
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <mrpt/serialization/CArchive.h>
+
+namespace rtog::archive {
+
+/// Longest name field of the map types' options ("octomap", "beam", ...).
+constexpr std::size_t kMaxName = 256;
+/// Most weights of likelihoodOptions.OWA_weights (MRPT's configs use a handful).
+constexpr std::size_t kMaxWeights = std::size_t{1} << 16;
+/// Most cells of a 2D grid: COccupancyGridMap2D indexes its cells with an int.
+constexpr std::uint64_t kMaxGridCells = std::uint64_t{1} << 31;
+
+/// A std::string as CArchive writes it (uint32 length, bytes); a length over `max_len` throws
+/// std::runtime_error "<who>: corrupt stream (<what> ...)".
+std::string readString(mrpt::serialization::CArchive& in, std::size_t max_len, const char* who, const char* what);
+/// A std::vector<float> as CArchive writes it (uint32 count, floats), at most `max_count`.
+std::vector<float> readFloats(mrpt::serialization::CArchive& in, std::size_t max_count, const char* who,
+                              const char* what);
+/// `n` bytes, read in chunks: what a false length costs is the bytes the stream holds, not n.
+/// Throws "<who>: truncated stream (<what>: ...)" if the stream ends first.
+void readBytes(mrpt::serialization::CArchive& in, std::uint64_t n, std::string& out, const char* who,
+               const char* what);
+
+}  // namespace rtog::archive

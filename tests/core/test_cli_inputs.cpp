@@ -1,0 +1,125 @@
+// What rtog reads, as a hostile user would feed it: maps through pipes, bytes after a map,
+// length fields that promise a terabyte, numbers that are not numbers.
+#include <gtest/gtest.h>
+
+#include <sstream>
+
+#include "../mrpt/hostile_files.hpp"
+#include "cli_helpers.hpp"
+#include "commands.hpp"
+#include "rtog/core/mesh_export.hpp"
+#include "rtog/mrpt/CRTreeOccupancyGridMap.h"
+
+using namespace rtog_cli_test;
+
+namespace {
+
+/// The small map as the MRPT map type saves it (gzip CArchive), the format MRPT's apps write.
+std::string mrptFormatCopy(const std::string& dir) {
+  rtog::CRTreeOccupancyGridMap m(0.2);
+  m.map() = rtog::cli::loadMap(smallMap());
+  const std::string path = dir + "/m.gz";
+  m.saveToFile(path);
+  return path;
+}
+
+/// `info --json` without the memory figure, which depends on how the leaves were allocated.
+std::string withoutMemory(const std::string& json) {
+  std::istringstream in(json);
+  std::string line, out;
+  while (std::getline(in, line))
+    if (line.find("\"memory_bytes\"") == std::string::npos) out += line + "\n";
+  return out;
+}
+
+std::string plyOf(const std::string& map) {
+  std::ostringstream os;
+  rtog::writeOccupiedPly(rtog::cli::loadMap(map), os);
+  return os.str();
+}
+
+TEST(CliInputs, MapsReadFromAPipe) {
+  const std::string d = scratch("pipe_in");
+  const std::string gz = mrptFormatCopy(d);
+  std::string want, out;
+  ASSERT_EQ(run("info --json " + smallMap(), &want), 0) << want;
+  EXPECT_EQ(run("info --json /dev/stdin", &out, "cat '" + smallMap() + "' | "), 0) << out;
+  EXPECT_EQ(out, want);
+  EXPECT_EQ(run("info --json /dev/stdin", &out, "cat '" + gz + "' | "), 0) << out;
+  EXPECT_EQ(withoutMemory(out), withoutMemory(want));
+  EXPECT_EQ(run("export /dev/stdin --ply " + d + "/x.ply", &out, "cat '" + smallMap() + "' | "), 0) << out;
+  EXPECT_TRUE(readAll(d + "/x.ply") == plyOf(smallMap()));
+}
+
+TEST(CliInputs, TrailingBytesAfterAMapAreAnError) {
+  const std::string d = scratch("trailing");
+  const std::string gz = mrptFormatCopy(d);
+  writeAll(d + "/core.rtog", readAll(smallMap()) + "junk!");
+  writeAll(d + "/gz_after.rtog", readAll(gz) + "junk");
+  rtog::CRTreeOccupancyGridMap m(0.2);
+  m.map() = rtog::cli::loadMap(smallMap());
+  writeAll(d + "/gz_inside.rtog", rtog_test::gzip(rtog_test::archiveBytes(m) + "xyz"));
+  std::string out;
+  for (const auto& [file, n] : std::vector<std::pair<std::string, std::string>>{
+           {"core.rtog", "5 trailing bytes"}, {"gz_after.rtog", "4 trailing bytes"}, {"gz_inside.rtog", "3 trailing bytes"}}) {
+    EXPECT_EQ(run("info " + d + "/" + file, &out), 1) << file << ": " << out;
+    EXPECT_NE(out.find(n + " after the map"), std::string::npos) << file << ": " << out;
+  }
+  // Missing bytes, no bytes, a directory: each its own reason.
+  const std::string whole = readAll(smallMap());
+  writeAll(d + "/cut.rtog", whole.substr(0, whole.size() / 2));
+  EXPECT_EQ(run("info " + d + "/cut.rtog", &out), 1);
+  EXPECT_NE(out.find("truncated"), std::string::npos) << out;
+  writeAll(d + "/empty.rtog", "");
+  EXPECT_EQ(run("info " + d + "/empty.rtog", &out), 1);
+  EXPECT_NE(out.find("the file is empty"), std::string::npos) << out;
+  EXPECT_EQ(run("info " + d, &out), 1);
+  EXPECT_NE(out.find("is a directory"), std::string::npos) << out;
+}
+
+// A 64-bit length that says 2^40 and a string that says 1 GiB, in files of a few hundred bytes:
+// a clear error, and no allocation of what they promise.
+TEST(CliInputs, LengthFieldsCannotExhaustMemory) {
+  const std::string d = scratch("huge_length");
+  writeAll(d + "/block.rtog", rtog_test::hugeBlockFile(std::uint64_t{1} << 40));
+  writeAll(d + "/string.rtog", rtog_test::hugeStringFile(1u << 30));
+  for (const auto& [file, message] : std::vector<std::pair<std::string, std::string>>{
+           {"block.rtog", "truncated stream (map block: 1099511627776 bytes announced"},
+           {"string.rtog", "corrupt stream (sensorModel: a 1073741824-byte string"}}) {
+    const std::string path = d + "/" + file;
+    std::cout << file << ": " << readAll(path).size() << " bytes\n";
+    EXPECT_LT(readAll(path).size(), 400u);
+    const Child c = spawn({"info", path});
+    EXPECT_EQ(c.rc, 1) << c.output;
+    EXPECT_NE(c.output.find(message), std::string::npos) << c.output;
+    EXPECT_LT(c.maxrss_kb, 200 * 1024) << file << ": peak memory " << c.maxrss_kb / 1024 << " MiB";
+  }
+}
+
+// One check for every number of every subcommand: finite, of the right sign, named in the error.
+TEST(CliInputs, NumericOptionsMustBeFiniteNumbers) {
+  const std::string tum = std::string("build --tum ") + RTOG_TEST_TUM_DIR + " ";
+  const std::string fast = "--stride 16 ", coarse = "--resolution 0.2 ";
+  std::string out;
+  const auto refused = [&](const std::string& args, const std::string& message) {
+    EXPECT_EQ(run(args, &out), 2) << args << ": " << out;
+    EXPECT_NE(out.find(message), std::string::npos) << args << ": " << out;
+  };
+  for (const std::string v : {"nan", "inf", "-inf", "NaN"}) {
+    refused(tum + fast + coarse + "--max-range " + v, "--max-range: must be a finite number");
+    refused(tum + fast + "--resolution " + v, "--resolution: must be a finite number");
+    refused("export " + smallMap() + " --png /dev/null --slice-z " + v, "--slice-z: must be a finite number");
+  }
+  refused(tum + fast + coarse + "--max-range -1", "--max-range: must be >= 0");
+  refused(tum + fast + coarse + "--max-range 10m", "--max-range: '10m' is not a number");
+  refused(tum + fast + "--resolution 0", "--resolution: must be > 0");
+  refused(tum + fast + "--resolution -0.1", "--resolution: must be > 0");
+  refused(tum + coarse + "--stride 0", "--stride: must lie in [1, 65536]");
+  refused(tum + coarse + "--stride 1.5", "--stride: '1.5' is not a whole number");
+  refused(tum + fast + coarse + "--threads 0", "--threads: must lie in [1, 256]");
+  // 0 is the explicit "no cut"; a good value still works.
+  EXPECT_EQ(run(tum + fast + coarse + "--max-range 0", &out), 0) << out;
+  EXPECT_EQ(run(tum + fast + coarse + "--max-range 3.5", &out), 0) << out;
+}
+
+}  // namespace
