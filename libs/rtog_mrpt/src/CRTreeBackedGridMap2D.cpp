@@ -19,6 +19,13 @@ IMPLEMENTS_SERIALIZABLE(CRTreeBackedGridMap2D, COccupancyGridMap2D, rtog)
 
 MAP_DEFINITION_REGISTER("rtog::CRTreeBackedGridMap2D,rtreeGridMap2D", rtog::CRTreeBackedGridMap2D)
 
+// Registered for CArchive right after its runtimeClassId is initialized (why not with
+// MRPT_INITIALIZER: CRTreeOccupancyGridMap.cpp).
+namespace {
+[[maybe_unused]] const bool registered_at_load =
+    (mrpt::rtti::registerClass(CLASS_ID(rtog::CRTreeBackedGridMap2D)), true);
+}  // namespace
+
 namespace rtog {
 
 CRTreeBackedGridMap2D::TMapDefinition::TMapDefinition() = default;
