@@ -347,10 +347,18 @@ CRTreeOccupancyGridMap::CRTreeOccupancyGridMap(double resolution)
   setGridFrame(-10, 10, -10, 10);
 }
 
-CRTreeOccupancyGridMap::CRTreeOccupancyGridMap(double resolution, const TInsertionOptions& io)
-    : insertionOptions(io), map_(io.toMapParams(resolution)) {
-  registerMrptClasses();
+namespace {
+// toMapParams() quantizes the probabilities as MRPT does (float to int casts): only valid ones
+// may reach it, or a NaN is undefined behaviour before validate() could refuse it.
+const CRTreeOccupancyGridMap::TInsertionOptions& validated(const CRTreeOccupancyGridMap::TInsertionOptions& io) {
   io.validate();
+  return io;
+}
+}  // namespace
+
+CRTreeOccupancyGridMap::CRTreeOccupancyGridMap(double resolution, const TInsertionOptions& io)
+    : insertionOptions(io), map_(validated(io).toMapParams(resolution)) {
+  registerMrptClasses();
   setGridFrame(-10, 10, -10, 10);
 }
 
