@@ -7,6 +7,8 @@
 #include <stdexcept>
 
 #include <mrpt/maps/COccupancyGridMap2D.h>
+#include <mrpt/obs/CObservation2DRangeScan.h>
+#include <mrpt/poses/CPose3D.h>
 
 #include "rtog/mrpt/CRTreeOccupancyGridMap.h"
 
@@ -33,4 +35,18 @@ TEST(FuzzRegressions, NaNProbabilityIsRefusedBeforeItIsQuantized) {
   CRTreeOccupancyGridMap m(0.1);
   m.insertionOptions.maxOccupancyUpdateCertainty = kNaN;
   EXPECT_THROW(m.loadFromGrid(grid), std::invalid_argument);
+}
+
+// rtog_fuzz_insert: the mrpt_grid preset's 2D scan runs were range-checked with a left shift of
+// the (negative) start cell, undefined before C++20; a scan taken at negative coordinates.
+TEST(FuzzRegressions, GridScanAtNegativeCoordinates) {
+  CRTreeOccupancyGridMap m(0.1);
+  ASSERT_TRUE(m.insertionOptions.mrptGrid());
+  mrpt::obs::CObservation2DRangeScan scan;
+  scan.aperture = static_cast<float>(M_PI);
+  scan.resizeScan(5);
+  for (std::size_t i = 0; i < 5; ++i) scan.setScanRange(i, 2.0f), scan.setScanRangeValidity(i, true);
+  EXPECT_TRUE(m.insertObservation(scan, mrpt::poses::CPose3D(-2.31, -1.72, 0, 0.4, 0, 0)));
+  EXPECT_GT(m.map().leafCount(), 0u);
+  EXPECT_EQ(m.map().checkInvariants(), "");
 }
