@@ -7,9 +7,12 @@
 #include <stdexcept>
 
 #include <mrpt/maps/COccupancyGridMap2D.h>
+#include <mrpt/maps/CSimplePointsMap.h>
 #include <mrpt/obs/CObservation2DRangeScan.h>
+#include <mrpt/obs/CObservationPointCloud.h>
 #include <mrpt/poses/CPose3D.h>
 
+#include "rtog/mrpt/CRTreeBackedGridMap2D.h"
 #include "rtog/mrpt/CRTreeOccupancyGridMap.h"
 
 using rtog::CRTreeOccupancyGridMap;
@@ -49,4 +52,30 @@ TEST(FuzzRegressions, GridScanAtNegativeCoordinates) {
   EXPECT_TRUE(m.insertObservation(scan, mrpt::poses::CPose3D(-2.31, -1.72, 0, 0.4, 0, 0)));
   EXPECT_GT(m.map().leafCount(), 0u);
   EXPECT_EQ(m.map().checkInvariants(), "");
+}
+
+// rtog_fuzz_insert: CRTreeBackedGridMap2D grew its 2D cells over the beams' bounding box, in
+// which an end point with an infinite coordinate, cut at maxDistanceInsertion, became NaN:
+// MRPT's resizeGrid then failed an assertion (abort). End points the R-tree map skips are left
+// out of the box.
+TEST(FuzzRegressions, BackedGridIgnoresNonFiniteEndPoints) {
+  for (const bool range_limit : {true, false}) {
+    rtog::CRTreeOccupancyGridMap::TInsertionOptions io;
+    io.sensorModelPreset = "octomap";
+    io.maxDistanceInsertion = range_limit ? 5.0f : 0.0f;
+    rtog::CRTreeBackedGridMap2D g(0.1);
+    g.rtreeMap() = CRTreeOccupancyGridMap(0.1, io);
+    auto pts = mrpt::maps::CSimplePointsMap::Create();
+    pts->insertPoint(1.0f, 1.0f, 0.0f);
+    pts->insertPoint(std::numeric_limits<float>::infinity(), 0.5f, 0.0f);
+    pts->insertPoint(0.5f, -std::numeric_limits<float>::infinity(), 0.0f);
+    pts->insertPoint(kNaN, 0.5f, 0.0f);
+    pts->insertPoint(1e30f, 2.0f, 0.0f);  // finite, without a key
+    mrpt::obs::CObservationPointCloud obs;
+    obs.pointcloud = pts;
+    EXPECT_TRUE(g.insertObservation(obs, mrpt::poses::CPose3D(0.2, 0.3, 0.0, 0, 0, 0)));
+    EXPECT_GT(g.rtreeMap().map().leafCount(), 0u);
+    EXPECT_LT(g.getSizeX() * g.getSizeY(), 1000000u);  // the grid holds the finite beam, not more
+    EXPECT_NE(g.getPos(1.05f, 1.05f), 0.5f);  // the finite beam's end is in the 2D view
+  }
 }
