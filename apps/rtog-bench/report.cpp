@@ -230,8 +230,9 @@ void writeMarkdown(const std::vector<Result>& results, const RunInfo& run, const
          << " |\n";
     }
     if (!oct || !beam) continue;
-    const auto row = [&](const std::string& target, double value, bool pass, const std::string& unit,
-                         const char* not_a_target = nullptr) {
+    // C++17 lambdas cannot capture structured bindings (clang rejects it; C++20 allows it).
+    const auto row = [&, &ds = ds, &res = res](const std::string& target, double value, bool pass,
+                                               const std::string& unit, const char* not_a_target = nullptr) {
       md << "| " << ds << " | " << res << " | " << target << " | " << std::setprecision(3) << value << unit << " | "
          << (not_a_target ? not_a_target : pass ? "PASS" : "FAIL") << " |\n";
     };

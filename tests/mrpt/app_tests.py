@@ -46,7 +46,7 @@ class Runner:
     def app(self, args, cwd, preload=True, timeout=280, seed=1):
         """Runs an unmodified MRPT app; the seed shim pins MRPT's clock-seeded generator."""
         env = dict(os.environ)
-        env["LD_PRELOAD"] = " ".join([self.a.seed_shim] + ([self.a.plugin] if preload else []))
+        env["LD_PRELOAD"] = " ".join(self.a.preload_first + [self.a.seed_shim] + ([self.a.plugin] if preload else []))
         env["RTOG_TEST_SEED"] = str(seed)
         env.pop("DISPLAY", None)
         t0 = time.time()
@@ -309,8 +309,9 @@ def gui_app(r, d, args, preload, png, settle=12):
     screenshot and returns (process maps text, colours)."""
     x = Xvfb(d)
     env = dict(os.environ, DISPLAY=x.display, HOME=d)
-    if preload:
-        env["LD_PRELOAD"] = r.a.plugin
+    libs = r.a.preload_first + ([r.a.plugin] if preload else [])
+    if libs:
+        env["LD_PRELOAD"] = " ".join(libs)
     log = open(os.path.join(d, os.path.basename(args[0]) + ".log"), "w")
     p = subprocess.Popen(args, cwd=d, env=env, stdin=subprocess.DEVNULL, stdout=log, stderr=subprocess.STDOUT)
     try:
@@ -382,6 +383,8 @@ def main():
     p.add_argument("--config-dir", required=True)
     p.add_argument("--datasets", required=True)
     p.add_argument("--work-dir", required=True)
+    # A sanitizer runtime that must be loaded before our (instrumented) libraries in the apps.
+    p.add_argument("--preload-first", action="append", default=[])
     p.add_argument("case")
     a = p.parse_args()
     fn = globals().get("case_" + a.case)

@@ -105,7 +105,9 @@ TEST(MapSerialization, CloneAndMultiMapCopyAreFastAndEqual) {
   const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t1).count() / 10;
   std::printf("map with %zu leaves: one serialization copy %.2f ms (clone %.2f ms)\n", m.map().leafCount(), ms,
               std::chrono::duration<double, std::milli>(t1 - t0).count());
+#ifndef RTOG_SANITIZED  // sanitizers slow the copy down several times over: no time bound there
   EXPECT_LT(ms, 200.0);
+#endif
 }
 
 TEST(MapSerialization, CorruptStreamThrows) {

@@ -78,9 +78,10 @@ InsertStats OccupancyMap::applyStepRuns(std::int32_t z, const StepRun* runs, std
     const StepRun& r = runs[i];
     extend(r.x, r.y);
     if (r.count > 0) {
+      // Scaled by multiplying: a left shift of a negative start cell is undefined before C++20.
+      constexpr std::int64_t kOne = std::int64_t{1} << kRunFracBits;
       const std::int64_t k = r.count - 1;
-      extend(((std::int64_t{r.x} << kRunFracBits) + k * r.dx) >> kRunFracBits,
-             ((std::int64_t{r.y} << kRunFracBits) + k * r.dy) >> kRunFracBits);
+      extend((r.x * kOne + k * r.dx) >> kRunFracBits, (r.y * kOne + k * r.dy) >> kRunFracBits);
     }
     if (r.end) extend(r.end_x, r.end_y);
     steps += r.count + (r.end ? 1 : 0);

@@ -19,6 +19,13 @@ IMPLEMENTS_SERIALIZABLE(CRTreeBackedGridMap2D, COccupancyGridMap2D, rtog)
 
 MAP_DEFINITION_REGISTER("rtog::CRTreeBackedGridMap2D,rtreeGridMap2D", rtog::CRTreeBackedGridMap2D)
 
+// Registered for CArchive right after its runtimeClassId is initialized (why not with
+// MRPT_INITIALIZER: CRTreeOccupancyGridMap.cpp).
+namespace {
+[[maybe_unused]] const bool registered_at_load =
+    (mrpt::rtti::registerClass(CLASS_ID(rtog::CRTreeBackedGridMap2D)), true);
+}  // namespace
+
 namespace rtog {
 
 CRTreeBackedGridMap2D::TMapDefinition::TMapDefinition() = default;
@@ -128,12 +135,19 @@ bool CRTreeBackedGridMap2D::internal_insertObservation(const mrpt::obs::CObserva
   if (!rtree_.extractBeams(obs, pose, beams, true)) return false;
   if (!rtree_.insertObservation(obs, robotPose)) return false;
   // The region the beams can have changed: their bounding box, beams cut at maxDistanceInsertion.
+  // End points the R-tree map skipped (non-finite, or without a key) changed nothing: left out,
+  // or one infinite coordinate (cut to NaN) would make the grid's resize assert.
+  const Lattice& lat = rtree_.map().lattice();
+  Key unused;
+  if (!lat.tryKey(beams.origin, unused)) return true;
   double x0 = beams.origin.x(), x1 = x0, y0 = beams.origin.y(), y1 = y0;
   const double maxd = rtree_.insertionOptions.maxDistanceInsertion;
   for (const auto& p : beams.points) {
     Eigen::Vector3d q = p.cast<double>();
+    if (!q.allFinite()) continue;
     const Eigen::Vector3d d = q - beams.origin;
     if (maxd > 0 && d.norm() > maxd) q = beams.origin + d * (maxd / d.norm());
+    if (!lat.tryKey(q, unused)) continue;
     x0 = std::min(x0, q.x()), x1 = std::max(x1, q.x());
     y0 = std::min(y0, q.y()), y1 = std::max(y1, q.y());
   }

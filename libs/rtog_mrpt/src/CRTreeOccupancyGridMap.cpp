@@ -1,18 +1,20 @@
 // rtog::CRTreeOccupancyGridMap: construction, options, registration with MRPT.
 #include "rtog/mrpt/CRTreeOccupancyGridMap.h"
 
+#include <atomic>
 #include <cmath>
+#include <mutex>
 #include <sstream>
 #include <stdexcept>
 
 #include <mrpt/config/CConfigFileBase.h>
 #include <mrpt/core/bits_math.h>
-#include <mrpt/core/initializer.h>
 #include <mrpt/rtti/CObject.h>
 
 #include "mrpt_grid.hpp"
 #include "options_check.hpp"
 #include "rtog/mrpt/CRTreeBackedGridMap2D.h"
+#include "rtog/mrpt/register_classes.h"
 #include "CRTreeOccupancyGridMap_grid2d.hpp"
 
 using namespace mrpt::maps;
@@ -23,12 +25,40 @@ MAP_DEFINITION_REGISTER("rtog::CRTreeOccupancyGridMap,rtreeOccupancyGrid", rtog:
 
 // MAP_DEFINITION_REGISTER makes CMultiMetricMap able to create the map from an .ini; the RTTI
 // registration lets CArchive deserialize it (rbpf-slam copies maps through serialization).
-MRPT_INITIALIZER(rtog_mrpt_register_classes) {
-  mrpt::rtti::registerClass(CLASS_ID(rtog::CRTreeOccupancyGridMap));
-  mrpt::rtti::registerClass(CLASS_ID(rtog::CRTreeBackedGridMap2D));
-}
+//
+// Not with MRPT_INITIALIZER: on Linux that is __attribute__((constructor)), whose order against
+// this file's dynamic initializers is the compiler's choice. runtimeClassId holds a std::function,
+// so it is initialized dynamically; clang runs the constructor first, MRPT's registerClass then
+// sees a null class name, warns and drops the class, and every CArchive read of the map fails
+// with "not registered" (GCC happens to run it last). A variable defined after
+// IMPLEMENTS_SERIALIZABLE is initialized after runtimeClassId by every compiler (ordered
+// initialization within one translation unit); CRTreeBackedGridMap2D.cpp does the same for its
+// class. registerMrptClasses() registers both again on first use, for code that runs before the
+// library's initializers are done or links it in a way that skips them.
+namespace {
+[[maybe_unused]] const bool registered_at_load =
+    (mrpt::rtti::registerClass(CLASS_ID(rtog::CRTreeOccupancyGridMap)), true);
+}  // namespace
 
 namespace rtog {
+
+void registerMrptClasses() {
+  static std::atomic<bool> done{false};
+  if (done.load(std::memory_order_acquire)) return;
+  static std::mutex mutex;
+  std::lock_guard<std::mutex> lock(mutex);
+  const mrpt::rtti::TRuntimeClassId* ids[] = {CLASS_ID(CRTreeOccupancyGridMap), CLASS_ID(CRTreeBackedGridMap2D)};
+  // Called from another file's static initializer, an id may not be initialized yet: leave it
+  // to its own file's registration (and to a later call) instead of handing MRPT a null name.
+  bool all = true;
+  for (const auto* id : ids) {
+    if (id->className)
+      mrpt::rtti::registerClass(id);
+    else
+      all = false;
+  }
+  done.store(all, std::memory_order_release);
+}
 
 namespace {
 [[noreturn]] void badOption(const std::string& section, const std::string& key, const std::string& why) {
@@ -313,12 +343,22 @@ mrpt::maps::CMetricMap* CRTreeOccupancyGridMap::internal_CreateFromMapDefinition
 
 CRTreeOccupancyGridMap::CRTreeOccupancyGridMap(double resolution)
     : map_(insertionOptions.toMapParams(resolution)) {
+  registerMrptClasses();  // a process that makes a map can read one back (see above)
   setGridFrame(-10, 10, -10, 10);
 }
 
-CRTreeOccupancyGridMap::CRTreeOccupancyGridMap(double resolution, const TInsertionOptions& io)
-    : insertionOptions(io), map_(io.toMapParams(resolution)) {
+namespace {
+// toMapParams() quantizes the probabilities as MRPT does (float to int casts): only valid ones
+// may reach it, or a NaN is undefined behaviour before validate() could refuse it.
+const CRTreeOccupancyGridMap::TInsertionOptions& validated(const CRTreeOccupancyGridMap::TInsertionOptions& io) {
   io.validate();
+  return io;
+}
+}  // namespace
+
+CRTreeOccupancyGridMap::CRTreeOccupancyGridMap(double resolution, const TInsertionOptions& io)
+    : insertionOptions(io), map_(validated(io).toMapParams(resolution)) {
+  registerMrptClasses();
   setGridFrame(-10, 10, -10, 10);
 }
 

@@ -72,6 +72,7 @@ void CRTreeOccupancyGridMap::loadFromGrid(const mrpt::maps::COccupancyGridMap2D&
   // Widen the clamping only as far as the grid's most certain cells need, so that they keep
   // their values (MRPT's grid saturates at +-127 only).
   TInsertionOptions io = insertionOptions;
+  io.validate();  // before toMapParams(), which must not see a NaN (see validated())
   const LogOddsModel before(io.toMapParams(res).log_odds);
   const float vmin = -static_cast<float>(lmax) / 16.0f, vmax = -static_cast<float>(lmin) / 16.0f;
   if (vmin < before.clampMin()) io.clampingMin = boundProbability(vmin, -1);

@@ -14,6 +14,7 @@
 #include "rtog/mrpt/CRTreeOccupancyGridMap.h"
 #include "archive_read.hpp"
 #include "mrpt_grid.hpp"
+#include "rtog/mrpt/register_classes.h"
 
 namespace rtog {
 
@@ -145,6 +146,7 @@ void CRTreeOccupancyGridMap::saveToFile(const std::string& file) const {
 std::shared_ptr<CRTreeOccupancyGridMap> CRTreeOccupancyGridMap::loadFromFile(const std::string& file) {
   mrpt::io::CFileGZInputStream f;
   if (!f.open(file)) throw std::runtime_error("rtog::CRTreeOccupancyGridMap: cannot read '" + file + "'");
+  registerMrptClasses();  // ReadObject finds the class by name in MRPT's registry
   auto ar = mrpt::serialization::archiveFrom(f);
   auto obj = ar.ReadObject();
   auto m = std::dynamic_pointer_cast<CRTreeOccupancyGridMap>(obj);

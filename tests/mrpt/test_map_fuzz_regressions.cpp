@@ -1,0 +1,81 @@
+// Inputs the fuzz targets (fuzz/, doc/reliability_fuzz.md) found to misbehave, one case each.
+// Some misbehaved only as undefined behaviour: those cases fail before their fix in the
+// sanitizer builds (.ci/asan, .ci/fuzz), which report it, and pass silently elsewhere.
+#include <gtest/gtest.h>
+
+#include <limits>
+#include <stdexcept>
+
+#include <mrpt/maps/COccupancyGridMap2D.h>
+#include <mrpt/maps/CSimplePointsMap.h>
+#include <mrpt/obs/CObservation2DRangeScan.h>
+#include <mrpt/obs/CObservationPointCloud.h>
+#include <mrpt/poses/CPose3D.h>
+
+#include "rtog/mrpt/CRTreeBackedGridMap2D.h"
+#include "rtog/mrpt/CRTreeOccupancyGridMap.h"
+
+using rtog::CRTreeOccupancyGridMap;
+
+namespace {
+constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+}
+
+// rtog_fuzz_insert: a NaN probability reached MRPT's int8 quantization (a float to integer
+// cast: undefined) in the constructor, before the options were validated.
+TEST(FuzzRegressions, NaNProbabilityIsRefusedBeforeItIsQuantized) {
+  for (const char* preset : {"mrpt_grid", "octomap"}) {
+    CRTreeOccupancyGridMap::TInsertionOptions io;
+    io.sensorModelPreset = preset;
+    io.maxOccupancyUpdateCertainty = kNaN;
+    EXPECT_THROW(CRTreeOccupancyGridMap(0.1, io), std::invalid_argument) << preset;
+    io.maxOccupancyUpdateCertainty = 0.7f;
+    io.maxFreenessUpdateCertainty = kNaN;
+    EXPECT_THROW(CRTreeOccupancyGridMap(0.1, io), std::invalid_argument) << preset;
+  }
+  // The same options set on a map and then used by loadFromGrid.
+  mrpt::maps::COccupancyGridMap2D grid(-1.0f, 1.0f, -1.0f, 1.0f, 0.1f);
+  CRTreeOccupancyGridMap m(0.1);
+  m.insertionOptions.maxOccupancyUpdateCertainty = kNaN;
+  EXPECT_THROW(m.loadFromGrid(grid), std::invalid_argument);
+}
+
+// rtog_fuzz_insert: the mrpt_grid preset's 2D scan runs were range-checked with a left shift of
+// the (negative) start cell, undefined before C++20; a scan taken at negative coordinates.
+TEST(FuzzRegressions, GridScanAtNegativeCoordinates) {
+  CRTreeOccupancyGridMap m(0.1);
+  ASSERT_TRUE(m.insertionOptions.mrptGrid());
+  mrpt::obs::CObservation2DRangeScan scan;
+  scan.aperture = static_cast<float>(M_PI);
+  scan.resizeScan(5);
+  for (std::size_t i = 0; i < 5; ++i) scan.setScanRange(i, 2.0f), scan.setScanRangeValidity(i, true);
+  EXPECT_TRUE(m.insertObservation(scan, mrpt::poses::CPose3D(-2.31, -1.72, 0, 0.4, 0, 0)));
+  EXPECT_GT(m.map().leafCount(), 0u);
+  EXPECT_EQ(m.map().checkInvariants(), "");
+}
+
+// rtog_fuzz_insert: CRTreeBackedGridMap2D grew its 2D cells over the beams' bounding box, in
+// which an end point with an infinite coordinate, cut at maxDistanceInsertion, became NaN:
+// MRPT's resizeGrid then failed an assertion (abort). End points the R-tree map skips are left
+// out of the box.
+TEST(FuzzRegressions, BackedGridIgnoresNonFiniteEndPoints) {
+  for (const bool range_limit : {true, false}) {
+    rtog::CRTreeOccupancyGridMap::TInsertionOptions io;
+    io.sensorModelPreset = "octomap";
+    io.maxDistanceInsertion = range_limit ? 5.0f : 0.0f;
+    rtog::CRTreeBackedGridMap2D g(0.1);
+    g.rtreeMap() = CRTreeOccupancyGridMap(0.1, io);
+    auto pts = mrpt::maps::CSimplePointsMap::Create();
+    pts->insertPoint(1.0f, 1.0f, 0.0f);
+    pts->insertPoint(std::numeric_limits<float>::infinity(), 0.5f, 0.0f);
+    pts->insertPoint(0.5f, -std::numeric_limits<float>::infinity(), 0.0f);
+    pts->insertPoint(kNaN, 0.5f, 0.0f);
+    pts->insertPoint(1e30f, 2.0f, 0.0f);  // finite, without a key
+    mrpt::obs::CObservationPointCloud obs;
+    obs.pointcloud = pts;
+    EXPECT_TRUE(g.insertObservation(obs, mrpt::poses::CPose3D(0.2, 0.3, 0.0, 0, 0, 0)));
+    EXPECT_GT(g.rtreeMap().map().leafCount(), 0u);
+    EXPECT_LT(g.getSizeX() * g.getSizeY(), 1000000u);  // the grid holds the finite beam, not more
+    EXPECT_NE(g.getPos(1.05f, 1.05f), 0.5f);  // the finite beam's end is in the 2D view
+  }
+}
