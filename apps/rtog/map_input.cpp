@@ -76,6 +76,21 @@ std::runtime_error trailing(std::uint64_t n) {
                             " after the map (a damaged file, or not one map?)");
 }
 
+/// One line of what went wrong: MRPT wraps an exception thrown while reading an object in its
+/// own ("==== MRPT exception ====", the original, a location, a call stack).
+std::string reason(const std::exception& e) {
+  std::string s = e.what();
+  for (std::size_t at; (at = s.find("Original exception:\n")) != std::string::npos;) s = s.substr(at + 20);
+  if (s.rfind("==== MRPT exception ====", 0) == 0) {
+    const std::size_t at = s.find("Message:");
+    s = at == std::string::npos ? std::string() : s.substr(at + 8);
+    s.erase(0, s.find_first_not_of(' '));
+  }
+  s = s.substr(0, s.find('\n'));
+  if (s.find("Cannot read requested number of bytes") != std::string::npos) return "truncated stream (the archive ends early)";
+  return s.empty() ? "unreadable MRPT archive" : s;
+}
+
 OccupancyMap readMrptMap(std::istream& in) {
   GzipInput gz(in);
   auto ar = mrpt::serialization::archiveFrom(gz);
@@ -84,7 +99,7 @@ OccupancyMap readMrptMap(std::istream& in) {
     obj = ar.ReadObject();
   } catch (const std::exception& e) {
     if (gz.truncated()) throw std::runtime_error("truncated gzip stream (the file ends early)");
-    throw;
+    throw std::runtime_error(reason(e));
   }
   const auto m = std::dynamic_pointer_cast<CRTreeOccupancyGridMap>(obj);
   if (!m)

@@ -23,6 +23,18 @@
 
 namespace rtog_cli_test {
 
+/// What the tests of this process made under TempDir(), removed when the process ends.
+struct Leftovers {
+  std::vector<std::string> paths;
+  ~Leftovers() {
+    for (const auto& p : paths) std::system(("rm -rf '" + p + "'").c_str());
+  }
+};
+inline Leftovers& leftovers() {
+  static Leftovers l;
+  return l;
+}
+
 inline std::string exe() {
   const char* e = std::getenv("RTOG_TEST_EXE");
   return e && *e ? e : RTOG_EXE;
@@ -44,6 +56,8 @@ inline void writeAll(const std::string& path, const std::string& bytes) {
 inline int run(const std::string& args, std::string* output = nullptr, const std::string& prefix = "") {
   // Per process: ctest runs the cases in parallel processes.
   const std::string out_file = ::testing::TempDir() + "/rtog_cli_run_" + std::to_string(getpid()) + ".txt";
+  static const bool once = (leftovers().paths.push_back(out_file), true);
+  (void)once;
   const int rc = std::system((prefix + exe() + " " + args + " > " + out_file + " 2>&1").c_str());
   if (output) *output = readAll(out_file);
   return WIFEXITED(rc) ? WEXITSTATUS(rc) : 128 + WTERMSIG(rc);
@@ -60,6 +74,8 @@ struct Child {
 /// write past the limit fails with EFBIG as on a full disk instead of killing the process).
 inline Child spawn(const std::vector<std::string>& args, long file_size_limit = -1) {
   const std::string out_file = ::testing::TempDir() + "/rtog_cli_spawn_" + std::to_string(getpid()) + ".txt";
+  static const bool once = (leftovers().paths.push_back(out_file), true);
+  (void)once;
   Child c;
   std::cout.flush();  // else the child inherits (and writes) what this process had buffered
   std::fflush(nullptr);
@@ -92,6 +108,7 @@ inline Child spawn(const std::vector<std::string>& args, long file_size_limit = 
 inline std::string scratch(const std::string& name) {
   const std::string d = ::testing::TempDir() + "/rtog_" + name + "_" + std::to_string(getpid());
   EXPECT_EQ(std::system(("rm -rf '" + d + "' && mkdir -p '" + d + "'").c_str()), 0);
+  leftovers().paths.push_back(d);
   return d;
 }
 
@@ -116,6 +133,7 @@ inline bool isSymlink(const std::string& p) {
 inline const std::string& smallMap() {
   static const std::string path = [] {
     const std::string p = ::testing::TempDir() + "/rtog_cli_small_" + std::to_string(getpid()) + ".rtog";
+    leftovers().paths.push_back(p);
     std::string out;
     EXPECT_EQ(run(std::string("build --tum ") + RTOG_TEST_TUM_DIR + " --resolution 0.2 --stride 16 --out " + p, &out), 0)
         << out;

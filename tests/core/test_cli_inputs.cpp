@@ -65,6 +65,18 @@ TEST(CliInputs, TrailingBytesAfterAMapAreAnError) {
     EXPECT_EQ(run("info " + d + "/" + file, &out), 1) << file << ": " << out;
     EXPECT_NE(out.find(n + " after the map"), std::string::npos) << file << ": " << out;
   }
+  // A damaged archive inside a good gzip stream: MRPT's exceptions told in one line.
+  const std::string archive = rtog_test::archiveBytes(m);
+  writeAll(d + "/gz_cut.rtog", rtog_test::gzip(archive.substr(0, 100)));
+  std::string renamed = archive;
+  renamed[renamed.find("CRTreeOccupancyGridMap") + 21] = 'q';
+  writeAll(d + "/gz_class.rtog", rtog_test::gzip(renamed));
+  for (const auto& [file, message] : std::vector<std::pair<std::string, std::string>>{
+           {"gz_cut.rtog", "truncated stream (the archive ends early)"},
+           {"gz_class.rtog", "Stored object has class 'rtog::CRTreeOccupancyGridMaq' which is not registered!"}}) {
+    EXPECT_EQ(run("info " + d + "/" + file, &out), 1) << file << ": " << out;
+    EXPECT_EQ(out, "rtog: error: '" + d + "/" + file + "': " + message + "\n");
+  }
   // Missing bytes, no bytes, a directory: each its own reason.
   const std::string whole = readAll(smallMap());
   writeAll(d + "/cut.rtog", whole.substr(0, whole.size() / 2));
