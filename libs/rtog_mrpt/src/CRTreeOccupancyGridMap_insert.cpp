@@ -1,5 +1,7 @@
 // rtog::CRTreeOccupancyGridMap: turning MRPT observations into beams and inserting them.
 #include <cmath>
+#include <stdexcept>
+#include <string>
 
 #include <mrpt/maps/CPointsMap.h>
 #include <mrpt/maps/CSimplePointsMap.h>
@@ -18,6 +20,14 @@ namespace rtog {
 using mrpt::poses::CPose3D;
 
 namespace {
+
+// Arrays of one point cloud that disagree in length (a damaged or hand-made observation): read
+// past the shortest, they would be undefined behaviour.
+void requireSameSizes(const char* what, std::size_t x, std::size_t y, std::size_t z) {
+  if (x != y || x != z)
+    throw std::invalid_argument(std::string("rtog::CRTreeOccupancyGridMap: ") + what + " arrays differ in length (x " +
+                                std::to_string(x) + ", y " + std::to_string(y) + ", z " + std::to_string(z) + ")");
+}
 
 // A pose's rotation and translation taken out once per observation: CPose3D::composePoint is
 // a library call per point. Same arithmetic, same order.
@@ -209,6 +219,7 @@ bool CRTreeOccupancyGridMap::extractBeams(const mrpt::obs::CObservation& obs, co
             src = &tmp;
           }
           const auto& pcl = src->point_cloud;
+          requireSameSizes("CObservationVelodyneScan point_cloud", pcl.x.size(), pcl.y.size(), pcl.z.size());
           for (std::size_t i = 0; i < pcl.x.size(); i += dec) {
             if (!std::isfinite(pcl.x[i]) || !std::isfinite(pcl.y[i]) || !std::isfinite(pcl.z[i])) {
               ++invalid;
@@ -237,6 +248,8 @@ bool CRTreeOccupancyGridMap::extractBeams(const mrpt::obs::CObservation& obs, co
     const Frame frame(sensor);
     if (!depth->hasRangeImage) {
       if (!depth->hasPoints3D) return false;
+      requireSameSizes("CObservation3DRangeScan points3D", depth->points3D_x.size(), depth->points3D_y.size(),
+                       depth->points3D_z.size());
       // Only the point cloud was stored (sensor frame).
       setOrigin(sensor, out);
       for (std::size_t i = 0; i < depth->points3D_x.size(); i += dec) {
