@@ -1,10 +1,11 @@
-// Linked into the fuzz targets that read lengths from their input: operator new refuses (throws
-// std::bad_alloc) a single allocation above RTOG_FUZZ_ALLOC_CAP_MB (default 256), as it would in
-// a process under a memory limit. A loader must then fail with an exception, which the targets
-// accept as a rejection. Without the cap, a length field claiming terabytes makes libFuzzer stop
-// at its first such input with "out-of-memory (malloc(...))" -- a known finding (issue #15,
-// "bounded loads": lengths are to be checked against the bytes that remain), which would keep the
-// target from looking further. Set RTOG_FUZZ_ALLOC_CAP_MB=0 to see those inputs fail again.
+// Linked into the fuzz target that reads lengths from its input (rtog_fuzz_mrpt_archive):
+// operator new refuses (throws std::bad_alloc) a single allocation above RTOG_FUZZ_ALLOC_CAP_MB
+// (default 32; libFuzzer's own largest is smaller), as it would in a process under a memory
+// limit. A loader must then fail with an exception, which the target accepts as a rejection.
+// Without the cap, a length field claiming terabytes makes libFuzzer stop at its first such
+// input with "out-of-memory (malloc(...))": a known finding (issue #15, "bounded loads": lengths
+// are to be checked against the bytes that remain), which would keep the target from looking
+// further. RTOG_FUZZ_ALLOC_CAP_MB=0 lifts the cap, to see those inputs fail again.
 #include <cstdlib>
 #include <cstddef>
 #include <new>
@@ -14,7 +15,7 @@ namespace {
 std::size_t capBytes() {
   static const std::size_t cap = [] {
     const char* s = std::getenv("RTOG_FUZZ_ALLOC_CAP_MB");
-    const long mb = s ? std::atol(s) : 256;
+    const long mb = s ? std::atol(s) : 32;  // each refused claim first costs a zero-fill up to it
     return mb > 0 ? static_cast<std::size_t>(mb) << 20 : ~std::size_t{0};
   }();
   return cap;

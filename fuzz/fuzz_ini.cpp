@@ -52,7 +52,10 @@ mrpt::obs::CObservation2DRangeScan fixedScan() {
   s.aperture = static_cast<float>(M_PI);
   s.maxRange = 10.0f;
   s.resizeScan(9);
-  for (std::size_t i = 0; i < 9; ++i) s.setScanRange(i, 0.5f + 0.25f * static_cast<float>(i)), s.setScanRangeValidity(i, true);
+  for (std::size_t i = 0; i < 9; ++i) {
+    s.setScanRange(i, 0.5f + 0.25f * static_cast<float>(i));
+    s.setScanRangeValidity(i, true);
+  }
   return s;
 }
 

@@ -52,7 +52,8 @@ std::vector<std::uint64_t> readAll(const CRTreeOccupancyGridMap& m, const std::v
     put(4 * i + 1, ray ? *ray : -1.0);
     const auto near = m.nearestObstacleDistance({p.pose.x(), p.pose.y(), 0.05}, 3.0);
     put(4 * i + 2, near ? *near : -1.0);
-    put(4 * i + 3, m.squareDistanceToClosestCorrespondence(static_cast<float>(p.pose.x()), static_cast<float>(p.pose.y())));
+    const float x = static_cast<float>(p.pose.x()), y = static_cast<float>(p.pose.y());
+    put(4 * i + 3, m.squareDistanceToClosestCorrespondence(x, y));
   }
   return bits;
 }

@@ -1,9 +1,7 @@
 // rtog::CRTreeOccupancyGridMap: construction, options, registration with MRPT.
 #include "rtog/mrpt/CRTreeOccupancyGridMap.h"
 
-#include <atomic>
 #include <cmath>
-#include <mutex>
 #include <sstream>
 #include <stdexcept>
 
@@ -24,41 +22,15 @@ IMPLEMENTS_SERIALIZABLE(CRTreeOccupancyGridMap, CMetricMap, rtog)
 MAP_DEFINITION_REGISTER("rtog::CRTreeOccupancyGridMap,rtreeOccupancyGrid", rtog::CRTreeOccupancyGridMap)
 
 // MAP_DEFINITION_REGISTER makes CMultiMetricMap able to create the map from an .ini; the RTTI
-// registration lets CArchive deserialize it (rbpf-slam copies maps through serialization).
-//
-// Not with MRPT_INITIALIZER: on Linux that is __attribute__((constructor)), whose order against
-// this file's dynamic initializers is the compiler's choice. runtimeClassId holds a std::function,
-// so it is initialized dynamically; clang runs the constructor first, MRPT's registerClass then
-// sees a null class name, warns and drops the class, and every CArchive read of the map fails
-// with "not registered" (GCC happens to run it last). A variable defined after
-// IMPLEMENTS_SERIALIZABLE is initialized after runtimeClassId by every compiler (ordered
-// initialization within one translation unit); CRTreeBackedGridMap2D.cpp does the same for its
-// class. registerMrptClasses() registers both again on first use, for code that runs before the
-// library's initializers are done or links it in a way that skips them.
+// registration lets CArchive deserialize it (rbpf-slam copies maps through serialization). It
+// is a variable defined after IMPLEMENTS_SERIALIZABLE, not MRPT_INITIALIZER: see
+// register_classes.cpp.
 namespace {
 [[maybe_unused]] const bool registered_at_load =
     (mrpt::rtti::registerClass(CLASS_ID(rtog::CRTreeOccupancyGridMap)), true);
 }  // namespace
 
 namespace rtog {
-
-void registerMrptClasses() {
-  static std::atomic<bool> done{false};
-  if (done.load(std::memory_order_acquire)) return;
-  static std::mutex mutex;
-  std::lock_guard<std::mutex> lock(mutex);
-  const mrpt::rtti::TRuntimeClassId* ids[] = {CLASS_ID(CRTreeOccupancyGridMap), CLASS_ID(CRTreeBackedGridMap2D)};
-  // Called from another file's static initializer, an id may not be initialized yet: leave it
-  // to its own file's registration (and to a later call) instead of handing MRPT a null name.
-  bool all = true;
-  for (const auto* id : ids) {
-    if (id->className)
-      mrpt::rtti::registerClass(id);
-    else
-      all = false;
-  }
-  done.store(all, std::memory_order_release);
-}
 
 namespace {
 [[noreturn]] void badOption(const std::string& section, const std::string& key, const std::string& why) {
