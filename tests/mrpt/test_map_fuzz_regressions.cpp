@@ -3,14 +3,18 @@
 // sanitizer builds (.ci/asan, .ci/fuzz), which report it, and pass silently elsewhere.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <limits>
+#include <vector>
 #include <stdexcept>
 
+#include <mrpt/io/CMemoryStream.h>
 #include <mrpt/maps/COccupancyGridMap2D.h>
 #include <mrpt/maps/CSimplePointsMap.h>
 #include <mrpt/obs/CObservation2DRangeScan.h>
 #include <mrpt/obs/CObservationPointCloud.h>
 #include <mrpt/poses/CPose3D.h>
+#include <mrpt/serialization/CArchive.h>
 
 #include "rtog/mrpt/CRTreeBackedGridMap2D.h"
 #include "rtog/mrpt/CRTreeOccupancyGridMap.h"
@@ -77,5 +81,36 @@ TEST(FuzzRegressions, BackedGridIgnoresNonFiniteEndPoints) {
     EXPECT_GT(g.rtreeMap().map().leafCount(), 0u);
     EXPECT_LT(g.getSizeX() * g.getSizeY(), 1000000u);  // the grid holds the finite beam, not more
     EXPECT_NE(g.getPos(1.05f, 1.05f), 0.5f);  // the finite beam's end is in the 2D view
+  }
+}
+
+// rtog_fuzz_mrpt_archive: a stored bool whose byte is neither 0 nor 1 was copied into a bool by
+// MRPT's operator>> (undefined behaviour when read: UBSan "load of value 114, which is not a valid
+// value for type 'bool'"). Every byte of the options set to 114 in turn: each load either fails
+// with a message or loads a map, and (in the sanitizer builds) reads no invalid bool.
+TEST(FuzzRegressions, StoredBoolsOtherThanZeroOrOneAreRefused) {
+  for (const bool backed : {false, true}) {
+    mrpt::io::CMemoryStream buf;
+    auto ar = mrpt::serialization::archiveFrom(buf);
+    if (backed) ar << rtog::CRTreeBackedGridMap2D(0.1);
+    else ar << CRTreeOccupancyGridMap(0.1);
+    const auto* p = static_cast<const unsigned char*>(buf.getRawBufferData());
+    const std::vector<unsigned char> bytes(p, p + buf.getTotalBytesCount());
+    std::size_t refused = 0, loaded = 0;
+    for (std::size_t i = 0; i < std::min<std::size_t>(bytes.size(), 400); ++i) {
+      if (bytes[i] > 1) continue;  // only the bytes a bool could be
+      std::vector<unsigned char> bad = bytes;
+      bad[i] = 114;
+      mrpt::io::CMemoryStream in;
+      in.assignMemoryNotOwn(bad.data(), bad.size());
+      auto ar2 = mrpt::serialization::archiveFrom(in);
+      try {
+        const auto obj = ar2.ReadObject();
+        ++loaded;
+      } catch (const std::exception&) {
+        ++refused;
+      }
+    }
+    EXPECT_GT(refused, 0u) << (backed ? "backed" : "rtree");
   }
 }

@@ -50,19 +50,19 @@ void CRTreeBackedGridMap2D::serializeFrom(mrpt::serialization::CArchive& in, uin
 
   TInsertionOptions io = insertionOptions;  // as MRPT: the fields the stream lacks stay
   TLikelihoodOptions lo = likelihoodOptions;
-  in >> io.mapAltitude >> io.useMapAltitude >> io.maxDistanceInsertion >> io.maxOccupancyUpdateCertainty >>
-      io.considerInvalidRangesAsFreeSpace >> io.decimation >> io.horizontalTolerance;
+  in >> io.mapAltitude >> archive::Flag{io.useMapAltitude, "useMapAltitude"} >> io.maxDistanceInsertion >> io.maxOccupancyUpdateCertainty >>
+      archive::Flag{io.considerInvalidRangesAsFreeSpace, "considerInvalidRangesAsFreeSpace"} >> io.decimation >> io.horizontalTolerance;
   int32_t method = 0;
   in >> method >> lo.LF_stdHit >> lo.LF_zHit >> lo.LF_zRandom >> lo.LF_maxRange >> lo.LF_decimation >>
-      lo.LF_maxCorrsDistance >> lo.LF_alternateAverageMethod >> lo.MI_exponent >> lo.MI_skip_rays >>
-      lo.MI_ratio_max_distance >> lo.rayTracing_useDistanceFilter >> lo.rayTracing_decimation >>
+      lo.LF_maxCorrsDistance >> archive::Flag{lo.LF_alternateAverageMethod, "LF_alternateAverageMethod"} >> lo.MI_exponent >> lo.MI_skip_rays >>
+      lo.MI_ratio_max_distance >> archive::Flag{lo.rayTracing_useDistanceFilter, "rayTracing_useDistanceFilter"} >> lo.rayTracing_decimation >>
       lo.rayTracing_stdHit >> lo.consensus_takeEachRange >> lo.consensus_pow;
   lo.OWA_weights = archive::readFloats(in, archive::kMaxWeights, kWho, "OWA_weights");
-  in >> lo.enableLikelihoodCache;
+  in >> archive::Flag{lo.enableLikelihoodCache, "enableLikelihoodCache"};
   lo.likelihoodMethod = static_cast<TLikelihoodMethod>(method);
   mrpt::maps::TMapGenericParams generic;
   in >> generic;
-  in >> io.CFD_features_gaussian_size >> io.CFD_features_median_size >> io.wideningBeamsWithDistance;
+  in >> io.CFD_features_gaussian_size >> io.CFD_features_median_size >> archive::Flag{io.wideningBeamsWithDistance, "wideningBeamsWithDistance"};
 
   CRTreeOccupancyGridMap rtree;  // bounded and validated by its own serializeFrom()
   in >> rtree;

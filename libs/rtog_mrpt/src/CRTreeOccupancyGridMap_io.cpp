@@ -68,21 +68,21 @@ void CRTreeOccupancyGridMap::serializeFrom(mrpt::serialization::CArchive& in, ui
   in >> io.maxOccupancyUpdateCertainty >> io.maxFreenessUpdateCertainty >> io.clampingMin >> io.clampingMax >>
       io.occupiedThreshold >> io.maxDistanceInsertion >> io.decimation >> io.decimation_3d_range;
   io.mergePolicy = archive::readString(in, archive::kMaxName, kWho, "mergePolicy");
-  in >> io.discretize >> threads >> io.rotatingScan_minElevation_deg >> io.rotatingScan_maxElevation_deg;
+  in >> archive::Flag{io.discretize, "discretize"} >> threads >> io.rotatingScan_minElevation_deg >> io.rotatingScan_maxElevation_deg;
   io.threads = threads;
   // Before version 2 the elevations were always stored, -15/15 being the defaults that stood
   // for "no calibration known": unset, so that the calibration now decides.
   if (version < 2 && io.rotatingScan_minElevation_deg == -15.0f && io.rotatingScan_maxElevation_deg == 15.0f)
     io.rotatingScan_minElevation_deg = io.rotatingScan_maxElevation_deg = std::numeric_limits<float>::quiet_NaN();
   io.planarCache = true;
-  if (version >= 1) in >> io.planarCache;
+  if (version >= 1) in >> archive::Flag{io.planarCache, "planarCache"};
   TGridFrame2D frame;
   if (version >= 2) {
     io.sensorModelPreset = archive::readString(in, archive::kMaxName, kWho, "sensorModelPreset");
-    in >> io.maxFreenessInvalidRanges >> io.considerInvalidRangesAsFreeSpace >> io.horizontalTolerance >>
-        io.useMapAltitude >> io.mapAltitude >> io.wideningBeamsWithDistance;
+    in >> io.maxFreenessInvalidRanges >> archive::Flag{io.considerInvalidRangesAsFreeSpace, "considerInvalidRangesAsFreeSpace"} >> io.horizontalTolerance >>
+        archive::Flag{io.useMapAltitude, "useMapAltitude"} >> io.mapAltitude >> archive::Flag{io.wideningBeamsWithDistance, "wideningBeamsWithDistance"};
     in >> frame.x_min >> frame.x_max >> frame.y_min >> frame.y_max >> frame.resolution >> frame.size_x >>
-        frame.size_y >> frame.has_layer >> frame.layer;
+        frame.size_y >> archive::Flag{frame.has_layer, "has_layer"} >> frame.layer;
   } else {
     io.sensorModelPreset = "octomap";
   }
@@ -90,16 +90,16 @@ void CRTreeOccupancyGridMap::serializeFrom(mrpt::serialization::CArchive& in, ui
   TGridViewOptions gv;
   int32_t method = 0;
   in >> method >> lo.LF_stdHit >> lo.LF_zHit >> lo.LF_zRandom >> lo.LF_maxRange >> lo.LF_decimation >>
-      lo.LF_maxCorrsDistance >> lo.LF_useSquareDist >> lo.enableLikelihoodCache >> lo.rayTracing_decimation >>
+      lo.LF_maxCorrsDistance >> archive::Flag{lo.LF_useSquareDist, "LF_useSquareDist"} >> archive::Flag{lo.enableLikelihoodCache, "enableLikelihoodCache"} >> lo.rayTracing_decimation >>
       lo.rayTracing_stdHit;
   if (version < 2) {  // 0/1: the likelihood field / ray tracing, as COccupancyGridMap3D
     if (method != 0 && method != 1) throw std::runtime_error(std::string(kWho) + ": corrupt stream (likelihood method)");
     method = method == 0 ? lmLikelihoodField_Thrun : lmRayTracing;  // the others stay defaults
   } else {
-    in >> lo.LF_alternateAverageMethod >> lo.MI_exponent >> lo.MI_skip_rays >> lo.MI_ratio_max_distance >>
-        lo.rayTracing_useDistanceFilter >> lo.consensus_takeEachRange >> lo.consensus_pow;
+    in >> archive::Flag{lo.LF_alternateAverageMethod, "LF_alternateAverageMethod"} >> lo.MI_exponent >> lo.MI_skip_rays >> lo.MI_ratio_max_distance >>
+        archive::Flag{lo.rayTracing_useDistanceFilter, "rayTracing_useDistanceFilter"} >> lo.consensus_takeEachRange >> lo.consensus_pow;
     lo.OWA_weights = archive::readFloats(in, archive::kMaxWeights, kWho, "OWA_weights");
-    in >> lo.scanLikelihoodOnGridView >> gv.gridView_minZ >> gv.gridView_maxZ;
+    in >> archive::Flag{lo.scanLikelihoodOnGridView, "scanLikelihoodOnGridView"} >> gv.gridView_minZ >> gv.gridView_maxZ;
   }
   if (method < lmMeanInformation || method > lmConsensusOWA)
     throw std::runtime_error(std::string(kWho) + ": corrupt stream (likelihood method)");

@@ -58,4 +58,13 @@ std::vector<float> readFloats(mrpt::serialization::CArchive& in, std::size_t max
   return v;
 }
 
+mrpt::serialization::CArchive& operator>>(mrpt::serialization::CArchive& in, Flag f) {
+  const auto byte = in.ReadAs<std::uint8_t>();
+  if (byte > 1)
+    throw std::runtime_error(std::string("rtog: corrupt stream (") + f.what + ": a bool stored as " +
+                             std::to_string(int(byte)) + ")");
+  f.value = byte == 1;
+  return in;
+}
+
 }  // namespace rtog::archive

@@ -33,4 +33,13 @@ std::vector<float> readFloats(mrpt::serialization::CArchive& in, std::size_t max
 void readBytes(mrpt::serialization::CArchive& in, std::uint64_t n, std::string& out, const char* who,
                const char* what);
 
+/// A bool as CArchive writes it (one byte), read as a byte and checked: MRPT's operator>> copies
+/// the byte into the bool, and a byte other than 0 or 1 is then not a valid bool (undefined
+/// behaviour wherever it is read). Use as `in >> archive::Flag{b, "name"}`.
+struct Flag {
+  bool& value;
+  const char* what;
+};
+mrpt::serialization::CArchive& operator>>(mrpt::serialization::CArchive& in, Flag f);
+
 }  // namespace rtog::archive
