@@ -10,6 +10,7 @@
 
 #include <mrpt/io/CMemoryStream.h>
 #include <mrpt/poses/CPose3D.h>
+#include <mrpt/rtti/CObject.h>
 #include <mrpt/serialization/CArchive.h>
 
 #include "rtog/mrpt/CRTreeBackedGridMap2D.h"
@@ -43,6 +44,11 @@ void exercise(const rtog::CRTreeOccupancyGridMap& m) {
 }  // namespace
 
 extern "C" int LLVMFuzzerInitialize(int*, char***) {
+  // Loading the library must have registered both classes (built with clang it once did not:
+  // doc/reliability_fuzz.md). Checked before registerMrptClasses() could paper over it, so that
+  // the CI run of this clang-built target fails if that comes back.
+  for (const char* name : {"rtog::CRTreeOccupancyGridMap", "rtog::CRTreeBackedGridMap2D"})
+    if (!mrpt::rtti::findRegisteredClass(name)) fail(std::string(name) + " is not registered after loading");
   rtog::registerMrptClasses();
   return 0;
 }

@@ -304,12 +304,15 @@ class Xvfb:
         self.p.wait(timeout=10)
 
 
-def gui_app(r, d, args, preload, png, settle=12):
+def gui_app(r, d, args, preload, png, settle=12, loads_plugin=None):
     """Starts a GUI app on a private Xvfb, checks it is still running after `settle` s, saves a
-    screenshot and returns (process maps text, colours)."""
+    screenshot and returns (process maps text, colours). `loads_plugin`: the app loads our library
+    itself (RawLogViewer -l), so a sanitizer runtime must come first as with `preload`."""
     x = Xvfb(d)
     env = dict(os.environ, DISPLAY=x.display, HOME=d)
-    libs = r.a.preload_first + ([r.a.plugin] if preload else [])
+    helper_env = dict(env)  # our helper scripts run without the app's preloads
+    ours = preload or loads_plugin
+    libs = (r.a.preload_first if ours else []) + ([r.a.plugin] if preload else [])
     if libs:
         env["LD_PRELOAD"] = " ".join(libs)
     log = open(os.path.join(d, os.path.basename(args[0]) + ".log"), "w")
@@ -320,7 +323,7 @@ def gui_app(r, d, args, preload, png, settle=12):
             fail("%s exited early with %d (see %s)" % (args[0], p.returncode, log.name))
         # No window manager on Xvfb: make the window fill the screen, let it redraw.
         subprocess.run([sys.executable, os.path.join(os.path.dirname(os.path.abspath(__file__)), "xresize.py"),
-                        "1280", "1024"], env=env, check=False)
+                        "1280", "1024"], env=helper_env, check=False)
         time.sleep(4)
         if p.poll() is not None:
             fail("%s exited after resizing with %d (see %s)" % (args[0], p.returncode, log.name))
@@ -342,7 +345,7 @@ def case_rawlogviewer(r):
     png = os.path.join(d, "RawLogViewer.png")
     maps, colours = gui_app(r, d, ["RawLogViewer", "-l", r.a.plugin, os.path.join(r.a.datasets,
                                                                                  "test_velodyne_VLP16.rawlog")],
-                            False, png)
+                            False, png, loads_plugin=True)
     if "librtog_mrpt" not in maps:
         fail("RawLogViewer -l did not load librtog_mrpt.so")
     if colours < 20:
