@@ -45,7 +45,7 @@ void exercise(const rtog::CRTreeOccupancyGridMap& m) {
 
 extern "C" int LLVMFuzzerInitialize(int*, char***) {
   // Loading the library must have registered both classes (built with clang it once did not:
-  // doc/reliability_fuzz.md). Checked before registerMrptClasses() could paper over it, so that
+  // doc/reliability.md). Checked before registerMrptClasses() could paper over it, so that
   // the CI run of this clang-built target fails if that comes back.
   for (const char* name : {"rtog::CRTreeOccupancyGridMap", "rtog::CRTreeBackedGridMap2D"})
     if (!mrpt::rtti::findRegisteredClass(name)) fail(std::string(name) + " is not registered after loading");

@@ -1,4 +1,4 @@
-// Inputs the fuzz targets (fuzz/, doc/reliability_fuzz.md) found to misbehave, one case each.
+// Inputs the fuzz targets (fuzz/, doc/reliability.md) found to misbehave, one case each.
 // Some misbehaved only as undefined behaviour: those cases fail before their fix in the
 // sanitizer builds (.ci/asan, .ci/fuzz), which report it, and pass silently elsewhere.
 #include <gtest/gtest.h>
