@@ -113,27 +113,4 @@ TEST(FuzzRegressions, StoredBoolsOtherThanZeroOrOneAreRefused) {
     }
     EXPECT_GT(refused, 0u) << (backed ? "backed" : "rtree");
   }
-
-// rtog_fuzz_insert: scored on the 2D view, MRPT's cells-difference (and mean-information) method
-// inserts the scan into a grid that it grows to every valid end point: a pose 6e8 m away (or a
-// valid range of 1e9 m) made MRPT's resizeGrid abort (an assertion). Such poses go to the native
-// path, such ranges are no returns for those methods.
-TEST(FuzzRegressions, GridViewLikelihoodOfAHugeRange) {
-  CRTreeOccupancyGridMap m(0.1);
-  mrpt::obs::CObservation2DRangeScan scan;
-  scan.aperture = static_cast<float>(M_PI);
-  scan.maxRange = 8.0f;
-  scan.resizeScan(7);
-  for (std::size_t i = 0; i < 7; ++i) scan.setScanRange(i, 2.0f), scan.setScanRangeValidity(i, true);
-  ASSERT_TRUE(m.insertObservation(scan, mrpt::poses::CPose3D()));
-  scan.setScanRange(3, 1e9f);
-  scan.setScanRange(4, std::numeric_limits<float>::infinity());
-  scan.maxRange = 1e9f;  // a driver's "no limit"
-  for (const auto method : {CRTreeOccupancyGridMap::lmCellsDifference, CRTreeOccupancyGridMap::lmMeanInformation}) {
-    m.likelihoodOptions.likelihoodMethod = method;
-    ASSERT_TRUE(m.likelihoodOptions.scanLikelihoodOnGridView);
-    (void)m.computeObservationLikelihood(scan, mrpt::poses::CPose3D(0.05, 0.0, 0.0, 0.01, 0, 0));
-    (void)m.computeObservationLikelihood(scan, mrpt::poses::CPose3D(-6e8, 3.0, 0.0, 0.01, 0, 0));  // far away
-  }
-  EXPECT_EQ(m.map().checkInvariants(), "");
 }

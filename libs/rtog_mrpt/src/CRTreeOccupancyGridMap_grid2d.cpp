@@ -278,39 +278,6 @@ std::optional<double> CRTreeOccupancyGridMap::gridViewLikelihood(const mrpt::obs
     if ((*need)[0] < lo.x() - r || (*need)[1] < lo.y() - r || (*need)[2] > hi.x() + r || (*need)[3] > hi.y() + r)
       return std::nullopt;
   }
-  // MI and cells-difference insert the scan into a grid, which MRPT grows to hold every valid end
-  // point: a "valid" range of 1e9 m overflows its size arithmetic and resizeGrid aborts (an
-  // assertion). Such ranges (not finite, or beyond the scan's maxRange, the insertion range or
-  // 100 km, beyond any range sensor) are no returns for these two methods; the copy is made only
-  // for a scan that has one.
-  mrpt::obs::CObservation2DRangeScan trimmed;
-  const mrpt::obs::CObservation* scored = &obs;
-  if (method == lmMeanInformation || method == lmCellsDifference) {
-    float limit = 1e5f;
-    for (const float l : {scan->maxRange, insertionOptions.maxDistanceInsertion})
-      if (l > 0.0f) limit = std::min(limit, l);
-    const auto farOrBad = [&](std::size_t i) {
-      const float r = scan->getScanRange(i);
-      return scan->getScanRangeValidity(i) && !(std::isfinite(r) && r <= limit);
-    };
-    // And, as for lmConsensus, a pose whose scan cannot reach the map's cells is left to the
-    // native path: the grid would grow from the map to a particle flung far away.
-    const Box kb = map_.keyBounds();
-    if (kb.isEmpty()) return std::nullopt;
-    const Eigen::Vector3d lo = map_.lattice().boxMin(kb), hi = map_.lattice().boxMax(kb);
-    const double reach = limit + std::hypot(scan->sensorPose.x(), scan->sensorPose.y()) + 1.0;
-    if (pose.x() < lo.x() - reach || pose.y() < lo.y() - reach || pose.x() > hi.x() + reach ||
-        pose.y() > hi.y() + reach)
-      return std::nullopt;
-    std::size_t i = 0;
-    while (i < scan->getScanSize() && !farOrBad(i)) ++i;
-    if (i < scan->getScanSize()) {
-      trimmed = *scan;
-      for (; i < trimmed.getScanSize(); ++i)
-        if (farOrBad(i)) trimmed.setScanRangeValidity(i, false);
-      scored = &trimmed;
-    }
-  }
   const auto v = gridViewShared(need ? need->data() : nullptr);
   std::lock_guard<std::mutex> lk(v->mutex);
   v->setOptions(likelihoodOptions, insertionOptions);
@@ -318,9 +285,9 @@ std::optional<double> CRTreeOccupancyGridMap::gridViewLikelihood(const mrpt::obs
     // MRPT's MI "inserts" the scan counting information, but its scan insertion writes (and may
     // resize) the grid all the same: run it on a copy, so that the view stays the map's.
     GridView::Grid scratch = v->grid;
-    return scratch.computeObservationLikelihood(*scored, pose);
+    return scratch.computeObservationLikelihood(obs, pose);
   }
-  return v->grid.computeObservationLikelihood(*scored, pose);
+  return v->grid.computeObservationLikelihood(obs, pose);
 }
 
 // ---- grid queries on the view --------------------------------------------------------------
