@@ -24,7 +24,7 @@ for t in "${targets[@]}"; do
   rc=0
   # shellcheck disable=SC2086
   "$build/fuzz/rtog_fuzz_$t" -max_total_time="$secs" -print_final_stats=1 -artifact_prefix="$findings/" \
-    -timeout=10 -rss_limit_mb=2048 ${RTOG_FUZZ_FLAGS:-} "$corpus" "${seeds[@]}" > "$log" 2>&1 || rc=$?
+    -seed=${RTOG_FUZZ_SEED:-1} -timeout=10 -rss_limit_mb=2048 ${RTOG_FUZZ_FLAGS:-} "$corpus" "${seeds[@]}" > "$log" 2>&1 || rc=$?
   grep -E "^#[0-9]+ +(DONE|INITED)|^stat::|ERROR|SUMMARY|Test unit written" "$log" | tail -n 20 || true
   if [ "$rc" -ne 0 ]; then
     tail -n 60 "$log"
