@@ -11,6 +11,7 @@
 #include <mrpt/serialization/CArchive.h>
 
 #include "rtog/mrpt/CRTreeOccupancyGridMap.h"
+#include "hostile_files.hpp"
 #include "test_helpers.hpp"
 
 using rtog::CRTreeOccupancyGridMap;
@@ -18,13 +19,7 @@ using namespace rtog_test;
 
 namespace {
 
-std::string bytesOf(const CRTreeOccupancyGridMap& m) {
-  mrpt::io::CMemoryStream buf;
-  auto ar = mrpt::serialization::archiveFrom(buf);
-  ar << m;
-  const auto* p = static_cast<const char*>(buf.getRawBufferData());
-  return std::string(p, p + buf.getTotalBytesCount());
-}
+std::string bytesOf(const CRTreeOccupancyGridMap& m) { return archiveBytes(m); }
 
 // A map holding the first scans of SENA, so that "unchanged" means something.
 CRTreeOccupancyGridMap senaMap() {
