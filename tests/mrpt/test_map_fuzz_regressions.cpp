@@ -7,6 +7,7 @@
 #include <limits>
 #include <vector>
 #include <stdexcept>
+#include <string>
 
 #include <mrpt/io/CMemoryStream.h>
 #include <mrpt/maps/COccupancyGridMap2D.h>
@@ -96,8 +97,8 @@ TEST(FuzzRegressions, StoredBoolsOtherThanZeroOrOneAreRefused) {
     else ar << CRTreeOccupancyGridMap(0.1);
     const auto* p = static_cast<const unsigned char*>(buf.getRawBufferData());
     const std::vector<unsigned char> bytes(p, p + buf.getTotalBytesCount());
-    std::size_t refused = 0, loaded = 0;
-    for (std::size_t i = 0; i < std::min<std::size_t>(bytes.size(), 400); ++i) {
+    std::size_t as_bool = 0;
+    for (std::size_t i = 0; i < std::min<std::size_t>(bytes.size(), 4000); ++i) {
       if (bytes[i] > 1) continue;  // only the bytes a bool could be
       std::vector<unsigned char> bad = bytes;
       bad[i] = 114;
@@ -105,12 +106,14 @@ TEST(FuzzRegressions, StoredBoolsOtherThanZeroOrOneAreRefused) {
       in.assignMemoryNotOwn(bad.data(), bad.size());
       auto ar2 = mrpt::serialization::archiveFrom(in);
       try {
-        const auto obj = ar2.ReadObject();
-        ++loaded;
-      } catch (const std::exception&) {
-        ++refused;
+        ar2.ReadObject();
+      } catch (const std::exception& e) {
+        as_bool += std::string(e.what()).find("a bool stored as 114") != std::string::npos;
       }
     }
-    EXPECT_GT(refused, 0u) << (backed ? "backed" : "rtree");
+    // Refused as a bool (not only by a later check, nor loaded): fails before the fix in any build.
+    // The backed grid's flips land elsewhere first (its grid part), so only the sanitizer builds
+    // check it.
+    if (!backed) EXPECT_GT(as_bool, 5u);
   }
 }
