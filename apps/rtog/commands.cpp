@@ -2,7 +2,6 @@
 #include "output_files.hpp"
 
 #include <mrpt/io/CMemoryStream.h>
-#include <mrpt/io/zip.h>
 #include <mrpt/opengl/COpenGLScene.h>
 #include <mrpt/opengl/CSetOfObjects.h>
 #include <mrpt/serialization/CArchive.h>
@@ -162,11 +161,7 @@ int exportMap(const ExportOptions& opts, std::ostream& out) {
     mrpt::io::CMemoryStream mem;
     auto archive = mrpt::serialization::archiveFrom(mem);
     archive << scene;
-    const auto* raw = static_cast<const std::uint8_t*>(mem.getRawBufferData());
-    const std::vector<std::uint8_t> plain(raw, raw + mem.getTotalBytesCount());
-    std::vector<std::uint8_t> gz;
-    if (!mrpt::io::zip::compress_gz_data_block(plain, gz)) throw std::runtime_error("'" + opts.scene_path + "': gzip failed");
-    scene_out->write(reinterpret_cast<const char*>(gz.data()), static_cast<std::streamsize>(gz.size()));
+    writeGzip(mem.getRawBufferData(), mem.getTotalBytesCount(), *scene_out);
     messages.push_back("wrote " + opts.scene_path + ": " + std::to_string(map.statistics().occupied_leaves) +
                        " occupied cuboids (open with SceneViewer3D)");
   }

@@ -1,6 +1,7 @@
 // The rtog tool's commands, callable from tests; main.cpp only parses arguments.
 #pragma once
 
+#include <cstddef>
 #include <iosfwd>
 #include <memory>
 #include <optional>
@@ -55,6 +56,10 @@ int exportMap(const ExportOptions& opts, std::ostream& out);
 /// Loads a map file (the core format or the MRPT map's gzip archive), from a file or a pipe;
 /// throws std::runtime_error naming the file on failure, including bytes after the map.
 OccupancyMap loadMap(const std::string& path);
+
+/// `n` bytes gzip-compressed into `out`, in memory. (MRPT's compress_gz_data_block goes through
+/// a file in /tmp named by the clock: two processes in the same microsecond share it.)
+void writeGzip(const void* data, std::size_t n, std::ostream& out);
 /// Saves through an OutputSet: the old file stays intact unless the new one was written whole.
 void saveMap(const OccupancyMap& map, const std::string& path);
 

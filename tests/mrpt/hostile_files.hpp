@@ -3,15 +3,20 @@
 #pragma once
 
 #include <sys/resource.h>
+#include <unistd.h>
 
 #include <cstdint>
+#include <cstdio>
 #include <cstring>
+#include <fstream>
+#include <iterator>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
 #include <mrpt/io/CMemoryStream.h>
-#include <mrpt/io/zip.h>
+#include <mrpt/io/CFileGZInputStream.h>
+#include <mrpt/io/CFileGZOutputStream.h>
 #include <mrpt/serialization/CArchive.h>
 
 #include "rtog/mrpt/CRTreeOccupancyGridMap.h"
@@ -28,10 +33,45 @@ std::string archiveBytes(const T& obj) {
   return std::string(p, p + mem.getTotalBytesCount());
 }
 
+/// A file of its own in /tmp (mkstemp), removed with this object.
+struct ScratchFile {
+  std::string path;
+  ScratchFile() {
+    char name[] = "/tmp/rtog_test_XXXXXX";
+    const int fd = ::mkstemp(name);
+    if (fd < 0) throw std::runtime_error("mkstemp failed");
+    ::close(fd);
+    path = name;
+  }
+  ~ScratchFile() { std::remove(path.c_str()); }
+  ScratchFile(const ScratchFile&) = delete;
+  ScratchFile& operator=(const ScratchFile&) = delete;
+};
+
+/// `plain` gzip-compressed by MRPT's CFileGZOutputStream, the stream saveToFile() writes with.
+/// (Not mrpt::io::zip::compress_gz_data_block: it goes through a /tmp file named by the clock,
+/// which two test processes started in the same microsecond share.)
 inline std::string gzip(const std::string& plain) {
-  std::vector<std::uint8_t> in(plain.begin(), plain.end()), out;
-  if (!mrpt::io::zip::compress_gz_data_block(in, out)) throw std::runtime_error("gzip failed");
-  return std::string(out.begin(), out.end());
+  ScratchFile f;
+  {
+    mrpt::io::CFileGZOutputStream out;
+    if (!out.open(f.path)) throw std::runtime_error("gzip: cannot open " + f.path);
+    out.Write(plain.data(), plain.size());
+  }
+  std::ifstream in(f.path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+/// The inverse, by CFileGZInputStream.
+inline std::string gunzip(const std::string& gz) {
+  ScratchFile f;
+  std::ofstream(f.path, std::ios::binary) << gz;
+  mrpt::io::CFileGZInputStream in;
+  if (!in.open(f.path)) throw std::runtime_error("gunzip: cannot open " + f.path);
+  std::string plain;
+  char buf[1 << 14];
+  for (std::size_t got; (got = in.Read(buf, sizeof(buf))) > 0;) plain.append(buf, got);
+  return plain;
 }
 
 template <class T>

@@ -95,9 +95,7 @@ TEST(HostileFiles, LengthFieldsAllocateNothingTheyPromise) {
     std::remove(path.c_str());
     // Read into a map that holds cells: an error, and the map as it was.
     CRTreeOccupancyGridMap m = before;
-    std::vector<std::uint8_t> plain;
-    ASSERT_TRUE(mrpt::io::zip::decompress_gz_data_block(std::vector<std::uint8_t>(c.file.begin(), c.file.end()), plain));
-    EXPECT_NE(readInto(std::string(plain.begin(), plain.end()), m).find(c.message), std::string::npos);
+    EXPECT_NE(readInto(gunzip(c.file), m).find(c.message), std::string::npos);
     EXPECT_TRUE(archiveBytes(m) == before_bytes) << "the map a failed load was read into changed";
     EXPECT_LT(peakMiB() - peak0, 64.0) << "peak memory grew by " << peakMiB() - peak0 << " MiB";
   }
