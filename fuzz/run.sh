@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Runs fuzz targets for SECONDS each from their seed corpora; exits non-zero on the first target
 # that finds a crash, leak or sanitizer report (the input is left in BUILD/fuzz/findings/TARGET/,
-# the whole output in BUILD/fuzz/TARGET.log).
+# the whole output in BUILD/fuzz/TARGET.log). Past findings in fuzz/regressions/ are replayed first.
 # Usage: fuzz/run.sh BUILD_DIR SECONDS [TARGET...]   (targets: core_map mrpt_archive ini insert)
 # Extra libFuzzer flags may come in RTOG_FUZZ_FLAGS (e.g. -runs=10000000).
 set -euo pipefail
@@ -20,6 +20,17 @@ for t in "${targets[@]}"; do
   for d in "$build/fuzz/seeds/$t" "$src/corpus/$t"; do
     if [ -d "$d" ]; then seeds+=("$d"); fi
   done
+  # The inputs of past findings (fuzz/regressions/TARGET-*.bin) first, each run once: a fix that
+  # comes undone fails here, whatever the random run below finds.
+  regressions=("$src"/regressions/"$t"-*.bin)
+  if [ -e "${regressions[0]}" ]; then
+    echo "=== rtog_fuzz_$t: ${#regressions[@]} past findings"
+    "$build/fuzz/rtog_fuzz_$t" "${regressions[@]}" > "$log.regressions" 2>&1 || {
+      tail -n 60 "$log.regressions"
+      echo "rtog_fuzz_$t: a past finding fails again (see $log.regressions)"
+      exit 1
+    }
+  fi
   echo "=== rtog_fuzz_$t: ${secs} s, corpus $corpus, seeds ${seeds[*]:-none}"
   rc=0
   # shellcheck disable=SC2086

@@ -119,3 +119,45 @@ TEST(FuzzRegressions, StoredBoolsOtherThanZeroOrOneAreRefused) {
     }
   }
 }
+
+// rtog_fuzz_insert: scored on the 2D view, MRPT's cells-difference (and mean-information) method
+// inserts the scan into a grid that it grows to every valid end point: a pose 6e8 m away (or a
+// valid range of 1e9 m) made MRPT's resizeGrid abort (an assertion), and a valid range of -1e9 m
+// made it write out of bounds (SEGV). Such poses go to the native path, such ranges are no returns
+// for those methods.
+TEST(FuzzRegressions, GridViewLikelihoodOfAHugeRange) {
+  CRTreeOccupancyGridMap m(0.1);
+  mrpt::obs::CObservation2DRangeScan scan;
+  scan.aperture = static_cast<float>(M_PI);
+  scan.maxRange = 8.0f;
+  scan.resizeScan(7);
+  for (std::size_t i = 0; i < 7; ++i) scan.setScanRange(i, 2.0f), scan.setScanRangeValidity(i, true);
+  ASSERT_TRUE(m.insertObservation(scan, mrpt::poses::CPose3D()));
+  scan.setScanRange(3, 1e9f);
+  scan.setScanRange(4, std::numeric_limits<float>::infinity());
+  scan.setScanRangeValidity(5, false);  // a no-return beam, stepped up to maxRange
+  scan.setScanRange(6, -1e9f);          // "valid", behind the sensor: MRPT wrote beyond its grid
+  scan.maxRange = 1e9f;                  // a driver's "no limit"
+  for (const auto method : {CRTreeOccupancyGridMap::lmCellsDifference, CRTreeOccupancyGridMap::lmMeanInformation}) {
+    m.likelihoodOptions.likelihoodMethod = method;
+    ASSERT_TRUE(m.likelihoodOptions.scanLikelihoodOnGridView);
+    (void)m.computeObservationLikelihood(scan, mrpt::poses::CPose3D(0.05, 0.0, 0.0, 0.01, 0, 0));
+    (void)m.computeObservationLikelihood(scan, mrpt::poses::CPose3D(-6e8, 3.0, 0.0, 0.01, 0, 0));  // far away
+    auto offset = scan;
+    offset.sensorPose = mrpt::poses::CPose3D(0.0, 1e9, 0.0, 0, 0, 0);  // a sensor "mounted" far off
+    (void)m.computeObservationLikelihood(offset, mrpt::poses::CPose3D(0.05, 0.0, 0.0, 0.01, 0, 0));
+  }
+  EXPECT_EQ(m.map().checkInvariants(), "");
+}
+
+// rtog_fuzz_insert: in the mrpt_grid preset a 2D scan with a NaN aperture gave NaN beam angles,
+// and the grid raster cast the NaN end cells to int (undefined). It is refused.
+TEST(FuzzRegressions, GridScanWithANaNAperture) {
+  CRTreeOccupancyGridMap m(0.1);
+  mrpt::obs::CObservation2DRangeScan scan;
+  scan.aperture = kNaN;
+  scan.resizeScan(3);
+  for (std::size_t i = 0; i < 3; ++i) scan.setScanRange(i, 1.0f), scan.setScanRangeValidity(i, true);
+  EXPECT_THROW(m.insertObservation(scan, mrpt::poses::CPose3D(0.3, 0.2, 0.0, 0, 0, 0)), std::invalid_argument);
+  EXPECT_TRUE(m.isEmpty());
+}

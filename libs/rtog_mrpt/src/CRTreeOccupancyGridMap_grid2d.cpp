@@ -278,6 +278,42 @@ std::optional<double> CRTreeOccupancyGridMap::gridViewLikelihood(const mrpt::obs
     if ((*need)[0] < lo.x() - r || (*need)[1] < lo.y() - r || (*need)[2] > hi.x() + r || (*need)[3] > hi.y() + r)
       return std::nullopt;
   }
+  // MI and cells-difference insert the scan into a grid, which MRPT grows to hold every valid end
+  // point: a "valid" range of 1e9 m (or of -1e9 m, an end point behind the sensor) overflows its
+  // size arithmetic and resizeGrid aborts or writes out of bounds. Such ranges (not finite,
+  // negative, or beyond the scan's maxRange or 100 km, beyond any range sensor) are no returns
+  // for these two methods; the copy is made only for a scan that has one.
+  mrpt::obs::CObservation2DRangeScan trimmed;
+  const mrpt::obs::CObservation* scored = &obs;
+  if (method == lmMeanInformation || method == lmCellsDifference) {
+    // Not the insertion range: the stock grid scores beams beyond it, and so must the view.
+    const float limit = scan->maxRange > 0.0f ? std::min(scan->maxRange, 1e5f) : 1e5f;
+    const auto farOrBad = [&](std::size_t i) {
+      const float r = scan->getScanRange(i);
+      return scan->getScanRangeValidity(i) && !(std::isfinite(r) && r >= 0.0f && r <= limit);
+    };
+    // And, as for lmConsensus, a pose whose scan cannot reach the map's cells is left to the
+    // native path: the grid would grow from the map to a particle flung far away.
+    const Box kb = map_.keyBounds();
+    if (kb.isEmpty()) return std::nullopt;
+    const Eigen::Vector3d lo = map_.lattice().boxMin(kb), hi = map_.lattice().boxMax(kb);
+    // The grid holds the robot and the sensor (which may be mounted, or misconfigured, far off).
+    // Composed here only: these two methods cost far more than the composition. Written so
+    // that a NaN (finite poses can compose to one) is refused too.
+    const double reach = limit + 1.0;
+    const mrpt::poses::CPose3D sensor = pose + scan->sensorPose;
+    for (const mrpt::poses::CPose3D* p : {&pose, &sensor})
+      if (!(p->x() >= lo.x() - reach && p->y() >= lo.y() - reach && p->x() <= hi.x() + reach && p->y() <= hi.y() + reach))
+        return std::nullopt;
+    std::size_t i = 0;
+    while (i < scan->getScanSize() && !farOrBad(i)) ++i;
+    if (i < scan->getScanSize()) {
+      trimmed = *scan;
+      for (; i < trimmed.getScanSize(); ++i)
+        if (farOrBad(i)) trimmed.setScanRangeValidity(i, false);
+      scored = &trimmed;
+    }
+  }
   const auto v = gridViewShared(need ? need->data() : nullptr);
   std::lock_guard<std::mutex> lk(v->mutex);
   v->setOptions(likelihoodOptions, insertionOptions);
@@ -285,9 +321,9 @@ std::optional<double> CRTreeOccupancyGridMap::gridViewLikelihood(const mrpt::obs
     // MRPT's MI "inserts" the scan counting information, but its scan insertion writes (and may
     // resize) the grid all the same: run it on a copy, so that the view stays the map's.
     GridView::Grid scratch = v->grid;
-    return scratch.computeObservationLikelihood(obs, pose);
+    return scratch.computeObservationLikelihood(*scored, pose);
   }
-  return v->grid.computeObservationLikelihood(obs, pose);
+  return v->grid.computeObservationLikelihood(*scored, pose);
 }
 
 // ---- grid queries on the view --------------------------------------------------------------

@@ -134,6 +134,10 @@ bool planScan(const mrpt::obs::CObservation2DRangeScan& o, const mrpt::poses::CP
   for (const double v : {sensor.x(), sensor.y(), sensor.z(), sensor.yaw(), sensor.pitch(), sensor.roll()})
     if (!std::isfinite(v)) throw std::invalid_argument("rtog::CRTreeOccupancyGridMap: non-finite sensor pose");
   if (!o.isPlanarScan(opts.horizontalTolerance)) return false;
+  // A NaN or infinite aperture makes every beam angle NaN, and the raster would cast NaN cells
+  // to int (found by rtog_fuzz_insert).
+  if (!std::isfinite(o.aperture))
+    throw std::invalid_argument("rtog::CRTreeOccupancyGridMap: non-finite scan aperture");
   if (opts.useMapAltitude && std::fabs(opts.mapAltitude - sensor.z()) > 0.001) return false;
   const mrpt::poses::CPose2D laser(sensor);
   const bool bottomwards = sensor.getHomogeneousMatrixVal<mrpt::math::CMatrixDouble44>()(2, 2) < 0;
@@ -189,6 +193,12 @@ bool planScan(const mrpt::obs::CObservation2DRangeScan& o, const mrpt::poses::CP
   for (const float g : plan.grow)
     if (!(std::fabs(g) < reach))
       throw std::out_of_range("rtog::CRTreeOccupancyGridMap: a 2D scan reaches " + std::to_string(g) +
+                              " m, beyond the key range (+-" + std::to_string(reach) + " m)");
+  // The sensor too: a scan without usable beams does not grow the grid, and the raster would
+  // cast the sensor's cell beyond int (found by rtog_fuzz_insert).
+  for (const float p : {plan.px, plan.py})
+    if (!(std::fabs(p) < reach))
+      throw std::out_of_range("rtog::CRTreeOccupancyGridMap: a 2D scan taken at " + std::to_string(p) +
                               " m, beyond the key range (+-" + std::to_string(reach) + " m)");
   return true;
 }
