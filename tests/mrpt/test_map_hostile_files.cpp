@@ -104,6 +104,7 @@ TEST(HostileFiles, LengthFieldsAllocateNothingTheyPromise) {
 // The COccupancyGridMap2D part of rtreeGridMap2D: MRPT's own reader sizes the grid from the
 // stored extent and zero-fills it before reading a cell.
 TEST(HostileFiles, GridExtentsAllocateNothingTheyPromise) {
+  static constexpr float kMinusTen = -10.0f;  // y_min, where the flat case expects it
   const rtog::CRTreeBackedGridMap2D grid(0.1);  // -10..10 m: 200 x 200 cells
   const std::string bytes = archiveBytes(grid);
   std::string header(1, '\x08');
@@ -119,11 +120,18 @@ TEST(HostileFiles, GridExtentsAllocateNothingTheyPromise) {
   poke(wide, at + 13, 1.0e5f);
   poke(huge, at + 13, 1.0e30f);  // an exponent bit
   poke(nan, at + 13, std::numeric_limits<float>::quiet_NaN());
+  // Found by rtog_fuzz_mrpt_archive: a side of 0 cells made the product of the sides small, and
+  // the other side (1e12 cells) was cast to 32 bits (undefined).
+  std::string flat = bytes;
+  poke(flat, at + 13, 1.0e11f);
+  poke(flat, at + 21, -9.97f);  // y_max: 0.03 m above y_min, 0 cells
+  ASSERT_EQ(flat.substr(at + 17, 4), std::string(reinterpret_cast<const char*>(&kMinusTen), 4));
   for (const auto& [name, file, message] :
        std::vector<std::tuple<std::string, std::string, std::string>>{
            {"wide", wide, "truncated stream (grid cells: 200020000 bytes announced"},
            {"huge", huge, "corrupt stream (grid geometry: rtog mrpt_grid: a grid of more than 2^31 cells"},
-           {"nan", nan, "corrupt stream (grid geometry"}}) {
+           {"nan", nan, "corrupt stream (grid geometry"},
+           {"flat", flat, "corrupt stream (grid geometry: rtog mrpt_grid: a grid of more than 2^31 cells"}}) {
     SCOPED_TRACE(name);
     const double peak0 = peakMiB();
     rtog::CRTreeBackedGridMap2D into(0.1);

@@ -63,6 +63,24 @@ LogOddsParams logOddsParams(const Steps& s, double occupiedThreshold) {
 
 int cellOfValue(float v) { return static_cast<int>(std::lround(-v * 16.0f)); }
 
+namespace {
+
+/// The extent and cell counts of a frame of f.resolution, as COccupancyGridMap2D computes them.
+void setCells(TGridFrame2D& f, float xmin, float xmax, float ymin, float ymax) {
+  const float sx = std::round((xmax - xmin) / f.resolution), sy = std::round((ymax - ymin) / f.resolution);
+  // (Checked before the casts, which a non-finite or huge extent would make undefined; each side
+  // too, as a side of 0 cells makes any other side's product small.)
+  const double cap = double(archive::kMaxGridCells);
+  if (!(sx >= 0.0f && sy >= 0.0f && double{sx} <= cap && double{sy} <= cap && double{sx} * double{sy} <= cap))
+    throw std::invalid_argument("rtog mrpt_grid: a grid of more than 2^31 cells (COccupancyGridMap2D indexes its "
+                                "cells with an int)");
+  f.x_min = xmin, f.x_max = xmax, f.y_min = ymin, f.y_max = ymax;
+  f.size_x = static_cast<std::uint32_t>(sx);
+  f.size_y = static_cast<std::uint32_t>(sy);
+}
+
+}  // namespace
+
 void setSize(TGridFrame2D& f, float xmin, float xmax, float ymin, float ymax, float res) {
   if (!(res > 0.0f) || !(xmax > xmin) || !(ymax > ymin))
     throw std::invalid_argument("rtog mrpt_grid: a grid needs resolution > 0, max_x > min_x and max_y > min_y");
@@ -70,15 +88,10 @@ void setSize(TGridFrame2D& f, float xmin, float xmax, float ymin, float ymax, fl
   ymin = res * std::round(ymin / res);
   xmax = res * std::round(xmax / res);
   ymax = res * std::round(ymax / res);
-  const float sx = std::round((xmax - xmin) / res), sy = std::round((ymax - ymin) / res);
-  // (Checked before the casts, which a non-finite or huge extent would make undefined.)
-  if (!(std::isfinite(sx) && std::isfinite(sy) && double{sx} * double{sy} <= double(archive::kMaxGridCells)))
-    throw std::invalid_argument("rtog mrpt_grid: a grid of more than 2^31 cells (COccupancyGridMap2D indexes its "
-                                "cells with an int)");
-  f.resolution = res;
-  f.x_min = xmin, f.x_max = xmax, f.y_min = ymin, f.y_max = ymax;
-  f.size_x = static_cast<std::uint32_t>(sx);
-  f.size_y = static_cast<std::uint32_t>(sy);
+  TGridFrame2D g = f;  // f as it was if the size is refused
+  g.resolution = res;
+  setCells(g, xmin, xmax, ymin, ymax);
+  f = g;
 }
 
 void resize(TGridFrame2D& f, float nx0, float nx1, float ny0, float ny1) {
@@ -97,9 +110,7 @@ void resize(TGridFrame2D& f, float nx0, float nx1, float ny0, float ny1) {
     if (std::fabs(v / res - std::round(v / res)) > 0.05f) v = res * std::round(v / res);
   };
   snap(nx0), snap(ny0), snap(nx1), snap(ny1);
-  f.size_x = static_cast<std::uint32_t>(std::round((nx1 - nx0) / res));
-  f.size_y = static_cast<std::uint32_t>(std::round((ny1 - ny0) / res));
-  f.x_min = nx0, f.x_max = nx1, f.y_min = ny0, f.y_max = ny1;
+  setCells(f, nx0, nx1, ny0, ny1);
 }
 
 void checkFrame(const TGridFrame2D& f, double resolution) {
