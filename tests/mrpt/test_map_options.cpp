@@ -217,6 +217,21 @@ TEST(MapOptions, UnknownKeysAreReported) {
   EXPECT_EQ(err.find("'maxOccupancyUpdateCertainty'"), std::string::npos) << err;
 }
 
+// A process reading many generated sections keeps a bounded memory of what it told: after 1,000
+// unknown keys, one line says that the rest go untold.
+TEST(MapOptions, UnknownKeyWarningsAreBounded) {
+  std::string ini = "[MappingApplication]\nrtreeOccupancyGrid_count=1\n[MappingApplication_rtreeOccupancyGrid_00_insertOpts]\n";
+  for (int i = 0; i < 1500; ++i) ini += "noSuchKey" + std::to_string(i) + "=1\n";
+  testing::internal::CaptureStderr();
+  fromIni(ini);
+  const std::string err = testing::internal::GetCapturedStderr();
+  std::size_t told = 0;
+  for (std::size_t p = 0; (p = err.find("unknown key 'noSuchKey", p)) != std::string::npos; ++p) ++told;
+  EXPECT_LE(told, 1000u);
+  EXPECT_GT(told, 0u);
+  EXPECT_NE(err.find("further unknown keys are ignored without a warning"), std::string::npos);
+}
+
 // Every key of MRPT's own stock grid sections is known: pasting them warns about the one key the
 // stock grid ignores as well (minLaserScanNoiseStd) and about nothing else.
 TEST(MapOptions, StockGridSectionsWarnOnlyAboutKeysTheGridIgnores) {

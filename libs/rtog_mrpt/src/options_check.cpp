@@ -13,8 +13,12 @@ namespace rtog {
 
 void reportUnknownKeys(const mrpt::config::CConfigFileBase& source, const std::string& section,
                        std::initializer_list<const char*> known) {
+  // Each key is told once per process, and at most kMaxTold keys are remembered: a process that
+  // reads many generated sections (a fuzzer, a tool) must not grow without bound.
+  constexpr std::size_t kMaxTold = 1000;
   static std::mutex mutex;
   static std::set<std::string> reported;
+  static bool capped = false;
   std::vector<std::string> keys;
   source.getAllKeys(section, keys);
   for (const std::string& k : keys) {
@@ -22,8 +26,12 @@ void reportUnknownKeys(const mrpt::config::CConfigFileBase& source, const std::s
     for (const char* name : known) ok = ok || strcasecmp(k.c_str(), name) == 0;  // MRPT keys ignore case
     if (ok) continue;
     std::lock_guard<std::mutex> lk(mutex);
-    if (reported.insert(section + "/" + k).second)
+    if (reported.size() >= kMaxTold) {
+      if (!capped) std::cerr << "rtog: warning: further unknown keys are ignored without a warning\n";
+      capped = true;
+    } else if (reported.insert(section + "/" + k).second) {
       std::cerr << "rtog: warning: [" << section << "] unknown key '" << k << "' is ignored\n";
+    }
   }
 }
 
