@@ -3,6 +3,8 @@
 // leaves the map as it was.
 #include <gtest/gtest.h>
 
+#include <fstream>
+#include <iterator>
 #include <string>
 
 #include <mrpt/io/CMemoryStream.h>
@@ -79,4 +81,46 @@ TEST(MapBadInput, AStoredVersionFromTheFutureIsRefused) {
     EXPECT_NE(std::string(e.what()).find("version"), std::string::npos) << e.what();
   }
   EXPECT_EQ(bytesOf(target), before);
+}
+
+// loadFromFile reads the whole file: bytes after the map, inside the gzip stream or after it,
+// are an error (zlib's gzread skipped those after the member without a word); a plain
+// (uncompressed) archive loads, as through CFileGZInputStream; a directory says so.
+TEST(MapBadInput, LoadFromFileRefusesTrailingBytes) {
+  const CRTreeOccupancyGridMap m = senaMap();
+  const ScratchFile f;
+  m.saveToFile(f.path);
+  const std::string gz = [&] {
+    std::ifstream in(f.path, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  }();
+  const auto write = [&](const std::string& bytes) { std::ofstream(f.path, std::ios::binary | std::ios::trunc) << bytes; };
+  const auto error = [&]() -> std::string {
+    try {
+      CRTreeOccupancyGridMap::loadFromFile(f.path);
+      return "";
+    } catch (const std::exception& e) {
+      return e.what();
+    }
+  };
+  write(gz);
+  EXPECT_EQ(error(), "");
+  EXPECT_TRUE(bytesOf(*CRTreeOccupancyGridMap::loadFromFile(f.path)) == bytesOf(m));
+  write(gz + "junk");
+  EXPECT_NE(error().find("4 trailing bytes after the map"), std::string::npos) << error();
+  write(gzip(bytesOf(m) + "xyz"));
+  EXPECT_NE(error().find("3 trailing bytes after the map"), std::string::npos) << error();
+  write(bytesOf(m));
+  EXPECT_EQ(error(), "");
+  write(bytesOf(m) + "z");
+  EXPECT_NE(error().find("1 trailing byte after the map"), std::string::npos) << error();
+  write("");
+  EXPECT_NE(error().find("the file is empty"), std::string::npos) << error();
+  EXPECT_NE(error().find(f.path), std::string::npos) << error();
+  try {
+    CRTreeOccupancyGridMap::loadFromFile("/tmp");
+    ADD_FAILURE() << "a directory loaded";
+  } catch (const std::exception& e) {
+    EXPECT_NE(std::string(e.what()).find("it is a directory"), std::string::npos) << e.what();
+  }
 }

@@ -1,9 +1,13 @@
 // rtog::CRTreeOccupancyGridMap: versioned CSerializable and files.
+#include <sys/stat.h>
+
+#include <cerrno>
+#include <cstring>
+#include <fstream>
 #include <limits>
 #include <sstream>
 #include <stdexcept>
 
-#include <mrpt/io/CFileGZInputStream.h>
 #include <mrpt/io/CFileGZOutputStream.h>
 #include <mrpt/opengl/COpenGLScene.h>
 #include <mrpt/opengl/CSetOfObjects.h>
@@ -14,6 +18,7 @@
 #include "rtog/mrpt/CRTreeOccupancyGridMap.h"
 #include "archive_read.hpp"
 #include "mrpt_grid.hpp"
+#include "stream_input.hpp"
 #include "rtog/mrpt/register_classes.h"
 
 namespace rtog {
@@ -144,16 +149,21 @@ void CRTreeOccupancyGridMap::saveToFile(const std::string& file) const {
 }
 
 std::shared_ptr<CRTreeOccupancyGridMap> CRTreeOccupancyGridMap::loadFromFile(const std::string& file) {
-  mrpt::io::CFileGZInputStream f;
-  if (!f.open(file)) throw std::runtime_error("rtog::CRTreeOccupancyGridMap: cannot read '" + file + "'");
-  registerMrptClasses();  // ReadObject finds the class by name in MRPT's registry
-  auto ar = mrpt::serialization::archiveFrom(f);
-  auto obj = ar.ReadObject();
-  auto m = std::dynamic_pointer_cast<CRTreeOccupancyGridMap>(obj);
-  if (!m)
-    throw std::runtime_error("rtog::CRTreeOccupancyGridMap: '" + file + "' holds a " +
-                             std::string(obj ? obj->GetRuntimeClass()->className : "null object"));
-  return m;
+  const std::string who = "rtog::CRTreeOccupancyGridMap: '" + file + "': ";
+  struct stat st {};
+  if (::stat(file.c_str(), &st) != 0) throw std::runtime_error(who + "cannot read (" + std::strerror(errno) + ")");
+  if (S_ISDIR(st.st_mode)) throw std::runtime_error(who + "cannot read (it is a directory)");
+  std::ifstream in(file, std::ios::binary);
+  if (!in) throw std::runtime_error(who + "cannot read (" + std::strerror(errno) + ")");
+  try {
+    return readMapStream(in);
+  } catch (const std::exception& e) {
+    throw std::runtime_error(who + e.what());
+  }
+}
+
+std::shared_ptr<CRTreeOccupancyGridMap> CRTreeOccupancyGridMap::loadFromStream(std::istream& in) {
+  return readMapStream(in);
 }
 
 // <prefix>.rtog (gzip CArchive), <prefix>.3Dscene (SceneViewer3D) and <prefix>_slice.png (the

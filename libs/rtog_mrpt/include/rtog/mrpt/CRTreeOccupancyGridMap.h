@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <iosfwd>
 #include <limits>
 #include <memory>
 #include <mutex>
@@ -249,7 +250,11 @@ class CRTreeOccupancyGridMap : public mrpt::maps::CMetricMap {
 
   /// Writes `file` as a gzip-compressed CArchive holding this map; loadFromFile reads it back.
   void saveToFile(const std::string& file) const;
+  /// The map a file holds. Throws std::runtime_error naming the file if it cannot be read, is
+  /// damaged, holds another class, or has bytes after the map.
   static std::shared_ptr<CRTreeOccupancyGridMap> loadFromFile(const std::string& file);
+  /// The same from a stream, read forward only (a pipe works): gzip-compressed or plain CArchive.
+  static std::shared_ptr<CRTreeOccupancyGridMap> loadFromStream(std::istream& in);
 
   /// Log-likelihood of beams already in the map frame (used by computeObservationLikelihood).
   double beamsLikelihood(const ObservationBeams& b) const;
