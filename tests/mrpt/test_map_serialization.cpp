@@ -4,6 +4,9 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <sstream>
 #include <map>
 
 #include <mrpt/io/CMemoryStream.h>
@@ -14,6 +17,7 @@
 
 #include "rtog/mrpt/CRTreeBackedGridMap2D.h"
 #include "rtog/mrpt/CRTreeOccupancyGridMap.h"
+#include "hostile_files.hpp"
 #include "test_helpers.hpp"
 
 using rtog::CRTreeOccupancyGridMap;
@@ -152,4 +156,35 @@ TEST(MapSerialization, VisualizationDrawsOccupiedCuboids) {
   mrpt::opengl::CSetOfObjects none;
   m.getVisualizationInto(none);
   EXPECT_TRUE(none.empty());
+}
+
+// Maps saved by earlier builds (serialization versions 0 and 1; tests/mrpt/data/README.md names
+// the commits and the program that wrote them) load with their cells, their options and the
+// update rule they were built with (OctoMap's), and save again in today's version.
+TEST(MapSerialization, MapsOfEarlierVersionsLoad) {
+  for (const char* v : {"v0", "v1"}) {
+    SCOPED_TRACE(v);
+    const std::string base = std::string(RTOG_MRPT_TEST_DATA) + "/sena20_" + v;
+    const auto m = CRTreeOccupancyGridMap::loadFromFile(base + ".gz");
+    // The same map in the core format, as both builds wrote it (byte-identical).
+    std::ifstream gz(std::string(RTOG_MRPT_TEST_DATA) + "/sena20_core.rtog.gz", std::ios::binary);
+    std::istringstream in(gunzip(std::string(std::istreambuf_iterator<char>(gz), {})));
+    const rtog::OccupancyMap core = rtog::OccupancyMap::read(in);
+    EXPECT_GT(m->map().leafCount(), 1000u);
+    EXPECT_TRUE(leaves(m->map()) == leaves(core));
+    EXPECT_EQ(m->map().checkInvariants(), "");
+    EXPECT_DOUBLE_EQ(m->resolution(), 0.07);
+    EXPECT_EQ(m->insertionOptions.maxDistanceInsertion, 12.5f);
+    EXPECT_EQ(m->insertionOptions.sensorModelPreset, "octomap");
+    EXPECT_EQ(m->likelihoodOptions.LF_stdHit, 0.21f);
+    EXPECT_EQ(m->likelihoodOptions.LF_maxRange, 33.0f);
+    mrpt::io::CMemoryStream buf;
+    auto ar = mrpt::serialization::archiveFrom(buf);
+    ar << *m;
+    buf.Seek(0);
+    const auto back = std::dynamic_pointer_cast<CRTreeOccupancyGridMap>(ar.ReadObject());
+    ASSERT_TRUE(back);
+    expectSame(*m, *back);
+    EXPECT_EQ(back->insertionOptions.sensorModelPreset, "octomap");
+  }
 }
