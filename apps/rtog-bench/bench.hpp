@@ -83,6 +83,9 @@ struct RunInfo {
   int repeats = Options{}.repeats;
   double min_seconds = Options{}.min_seconds;
 };
+/// This machine (CPU model, cores, memory, kernel; the compiler, OctoMap and MRPT versions the
+/// bench was built with) and the time, from the system itself.
+std::map<std::string, std::string> machineFacts();
 /// This machine, now, with the rounds of `opts`.
 RunInfo currentRun(const Options& opts);
 

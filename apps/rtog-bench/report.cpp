@@ -1,11 +1,8 @@
 // Writes benchmark results: JSON for machines, Markdown + PNG plots for people.
-#include <array>
 #include <cctype>
 #include <cmath>
-#include <cstdio>
 #include <fstream>
 #include <iomanip>
-#include <memory>
 #include <set>
 #include <sstream>
 #include <stdexcept>
@@ -18,26 +15,6 @@
 
 namespace rtog::bench {
 namespace {
-
-std::string shellOutput(const char* cmd) {
-  std::array<char, 256> buf{};
-  std::string out;
-  std::unique_ptr<FILE, int (*)(FILE*)> p(popen(cmd, "r"), pclose);
-  if (!p) return {};
-  while (fgets(buf.data(), buf.size(), p.get())) out += buf.data();
-  while (!out.empty() && (out.back() == '\n' || out.back() == ' ')) out.pop_back();
-  return out;
-}
-
-std::map<std::string, std::string> machine() {
-  return {{"cpu", shellOutput("grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //'")},
-          {"cores", shellOutput("nproc")},
-          {"memory", shellOutput("free -h | awk '/Mem:/{print $2}'")},
-          {"compiler", shellOutput("c++ --version | head -1")},
-          {"octomap", shellOutput("dpkg-query -W -f='${Version}' liboctomap-dev")},
-          {"mrpt", shellOutput("dpkg-query -W -f='${Version}' libmrpt-dev")},
-          {"date", shellOutput("date -u +%Y-%m-%dT%H:%MZ")}};
-}
 
 const Result* find(const std::vector<Result>& rs, const std::string& dataset, double res, const std::string& method) {
   for (const auto& r : rs)
@@ -86,7 +63,7 @@ std::string slug(std::string s) {
 
 RunInfo currentRun(const Options& opts) {
   RunInfo info;
-  info.machine = machine();
+  info.machine = machineFacts();
   info.repeats = opts.repeats;
   info.min_seconds = opts.min_seconds;
   return info;
@@ -174,8 +151,8 @@ void writeMarkdown(const std::vector<Result>& results, const RunInfo& run, const
      << "the same rounds: the throughput of two independent one-thread builds at once over that of one\n"
      << "(a yardstick, not a bound: two maps fill twice the cache one shared map does); and the steal,\n"
      << "the share of the vCPUs' time the hypervisor gave others during the two-thread builds (/proc/stat).\n\n"
-     << "Machine: " << field("cpu") << ", " << field("cores") << " cores, " << field("memory") << " RAM; "
-     << field("compiler") << "; OctoMap " << field("octomap") << ", MRPT " << field("mrpt") << "; "
+     << "Machine: " << field("cpu") << ", " << field("cores") << " cores, " << field("memory") << " RAM, "
+     << field("os") << "; " << field("compiler") << "; OctoMap " << field("octomap") << ", MRPT " << field("mrpt") << "; "
      << field("date") << ".\n\n"
      << "Reproduce: `./build/apps/rtog-bench/rtog-bench --markdown doc/benchmarks.md --json doc/benchmarks.json "
         "--img-dir doc/img`; to render this report again from the JSON without measuring, "

@@ -1,11 +1,14 @@
 // The benchmark's report on the committed run (doc/benchmarks.json): the JSON reads back as it
-// was written, and the Markdown's insertion-speed verdicts follow from the raw build times.
+// was written, and the Markdown's insertion-speed verdicts follow from the raw build times. And
+// the machine facts a report states, read from the system.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cstdio>
 #include <fstream>
 #include <limits>
+#include <regex>
 #include <set>
 #include <sstream>
 #include <string>
@@ -91,6 +94,19 @@ TEST(BenchReport, SpeedVerdictsFollowFromTheBuildTimes) {
     EXPECT_EQ(cells[4], want) << line;
   }
   EXPECT_EQ(rows, 6);  // three 3D datasets at two resolutions
+}
+
+TEST(BenchReport, MachineFactsComeFromTheSystem) {
+  const auto m = machineFacts();
+  EXPECT_FALSE(m.at("cpu").empty());
+  EXPECT_EQ(m.at("cores"), std::to_string(sysconf(_SC_NPROCESSORS_ONLN)));
+  EXPECT_TRUE(std::regex_match(m.at("memory"), std::regex(R"([0-9]+\.[0-9] GiB)"))) << m.at("memory");
+  EXPECT_EQ(m.at("os").rfind("Linux ", 0), 0u) << m.at("os");
+  EXPECT_TRUE(std::regex_match(m.at("mrpt"), std::regex(R"([0-9]+\.[0-9]+\.[0-9]+)"))) << m.at("mrpt");
+  EXPECT_TRUE(std::regex_match(m.at("octomap"), std::regex(R"([0-9]+\.[0-9]+\.[0-9]+)"))) << m.at("octomap");
+  EXPECT_TRUE(std::regex_match(m.at("date"), std::regex(R"(20[0-9]{2}-[0-9]{2}-[0-9]{2}T[0-9]{2}:[0-9]{2}Z)")))
+      << m.at("date");
+  EXPECT_FALSE(m.at("compiler").empty());
 }
 
 }  // namespace
