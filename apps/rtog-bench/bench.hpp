@@ -57,6 +57,9 @@ struct Options {
   std::string raster_dir;                   ///< each dataset's first rtog map as a raster here (Default: "", none)
 };
 
+/// True if `opts.methods` names part of `method` (or names nothing: every method runs).
+bool selected(const Options& opts, const std::string& method);
+
 /// `s` with every character but letters and digits made '_', for file names.
 std::string slug(std::string s);
 
