@@ -24,6 +24,7 @@
 
 #include "methods.hpp"
 #include "octomap_compare.hpp"
+#include "rtog/app/output_files.hpp"
 #include "rtog/core/occupancy_map.hpp"
 #include "rtog/image/tum_dataset.hpp"
 #include "rtog/mrpt/CRTreeOccupancyGridMap.h"
@@ -262,9 +263,10 @@ std::size_t writeLogOddsRaster(const OccupancyMap& map, const std::string& path)
         std::fill_n(raster.begin() + static_cast<std::ptrdiff_t>(first), b.max.x - b.min.x + 1, value);
       }
   });
-  std::ofstream file(path, std::ios::binary);
-  file.write(reinterpret_cast<const char*>(raster.data()), static_cast<std::streamsize>(raster.size()));
-  if (!file) throw std::runtime_error("cannot write " + path);
+  app::OutputSet files;
+  files.add("--raster-dir", path)
+      .write(reinterpret_cast<const char*>(raster.data()), static_cast<std::streamsize>(raster.size()));
+  files.commit();
   return raster.size();
 }
 

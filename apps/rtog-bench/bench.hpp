@@ -3,6 +3,7 @@
 #pragma once
 
 #include <functional>
+#include <iosfwd>
 #include <map>
 #include <string>
 #include <vector>
@@ -11,6 +12,9 @@
 
 namespace rtog {
 class OccupancyMap;
+}
+namespace rtog::app {
+class OutputSet;
 }
 
 namespace rtog::bench {
@@ -92,13 +96,28 @@ std::map<std::string, std::string> machineFacts();
 /// This machine, now, with the rounds of `opts`.
 RunInfo currentRun(const Options& opts);
 
-/// JSON of the results and the run; a Markdown report with target ratios and PASS/FAIL.
-void writeJson(const std::vector<Result>& results, const RunInfo& run, const std::string& path);
+/// JSON of the results and the run.
+void writeJson(const std::vector<Result>& results, const RunInfo& run, std::ostream& out);
 /// Reads writeJson's file back (for a report re-rendered without measuring again). A file from
 /// before the rounds were recorded gets the default rounds. Throws std::runtime_error naming
 /// what is missing or malformed.
 std::vector<Result> readJson(const std::string& path, RunInfo& run);
-void writeMarkdown(const std::vector<Result>& results, const RunInfo& run, const std::string& path,
-                   const std::string& img_dir);
+/// The Markdown report with target ratios and PASS/FAIL; its bar charts are added to `files`
+/// as PNGs in `img_dir` (the report links them as img/NAME.png).
+void writeMarkdown(const std::vector<Result>& results, const RunInfo& run, std::ostream& md,
+                   const std::string& img_dir, app::OutputSet& files);
+
+/// A run of the bench as its command line gives it.
+struct Command {
+  Options opts;
+  std::string tum_dir;            ///< TUM depth sequence
+  std::string mrpt_datasets_dir;  ///< Debian mrpt-common's datasets
+  std::vector<std::string> only;  ///< datasets: tum, vlp16, rotscan, sena (none: all)
+  std::string json, markdown, img_dir = ".";
+  std::string from_json;          ///< render the report from this JSON, measure nothing
+};
+/// Measures (or reads --from-json), then writes the report's files all or none. Progress goes
+/// to `out`. Returns the exit code.
+int runCommand(const Command& cmd, std::ostream& out, std::ostream& err);
 
 }  // namespace rtog::bench

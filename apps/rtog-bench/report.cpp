@@ -3,6 +3,7 @@
 #include <cmath>
 #include <fstream>
 #include <iomanip>
+#include <ostream>
 #include <set>
 #include <sstream>
 #include <stdexcept>
@@ -12,6 +13,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "bench.hpp"
+#include "rtog/app/output_files.hpp"
 
 namespace rtog::bench {
 namespace {
@@ -32,8 +34,7 @@ const Result* bestOctomap(const std::vector<Result>& rs, const std::string& data
   return best;
 }
 
-void barChart(const std::vector<std::pair<std::string, double>>& bars, const std::string& title,
-              const std::string& path) {
+void barChart(const std::vector<std::pair<std::string, double>>& bars, const std::string& title, std::ostream& png) {
   const int w = 900, row = 26, top = 40, left = 330;
   cv::Mat img(top + row * int(bars.size()) + 20, w, CV_8UC3, cv::Scalar(255, 255, 255));
   cv::putText(img, title, {10, 25}, cv::FONT_HERSHEY_SIMPLEX, 0.6, {0, 0, 0}, 1, cv::LINE_AA);
@@ -50,7 +51,9 @@ void barChart(const std::vector<std::pair<std::string, double>>& bars, const std
     v << std::setprecision(3) << bars[i].second;
     cv::putText(img, v.str(), {left + len + 6, y + 17}, cv::FONT_HERSHEY_SIMPLEX, 0.42, {0, 0, 0}, 1, cv::LINE_AA);
   }
-  if (!cv::imwrite(path, img)) throw std::runtime_error("cannot write " + path);
+  std::vector<unsigned char> bytes;
+  if (!cv::imencode(".png", img, bytes)) throw std::runtime_error("cannot encode the chart '" + title + "' as PNG");
+  png.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
 }
 
 }  // namespace
@@ -69,7 +72,7 @@ RunInfo currentRun(const Options& opts) {
   return info;
 }
 
-void writeJson(const std::vector<Result>& results, const RunInfo& run, const std::string& path) {
+void writeJson(const std::vector<Result>& results, const RunInfo& run, std::ostream& out) {
   nlohmann::json j;
   j["machine"] = run.machine;
   j["rounds"] = {{"repeats", run.repeats}, {"min_seconds", run.min_seconds}};
@@ -87,9 +90,7 @@ void writeJson(const std::vector<Result>& results, const RunInfo& run, const std
                             {"file_bytes", r.file_bytes},
                             {"octomap_class_agreement", r.octomap_agreement},
                             {"extra", r.extra}});
-  std::ofstream out(path);
   out << j.dump(2) << "\n";
-  if (!out) throw std::runtime_error("cannot write " + path);
 }
 
 std::vector<Result> readJson(const std::string& path, RunInfo& run) {
@@ -127,9 +128,8 @@ std::vector<Result> readJson(const std::string& path, RunInfo& run) {
   return results;
 }
 
-void writeMarkdown(const std::vector<Result>& results, const RunInfo& run, const std::string& path,
-                   const std::string& img_dir) {
-  std::ostringstream md;
+void writeMarkdown(const std::vector<Result>& results, const RunInfo& run, std::ostream& md,
+                   const std::string& img_dir, app::OutputSet& files) {
   const auto field = [&](const char* key) {
     const auto it = run.machine.find(key);
     return it == run.machine.end() ? std::string("?") : it->second;
@@ -151,8 +151,8 @@ void writeMarkdown(const std::vector<Result>& results, const RunInfo& run, const
      << "the same rounds: the throughput of two independent one-thread builds at once over that of one\n"
      << "(a yardstick, not a bound: two maps fill twice the cache one shared map does); and the steal,\n"
      << "the share of the vCPUs' time the hypervisor gave others during the two-thread builds (/proc/stat).\n\n"
-     << "Machine: " << field("cpu") << ", " << field("cores") << " cores, " << field("memory") << " RAM, "
-     << field("os") << "; " << field("compiler") << "; OctoMap " << field("octomap") << ", MRPT " << field("mrpt") << "; "
+     << "Machine: " << field("cpu") << ", " << field("cores") << " cores, " << field("memory") << " RAM"
+     << (run.machine.count("os") ? ", " + field("os") : std::string()) << "; " << field("compiler") << "; OctoMap " << field("octomap") << ", MRPT " << field("mrpt") << "; "
      << field("date") << ".\n\n"
      << "Reproduce: `./build/apps/rtog-bench/rtog-bench --markdown doc/benchmarks.md --json doc/benchmarks.json "
         "--img-dir doc/img`; to render this report again from the JSON without measuring, "
@@ -279,7 +279,8 @@ void writeMarkdown(const std::vector<Result>& results, const RunInfo& run, const
       bars.push_back({r.method, r.insert_seconds});
     }
     const std::string img = slug(ds) + "_" + slug(std::to_string(res)) + "_insert.png";
-    barChart(bars, "insertion time [s], " + ds + ", " + std::to_string(res).substr(0, 4) + " m", img_dir + "/" + img);
+    barChart(bars, "insertion time [s], " + ds + ", " + std::to_string(res).substr(0, 4) + " m",
+             files.add("--img-dir", img_dir + "/" + img));
     md << "\n![insertion time](img/" << img << ")\n";
   }
   md << "\n## Accuracy against ground truth\n\n"
@@ -287,9 +288,6 @@ void writeMarkdown(const std::vector<Result>& results, const RunInfo& run, const
      << "MRPT's dense grids from simulated LiDAR and 2D scans of a seeded synthetic world whose occupancy is\n"
      << "known, and scores precision/recall and ROC AUC. Figures and how to reproduce them: `doc/accuracy.md`.\n\n"
      << "![ROC curves against the synthetic ground truth](img/roc_synthetic.png)\n";
-  std::ofstream out(path);
-  out << md.str();
-  if (!out) throw std::runtime_error("cannot write " + path);
 }
 
 }  // namespace rtog::bench

@@ -14,6 +14,7 @@
 #include <string>
 
 #include "bench.hpp"
+#include "rtog/app/output_files.hpp"
 
 using namespace rtog::bench;
 
@@ -26,6 +27,21 @@ std::string slurp(const std::string& path) {
   return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
 }
 
+void writeJsonFile(const std::vector<Result>& results, const RunInfo& run, const std::string& path) {
+  rtog::app::OutputSet files;
+  writeJson(results, run, files.add("--json", path));
+  files.commit();
+}
+
+/// The Markdown report as rtog-bench writes it, its charts into `img_dir`.
+std::string markdownOf(const std::vector<Result>& results, const RunInfo& run, const std::string& img_dir) {
+  const std::string path = ::testing::TempDir() + "/bench_report.md";
+  rtog::app::OutputSet files;
+  writeMarkdown(results, run, files.add("--markdown", path), img_dir, files);
+  files.commit();
+  return slurp(path);
+}
+
 TEST(BenchReport, JsonReadsBackAsWritten) {
   RunInfo run;
   const std::vector<Result> results = readJson(kRun, run);
@@ -36,7 +52,7 @@ TEST(BenchReport, JsonReadsBackAsWritten) {
   EXPECT_FALSE(run.machine.at("cpu").empty());
 
   const std::string copy = ::testing::TempDir() + "/bench_copy.json";
-  writeJson(results, run, copy);
+  writeJsonFile(results, run, copy);
   RunInfo again;
   const std::vector<Result> back = readJson(copy, again);
   ASSERT_EQ(back.size(), results.size());
@@ -66,9 +82,7 @@ TEST(BenchReport, BrokenJsonIsAnError) {
 TEST(BenchReport, SpeedVerdictsFollowFromTheBuildTimes) {
   RunInfo run;
   const std::vector<Result> results = readJson(kRun, run);
-  const std::string md_path = ::testing::TempDir() + "/bench_report.md";
-  writeMarkdown(results, run, md_path, ::testing::TempDir());
-  std::istringstream md(slurp(md_path));
+  std::istringstream md(markdownOf(results, run, ::testing::TempDir()));
   int rows = 0;
   for (std::string line; std::getline(md, line);) {
     const std::string marker = "insertion ≥ 20× faster than OctoMap's best (";
