@@ -63,10 +63,6 @@ void buildInRounds(const Options& opts, std::vector<std::vector<double>>& times,
     }
   }
 }
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v.empty() ? 0.0 : v[v.size() / 2];
-}
 
 /// CPU seconds the hypervisor ran something else while this guest had work (the "steal" of
 /// /proc/stat), summed over the CPUs; 0 where the kernel does not count it.
@@ -94,6 +90,11 @@ double residentBytes() {
 }
 
 }  // namespace
+
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v.empty() ? 0.0 : v[v.size() / 2];
+}
 
 bool selected(const Options& o, const std::string& method) {
   return o.methods.empty() || std::any_of(o.methods.begin(), o.methods.end(), [&](const std::string& s) {

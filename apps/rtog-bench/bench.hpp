@@ -63,6 +63,8 @@ struct Options {
 
 /// True if `opts.methods` names part of `method` (or names nothing: every method runs).
 bool selected(const Options& opts, const std::string& method);
+/// The middle value (of an even count the upper one); 0 for none.
+double median(std::vector<double> v);
 
 /// `s` with every character but letters and digits made '_', for file names.
 std::string slug(std::string s);
@@ -115,6 +117,7 @@ struct Command {
   std::vector<std::string> only;  ///< datasets: tum, vlp16, rotscan, sena (none: all)
   std::string json, markdown, img_dir = ".";
   std::string from_json;          ///< render the report from this JSON, measure nothing
+  std::string first_scan_helper;  ///< the rtog-first-scan executable
 };
 /// Measures (or reads --from-json), then writes the report's files all or none. Progress goes
 /// to `out`. Returns the exit code.

@@ -1,9 +1,21 @@
 // rtog-bench: run by hand on a quiet machine (Release build); not a test.
+#include <unistd.h>
+
+#include <filesystem>
 #include <iostream>
 
 #include <CLI/CLI.hpp>
 
 #include "bench.hpp"
+
+namespace {
+/// rtog-first-scan beside this executable (both are built into the same directory).
+std::string helperBesideThisExecutable() {
+  std::error_code ec;
+  const auto self = std::filesystem::read_symlink("/proc/self/exe", ec);
+  return ec ? std::string("rtog-first-scan") : (self.parent_path() / "rtog-first-scan").string();
+}
+}  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{"rtog-bench: rtog vs OctoMap and MRPT grids on real data, side by side"};
@@ -13,11 +25,12 @@ int main(int argc, char** argv) {
   cmd.tum_dir = RTOG_DEFAULT_TUM_DIR;
   cmd.json = "benchmarks.json";
   cmd.markdown = "benchmarks.md";
+  cmd.first_scan_helper = helperBesideThisExecutable();
   app.add_option("--tum", cmd.tum_dir, "TUM depth sequence directory")->capture_default_str();
   app.add_option("--mrpt-datasets", cmd.mrpt_datasets_dir, "Debian mrpt-common datasets directory")->capture_default_str();
   app.add_option("--only", cmd.only, "Run only these datasets: tum, vlp16, rotscan, sena");
   app.add_option("--methods", opts.methods,
-                 "Run only methods whose name contains one of these (profiling)");
+                 "Run only methods whose name contains one of these (profiling; \"first scan\": the fresh-process rows)");
   app.add_option("--repeats", opts.repeats, "Rounds of builds, every method in each (median reported)")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
@@ -33,6 +46,9 @@ int main(int argc, char** argv) {
       ->check(CLI::ExistingFile);
   app.add_option("--raster-dir", opts.raster_dir, "Write each dataset's first rtog map as a byte-per-cell raster here")
       ->check(CLI::ExistingDirectory);
+  app.add_option("--first-scan-helper", cmd.first_scan_helper, "The rtog-first-scan executable (fresh-process rows)")
+      ->capture_default_str()
+      ->check(CLI::ExistingFile);
   CLI11_PARSE(app, argc, argv);
   return rtog::bench::runCommand(cmd, std::cout, std::cerr);
 }

@@ -13,6 +13,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "bench.hpp"
+#include "first_scan.hpp"
 #include "rtog/app/output_files.hpp"
 
 namespace rtog::bench {
@@ -54,6 +55,14 @@ void barChart(const std::vector<std::pair<std::string, double>>& bars, const std
   std::vector<unsigned char> bytes;
   if (!cv::imencode(".png", img, bytes)) throw std::runtime_error("cannot encode the chart '" + title + "' as PNG");
   png.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+}
+
+/// The dataset and resolution pairs of the bench's own rows (the first-scan rows have their own).
+std::set<std::pair<std::string, double>> benchGroups(const std::vector<Result>& results) {
+  std::set<std::pair<std::string, double>> groups;
+  for (const auto& r : results)
+    if (!r.extra.count("first_scan")) groups.insert({r.dataset, r.resolution});
+  return groups;
 }
 
 }  // namespace
@@ -158,8 +167,7 @@ void writeMarkdown(const std::vector<Result>& results, const RunInfo& run, std::
         "--img-dir doc/img`; to render this report again from the JSON without measuring, "
         "`--from-json doc/benchmarks.json` in place of `--json`.\n\n";
 
-  std::set<std::pair<std::string, double>> groups;
-  for (const auto& r : results) groups.insert({r.dataset, r.resolution});
+  const auto groups = benchGroups(results);
 
   md << "## Targets\n\n| dataset | res | target | measured | verdict |\n|---|---|---|---|---|\n";
   for (const auto& [ds, res] : groups) {
@@ -257,13 +265,16 @@ void writeMarkdown(const std::vector<Result>& results, const RunInfo& run, std::
     }
   }
 
+  writeFirstScanTargets(results, md);
+
   for (const auto& [ds, res] : groups) {
     md << "\n## " << ds << ", " << res << " m\n\n"
        << "| method | insert [s] | M points/s | structure [MiB] | RSS growth [MiB] | leaves | point query [ns] | file [MiB] "
           "| class agreement with OctoMap | LF likelihood [µs/scan] |\n|---|---|---|---|---|---|---|---|---|---|\n";
     std::vector<std::pair<std::string, double>> bars;
     for (const auto& r : results) {
-      if (r.dataset != ds || r.resolution != res || r.extra.count("calibration")) continue;
+      if (r.dataset != ds || r.resolution != res || r.extra.count("calibration") || r.extra.count("first_scan"))
+        continue;
       md << "| " << r.method << " | " << std::fixed << std::setprecision(4) << r.insert_seconds << " | "
          << std::setprecision(2) << r.points_per_second / 1e6 << " | " << std::setprecision(2)
          << r.structure_bytes / 1048576.0 << " | " << r.rss_growth_bytes / 1048576.0 << " | " << r.leaves << " | "
@@ -283,6 +294,7 @@ void writeMarkdown(const std::vector<Result>& results, const RunInfo& run, std::
              files.add("--img-dir", img_dir + "/" + img));
     md << "\n![insertion time](img/" << img << ")\n";
   }
+  writeFirstScanSection(results, md);
   md << "\n## Accuracy against ground truth\n\n"
      << "Speed and memory say nothing about how good a map is: `rtog-accuracy` builds rtog, OctoMap and\n"
      << "MRPT's dense grids from simulated LiDAR and 2D scans of a seeded synthetic world whose occupancy is\n"
