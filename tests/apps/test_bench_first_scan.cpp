@@ -58,12 +58,14 @@ TEST(BenchFirstScan, EveryMapTypeHasASaneRow) {
     EXPECT_GE(r.extra.at("heap_held_bytes"), r.extra.at("heap_held_uordblks_bytes") - 1.0);
     EXPECT_LT(r.extra.at("heap_held_bytes"), 64.0 * 1048576.0);
   }
+#ifndef RTOG_SANITIZED  // a sanitizer's allocator is not glibc's: mallinfo2 does not see it
   // The rtog and OctoMap maps start empty: the scan's cells are all held after it.
   for (const Result& r : rows) {
     if (r.method.find("COccupancyGridMap2D") == std::string::npos) {
       EXPECT_GE(r.extra.at("heap_held_bytes"), 0.5 * double(r.structure_bytes)) << r.method;
     }
   }
+#endif
 }
 
 TEST(BenchFirstScan, RowsSurviveTheJsonAndReachTheTargets) {
