@@ -1,15 +1,9 @@
 #include "accuracy.hpp"
 
 #include <chrono>
-#include <cstdio>
 #include <cmath>
-#include <fstream>
 #include <functional>
-#include <iomanip>
-#include <iostream>
-#include <limits>
 #include <sstream>
-#include <stdexcept>
 
 #include <mrpt/maps/COccupancyGridMap2D.h>
 #include <mrpt/maps/COccupancyGridMap3D.h>
@@ -324,139 +318,6 @@ Report run(const Config& cfg, std::ostream& log) {
   }
   rep.total_seconds = secondsSince(t_start);
   return rep;
-}
-
-// ---- output ------------------------------------------------------------------------------
-
-namespace {
-std::string jsonEscape(const std::string& s) {
-  std::string o;
-  for (char c : s) {
-    if (c == '"' || c == '\\') o += '\\';
-    o += c;
-  }
-  return o;
-}
-}  // namespace
-
-void writeJson(const Report& r, std::ostream& os) {
-  os << std::setprecision(9);
-  const Config& c = r.config;
-  os << "{\n  \"config\": {\"seed\": " << c.seed << ", \"lidar_seed\": " << c.lidar_seed
-     << ", \"scanner_seed\": " << c.scanner_seed << ", \"resolution\": " << c.resolution
-     << ", \"stride\": " << c.stride << ", \"lidar\": {\"rings\": " << c.lidar.rings
-     << ", \"azimuth_steps\": " << c.lidar.azimuth_steps << ", \"elev_min_deg\": " << c.lidar.elev_min_deg
-     << ", \"elev_max_deg\": " << c.lidar.elev_max_deg << ", \"max_range\": " << c.lidar.max_range
-     << ", \"sigma\": " << c.lidar.sigma << ", \"height\": " << c.lidar.height
-     << "}, \"scanner\": {\"fov_deg\": " << c.scanner.fov_deg << ", \"step_deg\": " << c.scanner.step_deg
-     << ", \"max_range\": " << c.scanner.max_range << ", \"sigma\": " << c.scanner.sigma
-     << ", \"height\": " << c.scanner.height << "}},\n";
-  os << "  \"world\": \"" << jsonEscape(r.world_summary) << "\",\n";
-  os << "  \"versions\": {\"octomap\": \"" << r.octomap_version << "\", \"mrpt\": \"" << r.mrpt_version << "\"},\n";
-  os << "  \"total_seconds\": " << r.total_seconds << ",\n  \"scenarios\": [\n";
-  for (std::size_t i = 0; i < r.scenarios.size(); ++i) {
-    const Scenario& s = r.scenarios[i];
-    os << "    {\"name\": \"" << s.name << "\", \"description\": \"" << jsonEscape(s.description)
-       << "\", \"scans\": " << s.scans << ", \"beams\": " << s.beams << ", \"returns\": " << s.returns
-       << ", \"region_cells\": " << s.region_cells << ", \"evaluated_cells\": " << s.evaluated_cells
-       << ", \"truth_occupied\": " << s.truth_occupied << ", \"truth_free\": " << s.truth_free << "}"
-       << (i + 1 < r.scenarios.size() ? "," : "") << "\n";
-  }
-  os << "  ],\n  \"results\": [\n";
-  for (std::size_t i = 0; i < r.results.size(); ++i) {
-    const MapResult& m = r.results[i];
-    const sim::ClassMetrics& x = m.metrics;
-    os << "    {\"scenario\": \"" << m.scenario << "\", \"map\": \"" << m.map << "\", \"insert_seconds\": "
-       << m.insert_seconds << ", \"observed_cells\": " << m.observed_cells
-       << ", \"observed_outside\": " << m.observed_outside << ", \"class_agreement_with_octomap\": "
-       << m.agreement_octomap << ",\n     \"cells\": " << x.cells
-       << ", \"pred_occupied\": " << x.pred_occupied << ", \"pred_free\": " << x.pred_free
-       << ", \"unknown\": " << x.unknown << ", \"tp_occupied\": " << x.tp_occupied << ", \"tp_free\": " << x.tp_free
-       << ",\n     \"precision_occupied\": " << x.precision_occupied << ", \"recall_occupied\": " << x.recall_occupied
-       << ", \"precision_free\": " << x.precision_free << ", \"recall_free\": " << x.recall_free
-       << ", \"auc\": " << x.auc << ",\n     \"roc\": [";
-    for (std::size_t k = 0; k < x.roc.size(); ++k)
-      os << (k ? ", " : "") << "[" << x.roc[k].first << ", " << x.roc[k].second << "]";
-    os << "]}" << (i + 1 < r.results.size() ? "," : "") << "\n";
-  }
-  os << "  ]\n}\n";
-}
-
-void writeMarkdown(const Report& r, std::ostream& os) {
-  os << std::fixed;
-  for (const Scenario& s : r.scenarios) {
-    os << "**" << s.name << "** — " << s.description << "; " << s.scans << " scans, " << s.beams << " beams ("
-       << s.returns << " returns); evaluated cells " << s.evaluated_cells << " (truth: " << s.truth_occupied
-       << " occupied, " << s.truth_free << " free)\n\n";
-    os << "| map | observed cells | occupied precision | occupied recall | free precision | free recall | ROC AUC | "
-          "same class as OctoMap | insert time [s] |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|\n";
-    for (const MapResult& m : r.results) {
-      if (m.scenario != s.name) continue;
-      const auto& x = m.metrics;
-      os << "| " << m.map << " | " << m.observed_cells << " | " << std::setprecision(4) << x.precision_occupied
-         << " | " << x.recall_occupied << " | " << x.precision_free << " | " << x.recall_free << " | " << x.auc
-         << " | " << m.agreement_octomap << " | " << std::setprecision(2) << m.insert_seconds << " |\n";
-    }
-    os << "\n";
-  }
-}
-
-// ---- command line ------------------------------------------------------------------------
-
-int main(int argc, char** argv, std::ostream& out, std::ostream& err) {
-  Config cfg;
-  std::string json, markdown, png;
-  const std::string usage =
-      "usage: rtog-accuracy [--seed N] [--resolution M] [--stride K] [--sigma M] [--quick]\n"
-      "                     [--json FILE] [--markdown FILE] [--png FILE]\n";
-  try {
-    for (int i = 1; i < argc; ++i) {
-      const std::string a = argv[i];
-      auto value = [&]() -> std::string {
-        if (i + 1 >= argc) throw std::invalid_argument("missing value after " + a);
-        return argv[++i];
-      };
-      if (a == "--seed") cfg.seed = static_cast<std::uint32_t>(std::stoul(value()));
-      else if (a == "--resolution") cfg.resolution = std::stod(value());
-      else if (a == "--stride") cfg.stride = std::stoi(value());
-      else if (a == "--sigma") cfg.lidar.sigma = cfg.scanner.sigma = std::stod(value());
-      else if (a == "--quick") cfg.stride = 4;
-      else if (a == "--json") json = value();
-      else if (a == "--markdown") markdown = value();
-      else if (a == "--png") png = value();
-      else if (a == "-h" || a == "--help") {
-        out << usage;
-        return 0;
-      } else
-        throw std::invalid_argument("unknown argument '" + a + "'");
-    }
-    if (!(cfg.resolution > 0) || cfg.stride < 1) throw std::invalid_argument("bad --resolution or --stride");
-  } catch (const std::exception& e) {
-    err << "rtog-accuracy: " << e.what() << "\n" << usage;
-    return 2;
-  }
-  try {
-    const Report rep = run(cfg, err);
-    writeMarkdown(rep, out);
-    auto writeFile = [](const std::string& path, const std::function<void(std::ostream&)>& fn) {
-      const std::string tmp = path + ".tmp";
-      {
-        std::ofstream f(tmp);
-        if (!f) throw std::runtime_error("cannot write " + path);
-        fn(f);
-        if (!f) throw std::runtime_error("error writing " + path);
-      }
-      if (std::rename(tmp.c_str(), path.c_str()) != 0) throw std::runtime_error("cannot write " + path);
-    };
-    if (!json.empty()) writeFile(json, [&](std::ostream& os) { writeJson(rep, os); });
-    if (!markdown.empty()) writeFile(markdown, [&](std::ostream& os) { writeMarkdown(rep, os); });
-    if (!png.empty()) writeRocPng(rep, png);
-    err << "total " << rep.total_seconds << " s\n";
-  } catch (const std::exception& e) {
-    err << "rtog-accuracy: " << e.what() << "\n";
-    return 1;
-  }
-  return 0;
 }
 
 }  // namespace rtog::accuracy

@@ -63,12 +63,14 @@ Report run(const Config& cfg, std::ostream& log);
 
 void writeJson(const Report& r, std::ostream& os);
 void writeMarkdown(const Report& r, std::ostream& os);
-/// ROC curves, one panel per scenario, one coloured curve per map, with a legend (OpenCV).
-/// Throws std::runtime_error if the file cannot be written.
-void writeRocPng(const Report& r, const std::string& path);
+/// ROC curves as a PNG image, one panel per scenario, one coloured curve per map, with a legend
+/// (OpenCV). Throws std::runtime_error if the image cannot be encoded.
+void writeRocPng(const Report& r, std::ostream& os);
 
-/// The command line: `rtog-accuracy [--seed N] [--resolution R] [--stride K] [--json FILE]
-/// [--markdown FILE] [--png FILE] [--quick]`. Returns the exit code.
+/// The command line: `rtog-accuracy [--seed N] [--resolution M] [--stride K | --quick]
+/// [--sigma M] [--json FILE] [--markdown FILE] [--png FILE]`; the files are written all or
+/// none (rtog/app/output_files.hpp). Returns the exit code: 0, 1 (run or files failed), 2 (bad
+/// command line).
 int main(int argc, char** argv, std::ostream& out, std::ostream& err);
 
 }  // namespace rtog::accuracy

@@ -1,8 +1,10 @@
 // ROC plot of the accuracy report, drawn with OpenCV.
 #include <cmath>
 #include <cstdio>
+#include <ostream>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -90,7 +92,7 @@ void panel(cv::Mat& img, cv::Rect area, const Report& r, const Scenario& sc, con
 }
 }  // namespace
 
-void writeRocPng(const Report& r, const std::string& path) {
+void writeRocPng(const Report& r, std::ostream& os) {
   // Top row: the whole curves; bottom row: the top-left corner where they differ.
   const int w = 600, h = 520;
   const int n = static_cast<int>(r.scenarios.size());
@@ -104,7 +106,10 @@ void writeRocPng(const Report& r, const std::string& path) {
   std::snprintf(title, sizeof title, "ROC of P(occupied) vs ground truth - synthetic world seed %u, %.2f m cells",
                 r.config.seed, r.config.resolution);
   text(img, title, cv::Point(20, 24), 0.6, {0, 0, 0}, 1);
-  if (!cv::imwrite(path, img, {cv::IMWRITE_PNG_COMPRESSION, 9})) throw std::runtime_error("cannot write " + path);
+  std::vector<unsigned char> bytes;
+  if (!cv::imencode(".png", img, bytes, {cv::IMWRITE_PNG_COMPRESSION, 9}))
+    throw std::runtime_error("cannot encode the ROC plot as PNG");
+  os.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
 }
 
 }  // namespace rtog::accuracy

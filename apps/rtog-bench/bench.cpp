@@ -7,17 +7,13 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <cstdio>
 #include <fstream>
 #include <functional>
 #include <iomanip>
 #include <memory>
 #include <random>
-#include <sstream>
 #include <thread>
 
-#include <mrpt/maps/COccupancyGridMap3D.h>
-#include <mrpt/maps/COctoMap.h>
 #include <mrpt/maps/COccupancyGridMap2D.h>
 #include <mrpt/maps/CSimplePointsMap.h>
 #include <mrpt/obs/CObservationRotatingScan.h>
@@ -26,7 +22,9 @@
 #include <mrpt/obs/CRawlog.h>
 #include <octomap/OcTree.h>
 
+#include "methods.hpp"
 #include "octomap_compare.hpp"
+#include "rtog/app/output_files.hpp"
 #include "rtog/core/occupancy_map.hpp"
 #include "rtog/image/tum_dataset.hpp"
 #include "rtog/mrpt/CRTreeOccupancyGridMap.h"
@@ -65,10 +63,6 @@ void buildInRounds(const Options& opts, std::vector<std::vector<double>>& times,
     }
   }
 }
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v.empty() ? 0.0 : v[v.size() / 2];
-}
 
 /// CPU seconds the hypervisor ran something else while this guest had work (the "steal" of
 /// /proc/stat), summed over the CPUs; 0 where the kernel does not count it.
@@ -95,255 +89,18 @@ double residentBytes() {
   return resident * 4096.0;
 }
 
-/// A method under test: build() inserts every scan into a fresh map and returns the
-/// insertion time; the rest reads the map it built last.
-struct Method {
-  virtual ~Method() = default;
-  virtual std::string name() const = 0;
-  virtual double build(const Dataset& d) = 0;
-  virtual std::size_t structureBytes() const = 0;
-  virtual std::size_t leaves() const = 0;
-  virtual double queryNs(const std::vector<Eigen::Vector3d>& pts) const = 0;
-  virtual std::size_t fileBytes() const { return 0; }
-  virtual const OccupancyMap* rtogMap() const { return nullptr; }
-  virtual const octomap::OcTree* octree() const { return nullptr; }
-  /// Not a map but a yardstick of the machine, built in the same rounds (no map figures).
-  virtual bool calibration() const { return false; }
-  /// A build that allocates so much memory (a dense grid: up to 1.7 GB) that the kernel, paging
-  /// it in and out, keeps a core busy after it: builds after the other methods' rounds.
-  virtual bool heavy() const { return false; }
-};
+}  // namespace
 
-template <class Fn>
-double timeQueries(const std::vector<Eigen::Vector3d>& pts, Fn&& fn) {
-  std::size_t sink = 0;
-  const auto t0 = Clock::now();
-  for (const auto& p : pts) sink += fn(p);
-  const double s = seconds(t0, Clock::now());
-  if (sink == std::size_t(-1)) std::puts("");  // keeps the loop observable
-  return pts.empty() ? 0.0 : s / double(pts.size()) * 1e9;
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v.empty() ? 0.0 : v[v.size() / 2];
 }
-
-class RtogMethod : public Method {
- public:
-  RtogMethod(std::string label, double res, MergePolicy merge, InsertParams ip)
-      : label_(std::move(label)), ip_(ip) {
-    params_.resolution = res;
-    params_.merge = merge;
-  }
-  std::string name() const override { return label_; }
-  double build(const Dataset& d) override {
-    map_ = std::make_unique<OccupancyMap>(params_);
-    const auto t0 = Clock::now();
-    for (const Scan& s : d.scans) map_->insertPointCloud(s.origin, s.points, ip_);
-    map_->flush();  // a no-op unless planar scans wait in the cache
-    return seconds(t0, Clock::now());
-  }
-  std::size_t structureBytes() const override { return map_->memoryBytes(); }
-  std::size_t leaves() const override { return map_->leafCount(); }
-  double queryNs(const std::vector<Eigen::Vector3d>& pts) const override {
-    return timeQueries(pts, [&](const Eigen::Vector3d& p) { return std::size_t(map_->stateAt(p)); });
-  }
-  std::size_t fileBytes() const override {
-    std::ostringstream os;
-    map_->write(os);
-    return os.str().size();
-  }
-  const OccupancyMap* rtogMap() const override { return map_.get(); }
-
- private:
-  std::string label_;
-  MapParams params_;
-  InsertParams ip_;
-  std::unique_ptr<OccupancyMap> map_;
-};
-
-class OctomapMethod : public Method {
- public:
-  OctomapMethod(double res, bool lazy, bool discretize, double max_range)
-      : res_(res), lazy_(lazy), discretize_(discretize), max_range_(max_range) {}
-  std::string name() const override {
-    return std::string("OctoMap") + (lazy_ ? " lazy" : "") + (discretize_ ? " discretize" : "");
-  }
-  double build(const Dataset& d) override {
-    tree_ = std::make_unique<octomap::OcTree>(res_);
-    std::vector<octomap::Pointcloud> clouds(d.scans.size());
-    for (std::size_t i = 0; i < d.scans.size(); ++i)
-      for (const auto& q : d.scans[i].points) clouds[i].push_back(q.x(), q.y(), q.z());
-    const auto t0 = Clock::now();
-    for (std::size_t i = 0; i < d.scans.size(); ++i) {
-      const auto& o = d.scans[i].origin;
-      tree_->insertPointCloud(clouds[i], octomap::point3d(float(o.x()), float(o.y()), float(o.z())), max_range_, lazy_,
-                              discretize_);
-    }
-    if (lazy_) tree_->updateInnerOccupancy();
-    return seconds(t0, Clock::now());
-  }
-  std::size_t structureBytes() const override { return tree_->memoryUsage(); }
-  std::size_t leaves() const override { return tree_->getNumLeafNodes(); }
-  double queryNs(const std::vector<Eigen::Vector3d>& pts) const override {
-    return timeQueries(pts, [&](const Eigen::Vector3d& p) {
-      const auto* n = tree_->search(p.x(), p.y(), p.z());
-      return n ? std::size_t(tree_->isNodeOccupied(n)) + 1 : 0;
-    });
-  }
-  std::size_t fileBytes() const override {
-    std::ostringstream os;
-    tree_->write(os);  // .ot with full probabilities, like rtog's file (.bt keeps only classes)
-    return os.str().size();
-  }
-  const octomap::OcTree* octree() const override { return tree_.get(); }
-
- private:
-  double res_;
-  bool lazy_, discretize_;
-  double max_range_;
-  std::unique_ptr<octomap::OcTree> tree_;
-};
-
-mrpt::maps::CSimplePointsMap toPointsMap(const Scan& s) {
-  mrpt::maps::CSimplePointsMap pm;
-  pm.reserve(s.points.size());
-  for (const auto& q : s.points) pm.insertPointFast(q.x(), q.y(), q.z());
-  return pm;
-}
-
-class MrptOctoMapMethod : public Method {
- public:
-  explicit MrptOctoMapMethod(double res) : res_(res) {}
-  std::string name() const override { return "MRPT COctoMap"; }
-  double build(const Dataset& d) override {
-    map_ = std::make_unique<mrpt::maps::COctoMap>(res_);
-    std::vector<mrpt::maps::CSimplePointsMap> clouds;
-    for (const Scan& s : d.scans) clouds.push_back(toPointsMap(s));
-    const auto t0 = Clock::now();
-    for (std::size_t i = 0; i < d.scans.size(); ++i) {
-      const auto& o = d.scans[i].origin;
-      map_->insertPointCloud(clouds[i], float(o.x()), float(o.y()), float(o.z()));
-    }
-    return seconds(t0, Clock::now());
-  }
-  std::size_t structureBytes() const override { return map_->memoryUsage(); }
-  std::size_t leaves() const override { return 0; }  // not exposed by COctoMap (pimpl)
-  double queryNs(const std::vector<Eigen::Vector3d>& pts) const override {
-    return timeQueries(pts, [&](const Eigen::Vector3d& p) {
-      double prob = 0;
-      return std::size_t(map_->getPointOccupancy(float(p.x()), float(p.y()), float(p.z()), prob)) + (prob > 0.5);
-    });
-  }
-
- private:
-  double res_;
-  std::unique_ptr<mrpt::maps::COctoMap> map_;
-};
-
-class DenseGridMethod : public Method {
- public:
-  explicit DenseGridMethod(double res) : res_(res) {}
-  std::string name() const override { return "MRPT COccupancyGridMap3D (dense)"; }
-  bool heavy() const override { return true; }
-  double build(const Dataset& d) override {
-    map_.reset();  // not two grids at once
-    Eigen::Vector3d lo = d.scans.front().origin, hi = lo;
-    for (const Scan& s : d.scans) {
-      lo = lo.cwiseMin(s.origin), hi = hi.cwiseMax(s.origin);
-      for (const auto& q : s.points) lo = lo.cwiseMin(q.cast<double>()), hi = hi.cwiseMax(q.cast<double>());
-    }
-    lo.array() -= res_, hi.array() += res_;
-    map_ = std::make_unique<mrpt::maps::COccupancyGridMap3D>(mrpt::math::TPoint3D(lo.x(), lo.y(), lo.z()),
-                                                             mrpt::math::TPoint3D(hi.x(), hi.y(), hi.z()), float(res_));
-    map_->insertionOptions.maxDistanceInsertion = 1e6f;
-    map_->insertionOptions.decimation = 1;
-    cells_ = 1;
-    for (int a = 0; a < 3; ++a) cells_ *= static_cast<std::size_t>(std::ceil((hi[a] - lo[a]) / res_));
-    std::vector<mrpt::maps::CSimplePointsMap> clouds;
-    for (const Scan& s : d.scans) clouds.push_back(toPointsMap(s));
-    const auto t0 = Clock::now();
-    for (std::size_t i = 0; i < d.scans.size(); ++i) {
-      const auto& o = d.scans[i].origin;
-      map_->insertPointCloud(mrpt::math::TPoint3D(o.x(), o.y(), o.z()), clouds[i]);
-    }
-    return seconds(t0, Clock::now());
-  }
-  std::size_t structureBytes() const override {
-    return cells_ * sizeof(mrpt::maps::COccupancyGridMap3D::voxelType);
-  }
-  std::size_t leaves() const override { return cells_; }
-  double queryNs(const std::vector<Eigen::Vector3d>& pts) const override {
-    return timeQueries(pts, [&](const Eigen::Vector3d& p) {
-      return std::size_t(map_->getFreenessByPos(float(p.x()), float(p.y()), float(p.z())) > 0.5f);
-    });
-  }
-
- private:
-  double res_;
-  std::size_t cells_ = 0;
-  std::unique_ptr<mrpt::maps::COccupancyGridMap3D> map_;
-};
-
-/// Not a map of its own but a yardstick of the machine: two independent one-thread builds at
-/// once, one on a second thread. Built turn by turn with the maps, its throughput over one
-/// build's is what two vCPUs gave rtog's work at those moments, nothing shared (this VM has
-/// spells in which two busy vCPUs each run slower than one). Not a bound: two maps fill twice
-/// the cache that one map built on two threads does.
-class RtogPairMethod : public Method {
- public:
-  RtogPairMethod(double res, MergePolicy merge, InsertParams ip)
-      : first_("first", res, merge, ip), second_("second", res, merge, ip) {}
-  std::string name() const override { return "rtog beam, merge equal, two 1-thread builds at once"; }
-  bool calibration() const override { return true; }
-  double build(const Dataset& d) override {
-    // Each build times its own insertion, not the freeing of its previous map.
-    double second_seconds = 0;
-    std::thread other([&] { second_seconds = second_.build(d); });
-    const double first_seconds = first_.build(d);
-    other.join();
-    if (first_.leaves() != second_.leaves()) throw std::logic_error("two builds of the same scans differ");
-    return std::max(first_seconds, second_seconds);
-  }
-  std::size_t structureBytes() const override { return 0; }
-  std::size_t leaves() const override { return 0; }
-  double queryNs(const std::vector<Eigen::Vector3d>&) const override { return 0; }
-
- private:
-  RtogMethod first_, second_;
-};
 
 bool selected(const Options& o, const std::string& method) {
   return o.methods.empty() || std::any_of(o.methods.begin(), o.methods.end(), [&](const std::string& s) {
            return method.find(s) != std::string::npos;
          });
 }
-
-std::vector<std::unique_ptr<Method>> methodsFor(const Dataset& d, double res, const Options& o) {
-  std::vector<std::unique_ptr<Method>> m;
-  InsertParams beam, endpoint, disc, disc2;
-  beam.max_range = endpoint.max_range = disc.max_range = disc2.max_range = o.max_range;
-  endpoint.model = SensorModel::BeamEndPoint;
-  disc.discretize = disc2.discretize = true;
-  disc2.threads = 2;
-  InsertParams beam2 = beam;
-  beam2.threads = 2;
-  m.push_back(std::make_unique<RtogMethod>("rtog beam, merge equal", res, MergePolicy::Equal, beam));
-  m.push_back(std::make_unique<RtogMethod>("rtog beam, merge equal, 2 threads", res, MergePolicy::Equal, beam2));
-  m.push_back(std::make_unique<RtogMethod>("rtog beam, merge off", res, MergePolicy::Off, beam));
-  m.push_back(std::make_unique<RtogMethod>("rtog beam, merge clamped", res, MergePolicy::Clamped, beam));
-  m.push_back(std::make_unique<RtogMethod>("rtog beam discretize, merge equal", res, MergePolicy::Equal, disc));
-  m.push_back(std::make_unique<RtogMethod>("rtog beam discretize, merge equal, 2 threads", res, MergePolicy::Equal, disc2));
-  m.push_back(std::make_unique<RtogMethod>("rtog end point, merge equal", res, MergePolicy::Equal, endpoint));
-  for (const bool lazy : {false, true})
-    for (const bool discretize : {false, true})
-      m.push_back(std::make_unique<OctomapMethod>(res, lazy, discretize, o.max_range));
-  m.push_back(std::make_unique<MrptOctoMapMethod>(res));
-  m.push_back(std::make_unique<DenseGridMethod>(res));
-  m.push_back(std::make_unique<RtogPairMethod>(res, MergePolicy::Equal, beam));
-  (void)d;
-  m.erase(std::remove_if(m.begin(), m.end(), [&](const auto& method) { return !selected(o, method->name()); }),
-          m.end());
-  return m;
-}
-
-}  // namespace
 
 std::size_t Dataset::points() const {
   std::size_t n = 0;
@@ -507,9 +264,10 @@ std::size_t writeLogOddsRaster(const OccupancyMap& map, const std::string& path)
         std::fill_n(raster.begin() + static_cast<std::ptrdiff_t>(first), b.max.x - b.min.x + 1, value);
       }
   });
-  std::ofstream file(path, std::ios::binary);
-  file.write(reinterpret_cast<const char*>(raster.data()), static_cast<std::streamsize>(raster.size()));
-  if (!file) throw std::runtime_error("cannot write " + path);
+  app::OutputSet files;
+  files.add("--raster-dir", path)
+      .write(reinterpret_cast<const char*>(raster.data()), static_cast<std::streamsize>(raster.size()));
+  files.commit();
   return raster.size();
 }
 

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <functional>
+#include <iosfwd>
 #include <map>
 #include <string>
 #include <vector>
@@ -11,6 +12,9 @@
 
 namespace rtog {
 class OccupancyMap;
+}
+namespace rtog::app {
+class OutputSet;
 }
 
 namespace rtog::bench {
@@ -57,6 +61,11 @@ struct Options {
   std::string raster_dir;                   ///< each dataset's first rtog map as a raster here (Default: "", none)
 };
 
+/// True if `opts.methods` names part of `method` (or names nothing: every method runs).
+bool selected(const Options& opts, const std::string& method);
+/// The middle value (of an even count the upper one); 0 for none.
+double median(std::vector<double> v);
+
 /// `s` with every character but letters and digits made '_', for file names.
 std::string slug(std::string s);
 
@@ -83,16 +92,35 @@ struct RunInfo {
   int repeats = Options{}.repeats;
   double min_seconds = Options{}.min_seconds;
 };
+/// This machine (CPU model, cores, memory, kernel; the compiler, OctoMap and MRPT versions the
+/// bench was built with) and the time, from the system itself.
+std::map<std::string, std::string> machineFacts();
 /// This machine, now, with the rounds of `opts`.
 RunInfo currentRun(const Options& opts);
 
-/// JSON of the results and the run; a Markdown report with target ratios and PASS/FAIL.
-void writeJson(const std::vector<Result>& results, const RunInfo& run, const std::string& path);
+/// JSON of the results and the run.
+void writeJson(const std::vector<Result>& results, const RunInfo& run, std::ostream& out);
 /// Reads writeJson's file back (for a report re-rendered without measuring again). A file from
 /// before the rounds were recorded gets the default rounds. Throws std::runtime_error naming
 /// what is missing or malformed.
 std::vector<Result> readJson(const std::string& path, RunInfo& run);
-void writeMarkdown(const std::vector<Result>& results, const RunInfo& run, const std::string& path,
-                   const std::string& img_dir);
+/// The Markdown report with target ratios and PASS/FAIL; its bar charts are added to `files`
+/// as PNGs in `img_dir` (the report links them as img/NAME.png).
+void writeMarkdown(const std::vector<Result>& results, const RunInfo& run, std::ostream& md,
+                   const std::string& img_dir, app::OutputSet& files);
+
+/// A run of the bench as its command line gives it.
+struct Command {
+  Options opts;
+  std::string tum_dir;            ///< TUM depth sequence
+  std::string mrpt_datasets_dir;  ///< Debian mrpt-common's datasets
+  std::vector<std::string> only;  ///< datasets: tum, vlp16, rotscan, sena (none: all)
+  std::string json, markdown, img_dir = ".";
+  std::string from_json;          ///< render the report from this JSON, measure nothing
+  std::string first_scan_helper;  ///< the rtog-first-scan executable
+};
+/// Measures (or reads --from-json), then writes the report's files all or none. Progress goes
+/// to `out`. Returns the exit code.
+int runCommand(const Command& cmd, std::ostream& out, std::ostream& err);
 
 }  // namespace rtog::bench

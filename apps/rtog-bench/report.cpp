@@ -1,11 +1,9 @@
 // Writes benchmark results: JSON for machines, Markdown + PNG plots for people.
-#include <array>
 #include <cctype>
 #include <cmath>
-#include <cstdio>
 #include <fstream>
 #include <iomanip>
-#include <memory>
+#include <ostream>
 #include <set>
 #include <sstream>
 #include <stdexcept>
@@ -15,29 +13,11 @@
 #include <opencv2/imgproc.hpp>
 
 #include "bench.hpp"
+#include "first_scan.hpp"
+#include "rtog/app/output_files.hpp"
 
 namespace rtog::bench {
 namespace {
-
-std::string shellOutput(const char* cmd) {
-  std::array<char, 256> buf{};
-  std::string out;
-  std::unique_ptr<FILE, int (*)(FILE*)> p(popen(cmd, "r"), pclose);
-  if (!p) return {};
-  while (fgets(buf.data(), buf.size(), p.get())) out += buf.data();
-  while (!out.empty() && (out.back() == '\n' || out.back() == ' ')) out.pop_back();
-  return out;
-}
-
-std::map<std::string, std::string> machine() {
-  return {{"cpu", shellOutput("grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //'")},
-          {"cores", shellOutput("nproc")},
-          {"memory", shellOutput("free -h | awk '/Mem:/{print $2}'")},
-          {"compiler", shellOutput("c++ --version | head -1")},
-          {"octomap", shellOutput("dpkg-query -W -f='${Version}' liboctomap-dev")},
-          {"mrpt", shellOutput("dpkg-query -W -f='${Version}' libmrpt-dev")},
-          {"date", shellOutput("date -u +%Y-%m-%dT%H:%MZ")}};
-}
 
 const Result* find(const std::vector<Result>& rs, const std::string& dataset, double res, const std::string& method) {
   for (const auto& r : rs)
@@ -55,8 +35,7 @@ const Result* bestOctomap(const std::vector<Result>& rs, const std::string& data
   return best;
 }
 
-void barChart(const std::vector<std::pair<std::string, double>>& bars, const std::string& title,
-              const std::string& path) {
+void barChart(const std::vector<std::pair<std::string, double>>& bars, const std::string& title, std::ostream& png) {
   const int w = 900, row = 26, top = 40, left = 330;
   cv::Mat img(top + row * int(bars.size()) + 20, w, CV_8UC3, cv::Scalar(255, 255, 255));
   cv::putText(img, title, {10, 25}, cv::FONT_HERSHEY_SIMPLEX, 0.6, {0, 0, 0}, 1, cv::LINE_AA);
@@ -73,7 +52,17 @@ void barChart(const std::vector<std::pair<std::string, double>>& bars, const std
     v << std::setprecision(3) << bars[i].second;
     cv::putText(img, v.str(), {left + len + 6, y + 17}, cv::FONT_HERSHEY_SIMPLEX, 0.42, {0, 0, 0}, 1, cv::LINE_AA);
   }
-  if (!cv::imwrite(path, img)) throw std::runtime_error("cannot write " + path);
+  std::vector<unsigned char> bytes;
+  if (!cv::imencode(".png", img, bytes)) throw std::runtime_error("cannot encode the chart '" + title + "' as PNG");
+  png.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+}
+
+/// The dataset and resolution pairs of the bench's own rows (the first-scan rows have their own).
+std::set<std::pair<std::string, double>> benchGroups(const std::vector<Result>& results) {
+  std::set<std::pair<std::string, double>> groups;
+  for (const auto& r : results)
+    if (!r.extra.count("first_scan")) groups.insert({r.dataset, r.resolution});
+  return groups;
 }
 
 }  // namespace
@@ -86,13 +75,13 @@ std::string slug(std::string s) {
 
 RunInfo currentRun(const Options& opts) {
   RunInfo info;
-  info.machine = machine();
+  info.machine = machineFacts();
   info.repeats = opts.repeats;
   info.min_seconds = opts.min_seconds;
   return info;
 }
 
-void writeJson(const std::vector<Result>& results, const RunInfo& run, const std::string& path) {
+void writeJson(const std::vector<Result>& results, const RunInfo& run, std::ostream& out) {
   nlohmann::json j;
   j["machine"] = run.machine;
   j["rounds"] = {{"repeats", run.repeats}, {"min_seconds", run.min_seconds}};
@@ -110,9 +99,7 @@ void writeJson(const std::vector<Result>& results, const RunInfo& run, const std
                             {"file_bytes", r.file_bytes},
                             {"octomap_class_agreement", r.octomap_agreement},
                             {"extra", r.extra}});
-  std::ofstream out(path);
   out << j.dump(2) << "\n";
-  if (!out) throw std::runtime_error("cannot write " + path);
 }
 
 std::vector<Result> readJson(const std::string& path, RunInfo& run) {
@@ -150,9 +137,8 @@ std::vector<Result> readJson(const std::string& path, RunInfo& run) {
   return results;
 }
 
-void writeMarkdown(const std::vector<Result>& results, const RunInfo& run, const std::string& path,
-                   const std::string& img_dir) {
-  std::ostringstream md;
+void writeMarkdown(const std::vector<Result>& results, const RunInfo& run, std::ostream& md,
+                   const std::string& img_dir, app::OutputSet& files) {
   const auto field = [&](const char* key) {
     const auto it = run.machine.find(key);
     return it == run.machine.end() ? std::string("?") : it->second;
@@ -174,15 +160,14 @@ void writeMarkdown(const std::vector<Result>& results, const RunInfo& run, const
      << "the same rounds: the throughput of two independent one-thread builds at once over that of one\n"
      << "(a yardstick, not a bound: two maps fill twice the cache one shared map does); and the steal,\n"
      << "the share of the vCPUs' time the hypervisor gave others during the two-thread builds (/proc/stat).\n\n"
-     << "Machine: " << field("cpu") << ", " << field("cores") << " cores, " << field("memory") << " RAM; "
-     << field("compiler") << "; OctoMap " << field("octomap") << ", MRPT " << field("mrpt") << "; "
+     << "Machine: " << field("cpu") << ", " << field("cores") << " cores, " << field("memory") << " RAM"
+     << (run.machine.count("os") ? ", " + field("os") : std::string()) << "; " << field("compiler") << "; OctoMap " << field("octomap") << ", MRPT " << field("mrpt") << "; "
      << field("date") << ".\n\n"
      << "Reproduce: `./build/apps/rtog-bench/rtog-bench --markdown doc/benchmarks.md --json doc/benchmarks.json "
         "--img-dir doc/img`; to render this report again from the JSON without measuring, "
         "`--from-json doc/benchmarks.json` in place of `--json`.\n\n";
 
-  std::set<std::pair<std::string, double>> groups;
-  for (const auto& r : results) groups.insert({r.dataset, r.resolution});
+  const auto groups = benchGroups(results);
 
   md << "## Targets\n\n| dataset | res | target | measured | verdict |\n|---|---|---|---|---|\n";
   for (const auto& [ds, res] : groups) {
@@ -280,13 +265,16 @@ void writeMarkdown(const std::vector<Result>& results, const RunInfo& run, const
     }
   }
 
+  writeFirstScanTargets(results, md);
+
   for (const auto& [ds, res] : groups) {
     md << "\n## " << ds << ", " << res << " m\n\n"
        << "| method | insert [s] | M points/s | structure [MiB] | RSS growth [MiB] | leaves | point query [ns] | file [MiB] "
           "| class agreement with OctoMap | LF likelihood [µs/scan] |\n|---|---|---|---|---|---|---|---|---|---|\n";
     std::vector<std::pair<std::string, double>> bars;
     for (const auto& r : results) {
-      if (r.dataset != ds || r.resolution != res || r.extra.count("calibration")) continue;
+      if (r.dataset != ds || r.resolution != res || r.extra.count("calibration") || r.extra.count("first_scan"))
+        continue;
       md << "| " << r.method << " | " << std::fixed << std::setprecision(4) << r.insert_seconds << " | "
          << std::setprecision(2) << r.points_per_second / 1e6 << " | " << std::setprecision(2)
          << r.structure_bytes / 1048576.0 << " | " << r.rss_growth_bytes / 1048576.0 << " | " << r.leaves << " | "
@@ -302,17 +290,16 @@ void writeMarkdown(const std::vector<Result>& results, const RunInfo& run, const
       bars.push_back({r.method, r.insert_seconds});
     }
     const std::string img = slug(ds) + "_" + slug(std::to_string(res)) + "_insert.png";
-    barChart(bars, "insertion time [s], " + ds + ", " + std::to_string(res).substr(0, 4) + " m", img_dir + "/" + img);
+    barChart(bars, "insertion time [s], " + ds + ", " + std::to_string(res).substr(0, 4) + " m",
+             files.add("--img-dir", img_dir + "/" + img));
     md << "\n![insertion time](img/" << img << ")\n";
   }
+  writeFirstScanSection(results, md);
   md << "\n## Accuracy against ground truth\n\n"
      << "Speed and memory say nothing about how good a map is: `rtog-accuracy` builds rtog, OctoMap and\n"
      << "MRPT's dense grids from simulated LiDAR and 2D scans of a seeded synthetic world whose occupancy is\n"
      << "known, and scores precision/recall and ROC AUC. Figures and how to reproduce them: `doc/accuracy.md`.\n\n"
      << "![ROC curves against the synthetic ground truth](img/roc_synthetic.png)\n";
-  std::ofstream out(path);
-  out << md.str();
-  if (!out) throw std::runtime_error("cannot write " + path);
 }
 
 }  // namespace rtog::bench

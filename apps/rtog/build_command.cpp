@@ -17,7 +17,7 @@
 #include <mrpt/obs/CSensoryFrame.h>
 
 #include "commands.hpp"
-#include "output_files.hpp"
+#include "rtog/app/output_files.hpp"
 #include "rtog/image/tum_dataset.hpp"
 #include "rtog/mrpt/CRTreeOccupancyGridMap.h"
 #include "rtog/mrpt/rawlog_poses.h"
@@ -113,7 +113,7 @@ int build(const BuildOptions& o, std::ostream& out) {
   auto map = makeMap(o);
   // The output is checked and opened before the work: an unwritable path, or one that names an
   // input (which the save would destroy), fails now and not after the last scan.
-  std::vector<InputFile> inputs;
+  std::vector<app::InputFile> inputs;
   image::DepthSequence seq;
   if (!o.tum_dir.empty()) {
     seq = image::readTumSequence(o.tum_dir);
@@ -123,7 +123,7 @@ int build(const BuildOptions& o, std::ostream& out) {
   if (!o.rawlog_path.empty()) inputs.push_back({"--rawlog", o.rawlog_path});
   if (!o.simplemap_path.empty()) inputs.push_back({"--simplemap", o.simplemap_path});
   if (!o.ini_path.empty()) inputs.push_back({"--ini", o.ini_path});
-  OutputSet files(std::move(inputs));
+  app::OutputSet files(std::move(inputs));
   std::ostream* saved = o.out_path.empty() ? nullptr : &files.add("--out", o.out_path);
   std::size_t scans = 0, points = 0;
   double seconds = 0.0;

@@ -1,5 +1,5 @@
 #include "commands.hpp"
-#include "output_files.hpp"
+#include "rtog/app/output_files.hpp"
 
 #include <mrpt/io/CMemoryStream.h>
 #include <mrpt/opengl/COpenGLScene.h>
@@ -31,7 +31,7 @@
 namespace rtog::cli {
 
 void saveMap(const OccupancyMap& map, const std::string& path) {
-  OutputSet files;
+  app::OutputSet files;
   map.write(files.add("map", path));
   files.commit();
 }
@@ -125,7 +125,7 @@ int exportMap(const ExportOptions& opts, std::ostream& out) {
     throw std::invalid_argument("export: --slice-z must be a finite height in metres");
   // Every output checked and opened before the map is read; written to temporaries, and
   // renamed into place only when all of them succeeded.
-  OutputSet files({{"map", opts.map_path}});
+  app::OutputSet files({{"map", opts.map_path}});
   std::ostream* png_out = opts.png_path.empty() ? nullptr : &files.add("--png", opts.png_path);
   std::ostream* scene_out = opts.scene_path.empty() ? nullptr : &files.add("--scene", opts.scene_path);
   std::ostream* ply_out = opts.ply_path.empty() ? nullptr : &files.add("--ply", opts.ply_path);

@@ -6,12 +6,12 @@
 #include <CLI/CLI.hpp>
 
 #include "commands.hpp"
-#include "option_checks.hpp"
+#include "rtog/app/option_checks.hpp"
 
 int main(int argc, char** argv) {
-  using rtog::cli::checks::number;
-  using rtog::cli::checks::Sign;
-  const CLI::Validator path = rtog::cli::checks::path();
+  using rtog::app::checks::number;
+  using rtog::app::checks::Sign;
+  const CLI::Validator path = rtog::app::checks::path();
   CLI::App app{"rtog: R-tree occupancy grids for MRPT"};
   app.require_subcommand(1);
 
@@ -35,9 +35,9 @@ int main(int argc, char** argv) {
                     std::to_string(rtog::InsertParams{}.max_ray_cells) + " cells are skipped and counted either way)")
       ->capture_default_str()
       ->check(number(Sign::NonNegative));
-  b->add_option("--threads", build.insert.threads, "Threads tracing beams")->capture_default_str()->check(rtog::cli::checks::integer(1, 256));
+  b->add_option("--threads", build.insert.threads, "Threads tracing beams")->capture_default_str()->check(rtog::app::checks::integer(1, 256));
   b->add_flag("--discretize", build.insert.discretize, "Trace beams to end-cell centres, once per cell (OctoMap's discretize)");
-  b->add_option("--stride", build.stride, "Use every n-th pixel")->capture_default_str()->check(rtog::cli::checks::integer(1, 1 << 16));
+  b->add_option("--stride", build.stride, "Use every n-th pixel")->capture_default_str()->check(rtog::app::checks::integer(1, 1 << 16));
 
   std::string map_path;
   bool json = false;

@@ -1,16 +1,20 @@
 // The benchmark's report on the committed run (doc/benchmarks.json): the JSON reads back as it
-// was written, and the Markdown's insertion-speed verdicts follow from the raw build times.
+// was written, and the Markdown's insertion-speed verdicts follow from the raw build times. And
+// the machine facts a report states, read from the system.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cstdio>
 #include <fstream>
 #include <limits>
+#include <regex>
 #include <set>
 #include <sstream>
 #include <string>
 
 #include "bench.hpp"
+#include "rtog/app/output_files.hpp"
 
 using namespace rtog::bench;
 
@@ -23,6 +27,21 @@ std::string slurp(const std::string& path) {
   return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
 }
 
+void writeJsonFile(const std::vector<Result>& results, const RunInfo& run, const std::string& path) {
+  rtog::app::OutputSet files;
+  writeJson(results, run, files.add("--json", path));
+  files.commit();
+}
+
+/// The Markdown report as rtog-bench writes it, its charts into `img_dir`.
+std::string markdownOf(const std::vector<Result>& results, const RunInfo& run, const std::string& img_dir) {
+  const std::string path = ::testing::TempDir() + "/bench_report.md";
+  rtog::app::OutputSet files;
+  writeMarkdown(results, run, files.add("--markdown", path), img_dir, files);
+  files.commit();
+  return slurp(path);
+}
+
 TEST(BenchReport, JsonReadsBackAsWritten) {
   RunInfo run;
   const std::vector<Result> results = readJson(kRun, run);
@@ -33,7 +52,7 @@ TEST(BenchReport, JsonReadsBackAsWritten) {
   EXPECT_FALSE(run.machine.at("cpu").empty());
 
   const std::string copy = ::testing::TempDir() + "/bench_copy.json";
-  writeJson(results, run, copy);
+  writeJsonFile(results, run, copy);
   RunInfo again;
   const std::vector<Result> back = readJson(copy, again);
   ASSERT_EQ(back.size(), results.size());
@@ -63,9 +82,7 @@ TEST(BenchReport, BrokenJsonIsAnError) {
 TEST(BenchReport, SpeedVerdictsFollowFromTheBuildTimes) {
   RunInfo run;
   const std::vector<Result> results = readJson(kRun, run);
-  const std::string md_path = ::testing::TempDir() + "/bench_report.md";
-  writeMarkdown(results, run, md_path, ::testing::TempDir());
-  std::istringstream md(slurp(md_path));
+  std::istringstream md(markdownOf(results, run, ::testing::TempDir()));
   int rows = 0;
   for (std::string line; std::getline(md, line);) {
     const std::string marker = "insertion ≥ 20× faster than OctoMap's best (";
@@ -91,6 +108,19 @@ TEST(BenchReport, SpeedVerdictsFollowFromTheBuildTimes) {
     EXPECT_EQ(cells[4], want) << line;
   }
   EXPECT_EQ(rows, 6);  // three 3D datasets at two resolutions
+}
+
+TEST(BenchReport, MachineFactsComeFromTheSystem) {
+  const auto m = machineFacts();
+  EXPECT_FALSE(m.at("cpu").empty());
+  EXPECT_EQ(m.at("cores"), std::to_string(sysconf(_SC_NPROCESSORS_ONLN)));
+  EXPECT_TRUE(std::regex_match(m.at("memory"), std::regex(R"([0-9]+\.[0-9] GiB)"))) << m.at("memory");
+  EXPECT_EQ(m.at("os").rfind("Linux ", 0), 0u) << m.at("os");
+  EXPECT_TRUE(std::regex_match(m.at("mrpt"), std::regex(R"([0-9]+\.[0-9]+\.[0-9]+)"))) << m.at("mrpt");
+  EXPECT_TRUE(std::regex_match(m.at("octomap"), std::regex(R"([0-9]+\.[0-9]+\.[0-9]+)"))) << m.at("octomap");
+  EXPECT_TRUE(std::regex_match(m.at("date"), std::regex(R"(20[0-9]{2}-[0-9]{2}-[0-9]{2}T[0-9]{2}:[0-9]{2}Z)")))
+      << m.at("date");
+  EXPECT_FALSE(m.at("compiler").empty());
 }
 
 }  // namespace

@@ -1,5 +1,5 @@
-// Every file an rtog command writes goes through one OutputSet, so that no command can lose
-// data in its own way:
+// Every file an rtog tool (rtog, rtog-bench, rtog-accuracy) writes goes through one OutputSet, so
+// that no tool can lose data in its own way:
 // - an output that is one of the command's inputs, or another of its outputs, is refused
 //   (device and inode compared, so `./x`, symlinks and hard links are caught);
 // - a regular file is written to a unique temporary beside it (mkstemp: a user's `FILE.partial`
@@ -18,7 +18,7 @@
 #include <string>
 #include <vector>
 
-namespace rtog::cli {
+namespace rtog::app {
 
 /// A file a command reads, named by the option that gave it (for messages).
 struct InputFile {
@@ -52,4 +52,4 @@ class OutputSet {
   bool committed_ = false;
 };
 
-}  // namespace rtog::cli
+}  // namespace rtog::app

@@ -1,4 +1,4 @@
-#include "output_files.hpp"
+#include "rtog/app/output_files.hpp"
 
 #include <fcntl.h>
 #include <stdio.h>
@@ -11,7 +11,7 @@
 #include <stdexcept>
 #include <streambuf>
 
-namespace rtog::cli {
+namespace rtog::app {
 namespace {
 
 namespace fs = std::filesystem;
@@ -258,4 +258,4 @@ void OutputSet::commit() {
   }
 }
 
-}  // namespace rtog::cli
+}  // namespace rtog::app

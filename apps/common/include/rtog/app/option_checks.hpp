@@ -1,5 +1,6 @@
-// The checks of rtog's command-line values, in one place so that every option of every
-// subcommand means the same by them. CLI11 prefixes the message with the option's name.
+// The checks of the tools' command-line values (rtog, rtog-accuracy), in one place so that every
+// option of every tool and subcommand means the same by them. CLI11 prefixes the message with
+// the option's name.
 // (CLI11's own PositiveNumber lets "nan" and "inf" through: NaN compares false with everything.)
 #pragma once
 
@@ -10,7 +11,7 @@
 
 #include <CLI/CLI.hpp>
 
-namespace rtog::cli::checks {
+namespace rtog::app::checks {
 
 enum class Sign { Any, NonNegative, Positive };
 
@@ -52,4 +53,4 @@ inline CLI::Validator path() {
       [](std::string& s) -> std::string { return s.empty() ? "the path is empty (give a file name)" : ""; }, "PATH");
 }
 
-}  // namespace rtog::cli::checks
+}  // namespace rtog::app::checks

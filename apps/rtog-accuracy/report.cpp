@@ -1,0 +1,104 @@
+// The accuracy report as JSON (nlohmann-json: every string escaped by the JSON rules, control
+// characters included) and as Markdown tables.
+#include <iomanip>
+#include <ostream>
+
+#include <nlohmann/json.hpp>
+
+#include "accuracy.hpp"
+
+namespace rtog::accuracy {
+
+namespace {
+// ordered_json: the fields stay in the order a reader expects (config first, results last).
+using Json = nlohmann::ordered_json;
+
+Json configJson(const Config& c) {
+  return Json{{"seed", c.seed},
+              {"lidar_seed", c.lidar_seed},
+              {"scanner_seed", c.scanner_seed},
+              {"resolution", c.resolution},
+              {"stride", c.stride},
+              {"lidar",
+               {{"rings", c.lidar.rings},
+                {"azimuth_steps", c.lidar.azimuth_steps},
+                {"elev_min_deg", c.lidar.elev_min_deg},
+                {"elev_max_deg", c.lidar.elev_max_deg},
+                {"max_range", c.lidar.max_range},
+                {"sigma", c.lidar.sigma},
+                {"height", c.lidar.height}}},
+              {"scanner",
+               {{"fov_deg", c.scanner.fov_deg},
+                {"step_deg", c.scanner.step_deg},
+                {"max_range", c.scanner.max_range},
+                {"sigma", c.scanner.sigma},
+                {"height", c.scanner.height}}}};
+}
+
+Json resultJson(const MapResult& m) {
+  const sim::ClassMetrics& x = m.metrics;
+  Json roc = Json::array();
+  for (const auto& [fpr, tpr] : x.roc) roc.push_back({fpr, tpr});
+  return Json{{"scenario", m.scenario},
+              {"map", m.map},
+              {"insert_seconds", m.insert_seconds},
+              {"observed_cells", m.observed_cells},
+              {"observed_outside", m.observed_outside},
+              {"class_agreement_with_octomap", m.agreement_octomap},
+              {"cells", x.cells},
+              {"pred_occupied", x.pred_occupied},
+              {"pred_free", x.pred_free},
+              {"unknown", x.unknown},
+              {"tp_occupied", x.tp_occupied},
+              {"tp_free", x.tp_free},
+              {"precision_occupied", x.precision_occupied},
+              {"recall_occupied", x.recall_occupied},
+              {"precision_free", x.precision_free},
+              {"recall_free", x.recall_free},
+              {"auc", x.auc},
+              {"roc", roc}};
+}
+}  // namespace
+
+void writeJson(const Report& r, std::ostream& os) {
+  Json j;
+  j["config"] = configJson(r.config);
+  j["world"] = r.world_summary;
+  j["versions"] = {{"octomap", r.octomap_version}, {"mrpt", r.mrpt_version}};
+  j["total_seconds"] = r.total_seconds;
+  j["scenarios"] = Json::array();
+  for (const Scenario& s : r.scenarios)
+    j["scenarios"].push_back({{"name", s.name},
+                              {"description", s.description},
+                              {"scans", s.scans},
+                              {"beams", s.beams},
+                              {"returns", s.returns},
+                              {"region_cells", s.region_cells},
+                              {"evaluated_cells", s.evaluated_cells},
+                              {"truth_occupied", s.truth_occupied},
+                              {"truth_free", s.truth_free}});
+  j["results"] = Json::array();
+  for (const MapResult& m : r.results) j["results"].push_back(resultJson(m));
+  os << j.dump(2) << "\n";
+}
+
+void writeMarkdown(const Report& r, std::ostream& os) {
+  os << std::fixed;
+  for (const Scenario& s : r.scenarios) {
+    os << "**" << s.name << "** — " << s.description << "; " << s.scans << " scans, " << s.beams << " beams ("
+       << s.returns << " returns); evaluated cells " << s.evaluated_cells << " (truth: " << s.truth_occupied
+       << " occupied, " << s.truth_free << " free)\n\n";
+    os << "| map | observed cells | occupied precision | occupied recall | free precision | free recall | ROC AUC | "
+          "same class as OctoMap | insert time [s] |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+    for (const MapResult& m : r.results) {
+      if (m.scenario != s.name) continue;
+      const auto& x = m.metrics;
+      os << "| " << m.map << " | " << m.observed_cells << " | " << std::setprecision(4) << x.precision_occupied
+         << " | " << x.recall_occupied << " | " << x.precision_free << " | " << x.recall_free << " | " << x.auc
+         << " | " << m.agreement_octomap << " | " << std::setprecision(2) << m.insert_seconds << " |\n";
+    }
+    os << "\n";
+  }
+}
+
+}  // namespace rtog::accuracy

@@ -1,0 +1,62 @@
+// rtog-bench's run: the datasets it was asked for, every method on each, the first-scan rows in
+// fresh processes, then the report's files through one OutputSet (opened before the run, so that
+// a bad path fails at once; the JSON, the Markdown and the charts are written all or none).
+#include <algorithm>
+#include <ostream>
+#include <stdexcept>
+
+#include "bench.hpp"
+#include "first_scan.hpp"
+#include "rtog/app/output_files.hpp"
+
+namespace rtog::bench {
+
+int runCommand(const Command& cmd, std::ostream& out, std::ostream& err) {
+  try {
+    std::vector<app::InputFile> inputs;
+    if (!cmd.from_json.empty()) inputs.push_back({"--from-json", cmd.from_json});
+    app::OutputSet files(std::move(inputs));
+    std::ostream* json = cmd.from_json.empty() ? &files.add("--json", cmd.json) : nullptr;
+    std::ostream& markdown = files.add("--markdown", cmd.markdown);
+    RunInfo run;
+    std::vector<Result> results;
+    if (!cmd.from_json.empty()) {
+      results = readJson(cmd.from_json, run);
+    } else {
+      run = currentRun(cmd.opts);
+      const auto wanted = [&](const std::string& n) {
+        return cmd.only.empty() || std::find(cmd.only.begin(), cmd.only.end(), n) != cmd.only.end();
+      };
+      const std::string vlp16 = cmd.mrpt_datasets_dir + "/test_velodyne_VLP16.rawlog";
+      const std::string sena = cmd.mrpt_datasets_dir + "/2006-01ENE-21-SENA_Telecom Faculty_one_loop_only.rawlog";
+      std::vector<Dataset> sets;
+      if (wanted("tum")) sets.push_back(loadTum(cmd.tum_dir));
+      if (wanted("vlp16")) sets.push_back(loadRawlog3D(vlp16, "Velodyne VLP-16 (test_velodyne_VLP16)"));
+      if (wanted("rotscan"))
+        sets.push_back(loadRawlog3D(cmd.mrpt_datasets_dir + "/rot_scan_velodyne.rawlog",
+                                    "Velodyne rotating scan (rot_scan_velodyne)"));
+      if (wanted("sena")) run2D(sena, cmd.opts, results, out);
+      for (const auto& data : sets) {
+        out << data.name << ": " << data.points() << " points\n";
+        runDataset(data, cmd.opts, results, out);
+      }
+      // rot_scan_velodyne has none: MRPT 2.5's COctoMap does not insert a CObservationRotatingScan.
+      std::vector<FirstScanSource> first;
+      if (wanted("tum")) first.push_back({"tum", cmd.tum_dir, "TUM fr2/pioneer_slam2, first frame"});
+      if (wanted("vlp16")) first.push_back({"rawlog3d", vlp16, "Velodyne VLP-16 (test_velodyne_VLP16), first scan"});
+      if (wanted("sena")) first.push_back({"rawlog2d", sena, "SENA 2D laser, first scan"});
+      if (!first.empty()) out << "first scans, each in a fresh process (" << cmd.first_scan_helper << ")\n";
+      runFirstScans(cmd.first_scan_helper, first, cmd.opts, results, out);
+    }
+    if (json) writeJson(results, run, *json);
+    writeMarkdown(results, run, markdown, cmd.img_dir, files);
+    files.commit();
+    out << "wrote " << (json ? cmd.json + ", " : "") << cmd.markdown << "\n";
+  } catch (const std::exception& e) {
+    err << "rtog-bench: error: " << e.what() << "\n";
+    return 1;
+  }
+  return 0;
+}
+
+}  // namespace rtog::bench

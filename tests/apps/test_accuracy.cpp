@@ -1,0 +1,117 @@
+// rtog-accuracy's report and command line: the JSON is valid JSON whatever its strings hold
+// (control characters in them were written raw before nlohmann-json wrote it), it keeps the
+// fields of the committed report, and the tool's options and files behave like the rtog tool's.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <set>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "accuracy.hpp"
+
+using rtog::accuracy::Report;
+
+namespace {
+
+std::string slurp(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
+/// Every key path of a JSON document ("results[].roc"), arrays' elements merged.
+void keyPaths(const nlohmann::json& j, const std::string& at, std::set<std::string>& out) {
+  if (j.is_object()) {
+    for (const auto& [k, v] : j.items()) {
+      out.insert(at + "." + k);
+      keyPaths(v, at + "." + k, out);
+    }
+  } else if (j.is_array()) {
+    for (const auto& v : j) keyPaths(v, at + "[]", out);
+  }
+}
+
+int runTool(std::vector<std::string> args, std::string* out = nullptr, std::string* err = nullptr) {
+  args.insert(args.begin(), "rtog-accuracy");
+  std::vector<char*> argv;
+  for (auto& a : args) argv.push_back(a.data());
+  std::ostringstream o, e;
+  const int rc = rtog::accuracy::main(static_cast<int>(argv.size()), argv.data(), o, e);
+  if (out) *out = o.str();
+  if (err) *err = e.str();
+  return rc;
+}
+
+TEST(AccuracyReport, ControlCharactersInStringsAreEscaped) {
+  Report r;
+  r.world_summary = std::string("boxes\x01 tab\t new\nline \"quoted\" back\\slash \x1f end");
+  rtog::accuracy::Scenario sc;
+  sc.name = "lidar3d";
+  sc.description = "bell\a and DEL \x7f";
+  r.scenarios.push_back(sc);
+  std::ostringstream os;
+  rtog::accuracy::writeJson(r, os);
+  const std::string text = os.str();
+  for (const char c : text) EXPECT_FALSE(static_cast<unsigned char>(c) < 0x20 && c != '\n') << int(c);
+  EXPECT_NE(text.find("\\u0001"), std::string::npos);
+  EXPECT_NE(text.find("\\u001f"), std::string::npos);
+  const nlohmann::json j = nlohmann::json::parse(text);  // throws on a raw control character
+  EXPECT_EQ(j.at("world").get<std::string>(), r.world_summary);
+  EXPECT_EQ(j.at("scenarios").at(0).at("description").get<std::string>(), sc.description);
+}
+
+TEST(AccuracyReport, JsonHasTheFieldsOfTheCommittedReport) {
+  // A real (short) run: every field is filled the way the tool fills it.
+  const std::string json = ::testing::TempDir() + "/accuracy_" + std::to_string(getpid()) + ".json";
+  std::string err;
+  ASSERT_EQ(runTool({"--stride", "16", "--json", json}, nullptr, &err), 0) << err;
+  std::set<std::string> now, committed;
+  keyPaths(nlohmann::json::parse(slurp(json)), "", now);
+  keyPaths(nlohmann::json::parse(slurp(RTOG_ACCURACY_JSON)), "", committed);
+  EXPECT_EQ(now, committed);
+  EXPECT_GT(now.size(), 40u);
+  std::remove(json.c_str());
+}
+
+TEST(AccuracyCli, BadValuesAreRefusedWithExit2) {
+  for (const std::vector<std::string>& bad :
+       {std::vector<std::string>{"--resolution", "nan"}, {"--resolution", "0"}, {"--stride", "0"}, {"--stride", "1.5"},
+        {"--seed", "-1"}, {"--sigma", "-0.1"}, {"--json", ""}, {"--quick", "--stride", "2"}, {"--no-such-option"}}) {
+    std::string err;
+    EXPECT_EQ(runTool(bad, nullptr, &err), 2) << bad.front();
+    EXPECT_NE(err.find("rtog-accuracy: "), std::string::npos) << err;
+  }
+  std::string out;
+  EXPECT_EQ(runTool({"--help"}, &out), 0);
+  for (const char* opt : {"--seed", "--resolution", "--stride", "--sigma", "--quick", "--json", "--markdown", "--png"})
+    EXPECT_NE(out.find(opt), std::string::npos) << opt;
+}
+
+TEST(AccuracyCli, FilesAreWrittenAllOrNone) {
+  const std::string dir = ::testing::TempDir() + "/accuracy_files_" + std::to_string(getpid());
+  std::filesystem::create_directories(dir);
+  const std::string json = dir + "/a.json", md = dir + "/a.md", png = dir + "/a.png";
+  std::ofstream(md) << "the old report\n";
+  // An output that cannot be written fails before the run, and the other output stays as it was.
+  std::string err;
+  EXPECT_EQ(runTool({"--stride", "16", "--markdown", md, "--json", dir + "/no/such/dir/a.json"}, nullptr, &err), 1);
+  EXPECT_NE(err.find("--json"), std::string::npos) << err;
+  EXPECT_EQ(slurp(md), "the old report\n");
+  // All three written; nothing else left in the directory (no temporaries).
+  ASSERT_EQ(runTool({"--stride", "16", "--json", json, "--markdown", md, "--png", png}, nullptr, &err), 0) << err;
+  EXPECT_NO_THROW(nlohmann::json::parse(slurp(json)));
+  EXPECT_NE(slurp(md).find("| rtog |"), std::string::npos);
+  EXPECT_EQ(slurp(png).substr(0, 8), std::string("\x89PNG\r\n\x1a\n", 8));
+  std::set<std::string> listing;
+  for (const auto& e : std::filesystem::directory_iterator(dir)) listing.insert(e.path().filename().string());
+  EXPECT_EQ(listing, (std::set<std::string>{"a.json", "a.md", "a.png"}));
+  std::filesystem::remove_all(dir);
+}
+
+}  // namespace
