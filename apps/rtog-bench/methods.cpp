@@ -226,6 +226,7 @@ std::vector<std::unique_ptr<Method>> methodsFor(const Dataset& d, double res, co
   beam.max_range = endpoint.max_range = disc.max_range = disc2.max_range = o.max_range;
   endpoint.model = SensorModel::BeamEndPoint;
   disc.discretize = disc2.discretize = true;
+  beam.threads = endpoint.threads = disc.threads = 1;  // the one-thread rows, whatever the machine
   disc2.threads = 2;
   InsertParams beam2 = beam;
   beam2.threads = 2;

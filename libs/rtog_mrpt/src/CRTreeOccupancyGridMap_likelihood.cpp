@@ -67,15 +67,9 @@ float CRTreeOccupancyGridMap::fieldTermLocked(const Eigen::Vector3d& p, const Fi
   if (!likelihoodOptions.enableLikelihoodCache) return term(p);
   // Cached per lattice cell: the term at the cell centre.
   const std::uint64_t pk = packKey(k);
-  std::uint32_t bits = caches_.lf.find(pk);
-  float t;
-  if (bits != detail::FlatHashMap64::kAbsent) {
-    std::memcpy(&t, &bits, sizeof t);
-    return t;
-  }
-  t = term(map_.lattice().cellCenter(k));
-  std::memcpy(&bits, &t, sizeof t);  // a finite term is never NaN, so never kAbsent's bits
-  caches_.lf.findOrInsert(pk, bits);
+  if (const auto it = caches_.lf.find(pk); it != caches_.lf.end()) return it->second;
+  const float t = term(map_.lattice().cellCenter(k));
+  caches_.lf.emplace(pk, t);
   return t;
 }
 

@@ -29,6 +29,10 @@ struct Key {
 
 /// Keys are limited to 21 bits per axis so that a key packs into 64 bits and sums of
 /// extents never overflow; at 5 cm that is +-52 km around the origin.
+/// Leaves lie inside aligned cubes ("bricks") of 2^kBrickBits cells a side, in the map and in
+/// its file format (doc/format.md).
+constexpr int kBrickBits = 4;
+
 constexpr int kKeyBits = 21;
 constexpr std::int32_t kKeyMin = -(1 << (kKeyBits - 1));
 constexpr std::int32_t kKeyMax = (1 << (kKeyBits - 1)) - 1;

@@ -82,4 +82,25 @@ struct StepRule {
   }
 };
 
+/// Cells a beam steps in one z-layer, as grids raster beams in fixed point: cell k (k < count)
+/// is (((x << F) + k * dx) >> F, ((y << F) + k * dy) >> F) for F = kStepRunFracBits, each taking
+/// a `kind` step; then, if `end`, the cell (end_x, end_y) takes an Occupied step.
+struct StepRun {
+  std::int32_t x, y, dx, dy;
+  std::uint32_t count;
+  StepKind kind;
+  bool end;
+  std::int32_t end_x, end_y;
+};
+constexpr int kStepRunFracBits = 9;
+
+/// Calls fn(x, y, kind) for every cell of a run, in its order.
+template <class Fn>
+void forEachRunCell(const StepRun& r, Fn&& fn) {
+  std::int32_t fx = r.x * (1 << kStepRunFracBits), fy = r.y * (1 << kStepRunFracBits);
+  for (std::uint32_t k = 0; k < r.count; ++k, fx += r.dx, fy += r.dy)
+    fn(fx >> kStepRunFracBits, fy >> kStepRunFracBits, r.kind);
+  if (r.end) fn(r.end_x, r.end_y, StepKind::Occupied);
+}
+
 }  // namespace rtog

@@ -8,6 +8,8 @@
 #include <limits>
 #include <memory>
 #include <mutex>
+
+#include <tsl/robin_map.h>
 #include <optional>
 #include <string>
 #include <unordered_map>
@@ -20,7 +22,6 @@
 #include <mrpt/maps/CSimplePointsMap.h>
 #include <mrpt/poses/CPose3D.h>
 
-#include "rtog/core/detail/flat_hash_map.hpp"
 #include "rtog/core/occupancy_map.hpp"
 #include "rtog/mrpt/map_types.h"
 
@@ -85,8 +86,9 @@ class CRTreeOccupancyGridMap : public mrpt::maps::CMetricMap {
     std::string mergePolicy{"clamped"};
     /// Trace each beam to the centre of its end cell and beams ending in one cell once. (Default: false)
     bool discretize{false};
-    /// Threads tracing beams (the result does not depend on it). (Default: 1)
-    int threads{1};
+    /// Threads tracing and applying beams (the result does not depend on it). (Default: the
+    /// machine's hardware threads)
+    int threads{rtog::defaultThreadCount()};
     /// 2D scans update dense per-brick layers in place and become leaves when the map is next
     /// read, not at every scan (the cells are the same either way). (Default: true)
     bool planarCache{true};
@@ -358,7 +360,7 @@ class CRTreeOccupancyGridMap : public mrpt::maps::CMetricMap {
   /// Derived data; copies start empty (a copy rebuilds them on demand).
   struct Caches {
     std::mutex mutex;
-    detail::FlatHashMap64 lf;  ///< packed key -> likelihood-field term (float bits)
+    tsl::robin_map<std::uint64_t, float> lf;  ///< packed key -> likelihood-field term
     std::optional<FieldParams> lf_params;  ///< what the terms in `lf` were computed with
     bool points_dirty{true};
     mrpt::maps::CSimplePointsMap occupied_points;

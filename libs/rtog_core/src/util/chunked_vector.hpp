@@ -1,6 +1,7 @@
 // A vector of fixed-size chunks: growing never moves or copies what it holds, so a pool of
-// large elements (the planar cache's 1 KiB layers) costs one first touch per element instead
-// of the copies and fresh pages of each doubling.
+// large elements (the planar cache's 1 KiB layers, an update batch's 1 KiB brick masks) costs
+// one first touch per element instead of the copies and fresh pages of each doubling, and
+// clear() keeps the chunks for the next scan.
 #pragma once
 
 #include <cstddef>

@@ -10,8 +10,7 @@
 #include <sstream>
 #include <thread>
 
-#include "rtog/core/detail/cover.hpp"
-#include "rtog/core/detail/layer_update.hpp"
+#include "storage/brick.hpp"  // brickOf: leaves stay in their brick
 #include "test_support.hpp"
 
 using namespace rtog;
@@ -124,38 +123,6 @@ TEST(OccupancyMap, SplitOnDisagreeingEvidenceChangesOnlyTouchedCells) {
     test::expectMatchesReference(map, ref, true);
   }
   EXPECT_GT(total.leaves_split, 0u);
-}
-
-TEST(OccupancyMap, SeveralBatchesApplyAsTheirUnionWithOccupiedWinning) {
-  MapParams p;
-  p.resolution = 1.0;
-  OccupancyMap together(p), split(p);
-  const Eigen::Vector3d origin(0.5, 0.5, 0.5);
-  // Beam a ends in cell (5, 0, 0); beam b passes through it to (9, 0, 0), across a brick border
-  // at 16 only for the third beam.
-  const std::vector<Eigen::Vector3f> a{{5.5f, 0.5f, 0.5f}}, b{{9.5f, 0.5f, 0.5f}, {20.5f, 3.5f, 0.5f}};
-  std::vector<Eigen::Vector3f> both = a;
-  both.insert(both.end(), b.begin(), b.end());
-  UpdateBatch one, first, second;
-  InsertStats s1, s2;
-  together.computeUpdate(origin, both.data(), both.size(), {}, nullptr, one, s1);
-  one.finalize();
-  together.applyUpdate(one, s1);
-  split.computeUpdate(origin, a.data(), a.size(), {}, nullptr, first, s2);
-  split.computeUpdate(origin, b.data(), b.size(), {}, nullptr, second, s2);
-  first.finalize();
-  second.finalize();
-  split.applyUpdate(std::vector<const UpdateBatch*>{&second, &first}, s2, 2);
-  EXPECT_EQ(split.checkInvariants(), "");
-  EXPECT_EQ(split.state(Key{5, 0, 0}), CellState::Occupied);  // free in `second`, occupied in `first`
-  EXPECT_EQ(s2.cells_occupied, s1.cells_occupied);
-  EXPECT_EQ(s2.cells_free, s1.cells_free);
-  EXPECT_EQ(split.cellCount(), together.cellCount());
-  together.forEachLeaf([&](const Box& box, float value) {
-    for (std::int32_t x = box.min.x; x <= box.max.x; ++x)
-      for (std::int32_t y = box.min.y; y <= box.max.y; ++y)
-        for (std::int32_t z = box.min.z; z <= box.max.z; ++z) EXPECT_EQ(split.logOdds(Key{x, y, z}), value);
-  });
 }
 
 TEST(OccupancyMap, QueriesMatchBruteForceOverCells) {
@@ -438,104 +405,3 @@ TEST(OccupancyMap, SerializationRoundTripAndCorruption) {
 
 }  // namespace
 
-// The planar cache covers a brick's single changed layer with its own loop (masks of equal
-// cells); it must give the general greedy cover's boxes, in the same order: random layers of
-// few distinct values, sparse to full, blocky and noisy, every z, with merging on, off and
-// only for some values.
-TEST(OccupancyMap, CoverOfOneLayerEqualsTheGeneralCover) {
-  std::mt19937 rng(17);
-  std::uniform_real_distribution<double> u(0.0, 1.0);
-  const float palette[] = {-2.0f, -0.4f, 0.4f, 0.85f, 3.5f};
-  struct Box {
-    int lo[3], hi[3];
-    float value;
-    bool operator==(const Box& o) const {
-      return std::equal(lo, lo + 3, o.lo) && std::equal(hi, hi + 3, o.hi) && value == o.value;
-    }
-  };
-  std::size_t merged = 0;
-  for (int trial = 0; trial < 600; ++trial) {
-    const int z = trial % kBrickSize, policy = trial % 3, distinct = 1 + trial % 5;
-    const double density = 0.2 + 0.8 * u(rng), blockiness = u(rng);
-    std::array<float, kLayerCells> values{};
-    std::array<std::uint64_t, kLayerWords> known{};
-    for (int c = 0; c < kLayerCells; ++c) {
-      // Blocky layers copy the cell to the left or below most of the time.
-      const bool copy = c > 0 && u(rng) < blockiness;
-      const int source = c % kBrickSize > 0 && u(rng) < 0.5 ? c - 1 : std::max(c - kBrickSize, 0);
-      values[static_cast<std::size_t>(c)] = copy ? values[static_cast<std::size_t>(source)]
-                                                 : palette[static_cast<std::size_t>(static_cast<int>(u(rng) * distinct))];
-      if (u(rng) < density) known[static_cast<std::size_t>(c >> 6)] |= std::uint64_t{1} << (c & 63);
-    }
-    const auto mergeable = [policy](float v) { return policy == 0 || (policy == 1 && v > 0.5f); };
-    std::vector<Box> general, layer;
-    detail::BrickMask mask{};
-    std::copy(known.begin(), known.end(), mask.begin() + z * kLayerWords);
-    const auto valueAt = [&](int cell) { return values[static_cast<std::size_t>(cell % kLayerCells)]; };
-    detail::coverGreedily(
-        mask, [&](int start, int cell) { return valueAt(cell) == valueAt(start) && mergeable(valueAt(start)); },
-        [&](const std::uint8_t lo[3], const std::uint8_t hi[3], int start) {
-          general.push_back(Box{{lo[0], lo[1], lo[2]}, {hi[0], hi[1], hi[2]}, valueAt(start)});
-        });
-    detail::coverLayer(known, values.data(), z, mergeable,
-                       [&](const std::uint8_t lo[3], const std::uint8_t hi[3], float v) {
-                         layer.push_back(Box{{lo[0], lo[1], lo[2]}, {hi[0], hi[1], hi[2]}, v});
-                       });
-    ASSERT_TRUE(layer == general) << "trial " << trial << ": " << layer.size() << " boxes against " << general.size();
-    for (const Box& b : general) merged += b.lo[0] != b.hi[0] || b.lo[1] != b.hi[1];
-  }
-  EXPECT_GT(merged, 5000u);  // boxes of more than one cell, in both directions, were compared
-}
-
-// The planar layer update kernels against the rule they implement, cell by cell: occupied marks
-// add the hit delta, the other free marks the miss delta, clamped; counts of marked cells and of
-// known cells left unchanged. The AVX2 kernel (where the CPU has it) must match bit for bit.
-TEST(OccupancyMap, LayerUpdateKernelsFollowTheUpdateRule) {
-  std::mt19937 rng(23);
-  std::uniform_real_distribution<double> u(0.0, 1.0);
-  const float deltas[4] = {0.85f, -0.4f, -2.0f, 3.5f};
-  const auto kernels = detail::layerUpdateKernels();
-  for (int trial = 0; trial < 2000; ++trial) {
-    std::array<float, kLayerCells> start{};
-    std::array<std::uint64_t, kLayerWords> known{}, occupied{}, free{};
-    const double p_occupied = 0.3 * u(rng), p_free = u(rng), p_known = u(rng);
-    for (int c = 0; c < kLayerCells; ++c) {
-      const double r = u(rng);  // some cells at the clamps, where an update changes nothing
-      start[static_cast<std::size_t>(c)] = r < 0.2 ? 3.5f : (r < 0.4 ? -2.0f : static_cast<float>(-2.0 + 5.5 * u(rng)));
-      const std::uint64_t bit = std::uint64_t{1} << (c & 63);
-      const auto w = static_cast<std::size_t>(c >> 6);
-      if (u(rng) < p_known) known[w] |= bit;
-      if (u(rng) < p_occupied) occupied[w] |= bit;
-      if (u(rng) < p_free) free[w] |= bit;  // overlapping occupied marks too: occupied wins
-    }
-    std::array<float, kLayerCells> expected = start;
-    std::array<std::uint64_t, kLayerWords> expected_known = known;
-    detail::LayerCounts expected_counts;
-    for (int c = 0; c < kLayerCells; ++c) {
-      const auto w = static_cast<std::size_t>(c >> 6);
-      const std::uint64_t bit = std::uint64_t{1} << (c & 63);
-      const bool o = (occupied[w] & bit) != 0, f = !o && (free[w] & bit) != 0;
-      if (!o && !f) continue;
-      float& v = expected[static_cast<std::size_t>(c)];
-      const float updated = std::min(std::max(v + (o ? deltas[0] : deltas[1]), deltas[2]), deltas[3]);
-      expected_counts.unchanged += (known[w] & bit) != 0 && updated == v;
-      expected_counts.occupied += o;
-      expected_counts.free += f;
-      v = updated;
-      expected_known[w] |= bit;
-    }
-    for (const detail::UpdateLayerFn kernel : kernels) {
-      if (!kernel) continue;
-      std::array<float, kLayerCells> values = start;
-      std::array<std::uint64_t, kLayerWords> k = known;
-      detail::LayerCounts counts;
-      kernel(values.data(), k.data(), occupied.data(), free.data(), deltas, counts);
-      ASSERT_EQ(std::memcmp(values.data(), expected.data(), sizeof(values)), 0) << "trial " << trial;
-      ASSERT_EQ(k, expected_known);
-      ASSERT_EQ(counts.unchanged, expected_counts.unchanged);
-      ASSERT_EQ(counts.occupied, expected_counts.occupied);
-      ASSERT_EQ(counts.free, expected_counts.free);
-    }
-  }
-  if (!kernels[1]) GTEST_SKIP() << "this CPU has no AVX2: only the portable kernel was checked";
-}

@@ -5,7 +5,7 @@
 #include <limits>
 #include <stdexcept>
 
-#include "rtog/core/occupancy_map.hpp"
+#include "integrate/planar/planar_cache.hpp"
 
 namespace rtog {
 namespace {
@@ -26,7 +26,7 @@ template <bool Occupied, bool AllKnown>
 std::size_t stepStretch(float* value, std::uint64_t* known, std::int32_t& fx_io, std::int32_t& fy_io,
                         std::int32_t dx, std::int32_t dy, std::uint32_t n, float delta, float limit, float bound,
                         std::vector<float>* after) {
-  constexpr int F = OccupancyMap::kRunFracBits;
+  constexpr int F = kStepRunFracBits;
   constexpr int M = kBrickSize - 1;
   const std::uint32_t bound_bits = bitsOf(bound);
   std::int32_t fx = fx_io, fy = fy_io;
@@ -59,8 +59,8 @@ std::size_t stepStretch(float* value, std::uint64_t* known, std::int32_t& fx_io,
 
 }  // namespace
 
-InsertStats OccupancyMap::applyStepRuns(std::int32_t z, const StepRun* runs, std::size_t n, const StepRule& rule,
-                                        std::vector<float>* after) {
+InsertStats PlanarCache::applyStepRuns(MapStore& store, std::int32_t z, const StepRun* runs, std::size_t n,
+                                       const StepRule& rule, std::vector<float>* after) {
   InsertStats stats;
   if (after) after->clear();
   if (n == 0) return stats;
@@ -79,9 +79,9 @@ InsertStats OccupancyMap::applyStepRuns(std::int32_t z, const StepRun* runs, std
     extend(r.x, r.y);
     if (r.count > 0) {
       // Scaled by multiplying: a left shift of a negative start cell is undefined before C++20.
-      constexpr std::int64_t kOne = std::int64_t{1} << kRunFracBits;
+      constexpr std::int64_t kOne = std::int64_t{1} << kStepRunFracBits;
       const std::int64_t k = r.count - 1;
-      extend((r.x * kOne + k * r.dx) >> kRunFracBits, (r.y * kOne + k * r.dy) >> kRunFracBits);
+      extend((r.x * kOne + k * r.dx) >> kStepRunFracBits, (r.y * kOne + k * r.dy) >> kStepRunFracBits);
     }
     if (r.end) extend(r.end_x, r.end_y);
     steps += r.count + (r.end ? 1 : 0);
@@ -95,16 +95,11 @@ InsertStats OccupancyMap::applyStepRuns(std::int32_t z, const StepRun* runs, std
   const auto bw = static_cast<std::size_t>((x1 >> kBrickBits) - bx0 + 1);
   const auto bh = static_cast<std::size_t>((y1 >> kBrickBits) - by0 + 1);
   std::vector<PlanarLayer*> table(bw * bh, nullptr);
-  const int local_z = z & (kBrickSize - 1);
   const std::int32_t bz = z >> kBrickBits;
-  const auto layerAt = [&](std::int32_t x, std::int32_t y) {
+  const auto layerOf = [&](std::int32_t x, std::int32_t y) {
     PlanarLayer*& l = table[static_cast<std::size_t>((y >> kBrickBits) - by0) * bw +
                             static_cast<std::size_t>((x >> kBrickBits) - bx0)];
-    if (!l) {
-      const Key brick{x >> kBrickBits, y >> kBrickBits, bz};
-      l = &planar_layers_[recent_layers_.get(packKey(Key{brick.x, brick.y, z}),
-                                             [&] { return planarLayer(brickSlot(brick), local_z); })];
-    }
+    if (!l) l = &layerAt(store, Key{x >> kBrickBits, y >> kBrickBits, bz}, z);
     return l;
   };
   // The walk of forEachRunCell, cut into the stretches a run spends in one brick: this loop is
@@ -112,7 +107,7 @@ InsertStats OccupancyMap::applyStepRuns(std::int32_t z, const StepRun* runs, std
   // count of unchanged cells stay in registers: as memory read-modify-writes, one per step, they
   // would chain every step to the store of the step before.
   std::size_t unchanged = 0, free_steps = 0, occupied_steps = 0;
-  constexpr std::int32_t kBrickFrac = kRunFracBits + kBrickBits;
+  constexpr std::int32_t kBrickFrac = kStepRunFracBits + kBrickBits;
   // Steps that fixed-point coordinate `f`, moving by `d`, takes before it leaves its brick, if
   // fewer than `m`: without a division where it can (a division costs tens of cycles, and a
   // raster's major axis moves a whole cell a step; its minor one mostly stays in the brick).
@@ -120,16 +115,16 @@ InsertStats OccupancyMap::applyStepRuns(std::int32_t z, const StepRun* runs, std
   const auto stepsInBrick = [](std::int32_t f, std::int32_t d, std::int64_t m) -> std::int64_t {
     if (d == 0) return m;
     const std::int64_t b = f >> kBrickFrac, lo = b * kSpan, hi = lo + kSpan;  // [lo, hi)
-    constexpr std::int32_t kCell = 1 << kRunFracBits;
-    if (d == kCell) return std::min<std::int64_t>(m, (hi - f + kCell - 1) >> kRunFracBits);
-    if (d == -kCell) return std::min<std::int64_t>(m, ((f - lo) >> kRunFracBits) + 1);
+    constexpr std::int32_t kCell = 1 << kStepRunFracBits;
+    if (d == kCell) return std::min<std::int64_t>(m, (hi - f + kCell - 1) >> kStepRunFracBits);
+    if (d == -kCell) return std::min<std::int64_t>(m, ((f - lo) >> kStepRunFracBits) + 1);
     const std::int64_t last = f + (m - 1) * std::int64_t{d};
     if (last >= lo && last < hi) return m;
     return d > 0 ? (hi - f + d - 1) / d : (f - lo) / -d + 1;
   };
   const auto stretch = [&](std::int32_t& fx, std::int32_t& fy, std::int32_t dx, std::int32_t dy, std::uint32_t m,
                            bool occupied, float delta, float limit, float bound) {
-    PlanarLayer& layer = *layerAt(fx >> kRunFracBits, fy >> kRunFracBits);
+    PlanarLayer& layer = *layerOf(fx >> kStepRunFracBits, fy >> kStepRunFracBits);
     std::uint64_t all = ~std::uint64_t{0};
     for (const std::uint64_t w : layer.known) all &= w;
     float* const v = layer.value.data();
@@ -147,7 +142,7 @@ InsertStats OccupancyMap::applyStepRuns(std::int32_t z, const StepRun* runs, std
     const auto k = static_cast<std::size_t>(r.kind);
     const float delta = rule.delta[k], limit = rule.limit[k], bound = rule.bound[k];
     const bool occ = r.kind == StepKind::Occupied;
-    std::int32_t fx = r.x * (1 << kRunFracBits), fy = r.y * (1 << kRunFracBits);
+    std::int32_t fx = r.x * (1 << kStepRunFracBits), fy = r.y * (1 << kStepRunFracBits);
     for (std::uint32_t left = r.count; left > 0;) {
       const auto m = static_cast<std::uint32_t>(stepsInBrick(fy, r.dy, stepsInBrick(fx, r.dx, left)));
       stretch(fx, fy, r.dx, r.dy, m, occ, delta, limit, bound);
@@ -156,7 +151,7 @@ InsertStats OccupancyMap::applyStepRuns(std::int32_t z, const StepRun* runs, std
     (occ ? occupied_steps : free_steps) += r.count;
     if (r.end) {
       const auto o = static_cast<std::size_t>(StepKind::Occupied);
-      std::int32_t ex = r.end_x * (1 << kRunFracBits), ey = r.end_y * (1 << kRunFracBits);
+      std::int32_t ex = r.end_x * (1 << kStepRunFracBits), ey = r.end_y * (1 << kStepRunFracBits);
       stretch(ex, ey, 0, 0, 1, true, rule.delta[o], rule.limit[o], rule.bound[o]);
       ++occupied_steps;
     }
@@ -165,7 +160,6 @@ InsertStats OccupancyMap::applyStepRuns(std::int32_t z, const StepRun* runs, std
   stats.cells_unchanged = unchanged;
   stats.cells_free = free_steps;
   stats.cells_occupied = occupied_steps;
-  cover_pending_.store(true, std::memory_order_release);
   return stats;
 }
 

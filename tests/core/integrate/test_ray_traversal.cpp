@@ -12,7 +12,9 @@
 
 #include "rtog/core/ray_traversal.hpp"
 #include "rtog/core/rtree.hpp"  // intersectRay
-#include "rtog/core/update_batch.hpp"
+#include "integrate/planar/fan_skip.hpp"
+#include "integrate/planar/planar_batch.hpp"
+#include "integrate/update_batch.hpp"
 
 using namespace rtog;
 

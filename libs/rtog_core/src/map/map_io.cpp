@@ -5,6 +5,7 @@
 #include <istream>
 #include <ostream>
 
+#include "map/map_engine.hpp"
 #include "rtog/core/occupancy_map.hpp"
 
 namespace rtog {
@@ -78,22 +79,24 @@ std::int64_t bytesLeft(std::istream& is) {
 }  // namespace
 
 void OccupancyMap::write(std::ostream& os) const {
-  ensureCovered();
+  engine_->ensureCovered();
+  const MapStore& store = engine_->store;
+  const MapParams& params = store.params;
   os.write(kMagic, sizeof(kMagic));
   Writer w(os);
   w.put(kFormatVersion);
-  const LogOddsParams& lp = params_.log_odds;
-  for (double d : {params_.resolution, lp.prob_hit, lp.prob_miss, lp.clamp_min, lp.clamp_max, lp.occupied_threshold,
+  const LogOddsParams& lp = params.log_odds;
+  for (double d : {params.resolution, lp.prob_hit, lp.prob_miss, lp.clamp_min, lp.clamp_max, lp.occupied_threshold,
                    lp.prior})
     w.put(d);
-  w.put(static_cast<std::uint8_t>(params_.merge));
-  w.put(params_.rtree.max_entries);
-  w.put(params_.rtree.min_entries);
-  w.put(static_cast<std::uint64_t>(leaf_count_));
+  w.put(static_cast<std::uint8_t>(params.merge));
+  w.put(params.rtree.max_entries);
+  w.put(params.rtree.min_entries);
+  w.put(static_cast<std::uint64_t>(store.index.leafCount()));
   // Bricks in key order so equal maps give equal files.
   std::vector<const Brick*> order;
-  order.reserve(bricks_.size());
-  for (const Brick& b : bricks_) order.push_back(&b);
+  order.reserve(store.index.bricks().size());
+  for (const Brick& b : store.index.bricks()) order.push_back(&b);
   std::sort(order.begin(), order.end(), [](const Brick* a, const Brick* b) { return a->brick < b->brick; });
   for (const Brick* b : order) {
     std::vector<LeafEntry> leaves = b->leaves;
@@ -102,7 +105,7 @@ void OccupancyMap::write(std::ostream& os) const {
     });
     const Key o = brickOrigin(b->brick);
     for (const LeafEntry& l : leaves) {
-      const Box gb = globalBox(o, l);
+      const Box gb = l.global(o);
       for (int a = 0; a < 3; ++a) w.put(gb.min[a]);
       for (int a = 0; a < 3; ++a) w.put(gb.max[a]);
       w.put(l.value);
@@ -148,6 +151,7 @@ OccupancyMap OccupancyMap::read(std::istream& is) {
                              std::to_string(left) + " (truncated or corrupt)");
 
   OccupancyMap map(p);
+  MapStore& store = map.engine_->store;
   for (std::uint64_t i = 0; i < count; ++i) {
     Box b;
     for (int a = 0; a < 3; ++a) b.min[a] = r.get<std::int32_t>("leaf");
@@ -155,9 +159,9 @@ OccupancyMap OccupancyMap::read(std::istream& is) {
     const auto v = r.get<float>("leaf");
     if (!keyInRange(b.min) || !keyInRange(b.max) || b.isEmpty() || brickOf(b.min) != brickOf(b.max))
       throw std::runtime_error("rtog map: malformed leaf box " + toString(b));
-    if (!(v >= map.model_.clampMin() && v <= map.model_.clampMax()))
+    if (!(v >= store.model.clampMin() && v <= store.model.clampMax()))
       throw std::runtime_error("rtog map: leaf value outside the clamping bounds");
-    if (b.volume() > 1 && !map.mergeable(v))
+    if (b.volume() > 1 && !store.mergeable(v))
       throw std::runtime_error("rtog map: merged leaf " + toString(b) + " with a value its merge policy keeps apart");
     const Key o = brickOrigin(brickOf(b.min));
     LeafEntry e{};
@@ -166,7 +170,7 @@ OccupancyMap OccupancyMap::read(std::istream& is) {
       e.hi[a] = static_cast<std::uint8_t>(b.max[a] - o[a]);
     }
     e.value = v;
-    map.bricks_[map.brickSlot(brickOf(b.min))].leaves.push_back(e);
+    store.index.brick(store.index.brickSlot(brickOf(b.min))).leaves.push_back(e);
   }
   std::uint64_t stored_sum;
   const std::uint64_t sum = r.checksum();
@@ -176,25 +180,23 @@ OccupancyMap OccupancyMap::read(std::istream& is) {
 
   // Leaves must be disjoint: paint each brick's cells once, then pack the brick and index
   // all leaf nodes with one bulk load.
-  for (std::uint32_t slot = 0; slot < map.bricks_.size(); ++slot) {
-    Brick& br = map.bricks_[slot];
+  std::vector<std::int32_t> local(kBrickCells, -1);
+  for (std::uint32_t slot = 0; slot < store.index.bricks().size(); ++slot) {
+    Brick& br = store.index.brick(slot);
     for (std::size_t i = 0; i < br.leaves.size(); ++i) {
       bool overlap = false;
-      forEachCell(globalBox(Key{0, 0, 0}, br.leaves[i]), [&](const Key& k) {
-        std::int32_t& cell = map.local_[localIndex(k)];
+      br.leaves[i].forEachCell([&](int c) {
+        std::int32_t& cell = local[static_cast<std::size_t>(c)];
         overlap |= cell >= 0;
         cell = static_cast<std::int32_t>(i);
       });
-      if (overlap) {
-        std::fill(map.local_.begin(), map.local_.end(), -1);
-        throw std::runtime_error("rtog map: overlapping leaves in brick " + toString(br.brick));
-      }
+      if (overlap) throw std::runtime_error("rtog map: overlapping leaves in brick " + toString(br.brick));
     }
-    map.packLeaves(slot);
-    std::fill(map.local_.begin(), map.local_.end(), -1);
-    map.leaf_count_ += br.leaves.size();
+    store.index.packLeaves(slot, local);
+    std::fill(local.begin(), local.end(), -1);
+    store.index.addLeafCount(static_cast<std::int64_t>(br.leaves.size()));
   }
-  map.rebuildUpperTree();
+  store.index.rebuildUpperTree();
   return map;
 }
 

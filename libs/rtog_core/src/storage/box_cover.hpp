@@ -1,25 +1,15 @@
-// Covering a brick's cells with boxes: the greedy cover of update_batch's bit masks that
-// insertion and the planar cache use, in a header of its own so that tests can compare the
-// cover of a single layer with the general one.
+// Covering a brick's cells with boxes: the greedy cover of bit masks that insertion, the planar
+// cache and the class cover use; tests compare the cover of a single layer with the general one.
 #pragma once
 
 #include <array>
 #include <cstdint>
-#if defined(__SSE2__)
-#include <emmintrin.h>
-#endif
 
-#include "rtog/core/update_batch.hpp"
+#include "kernels/row_compare.hpp"
+#include "storage/brick.hpp"
 
 namespace rtog {
 namespace detail {
-
-inline int localIdx(int x, int y, int z) { return x | (y << kBrickBits) | (z << (2 * kBrickBits)); }
-
-using BrickMask = std::array<std::uint64_t, kBrickWords>;
-
-// Bits lo..hi of a 16-cell x-row.
-inline std::uint32_t xRun(int lo, int hi) { return ((std::uint32_t{1} << (hi - lo + 1)) - 1u) << lo; }
 
 // Covers the set bits of `mask` with disjoint boxes, greedily: from the lowest uncovered cell
 // `start`, an x-run grown along y, then along z, over cells for which joins(start, cell) holds
@@ -49,7 +39,7 @@ void coverGreedily(BrickMask m, Joins&& joins, Emit&& emit) {
       const std::uint32_t run = xRun(x0, x1);
       const auto rowJoins = [&](int yy, int zz) {
         if ((row(yy, zz) & run) != run) return false;
-        const int base = localIdx(0, yy, zz);
+        const int base = localIndex(0, yy, zz);
         for (int x = x0; x <= x1; ++x)
           if (!joins(start, base + x)) return false;
         return true;
@@ -73,23 +63,12 @@ void coverGreedily(BrickMask m, Joins&& joins, Emit&& emit) {
 // planar cache layer): runs and rows are grown by masks of the cells equal to the start value,
 // four compared at a time, instead of cell by cell.
 template <class Mergeable, class Emit>
-void coverLayer(const std::array<std::uint64_t, kLayerWords>& known, const float* values, int z, Mergeable&& mergeable,
+void coverLayer(const LayerMask& known, const float* values, int z, Mergeable&& mergeable,
                 Emit&& emit) {
   std::uint32_t rows[kBrickSize];
   for (int y = 0; y < kBrickSize; ++y)
     rows[y] = static_cast<std::uint32_t>(known[static_cast<std::size_t>(y >> 2)] >> ((y & 3) * kBrickSize)) & 0xFFFFu;
-  const auto equalTo = [values](int y, float v) {
-    const float* row = values + y * kBrickSize;
-    std::uint32_t mask = 0;
-#if defined(__SSE2__)
-    const __m128 vv = _mm_set1_ps(v);
-    for (int q = 0; q < kBrickSize / 4; ++q)
-      mask |= static_cast<std::uint32_t>(_mm_movemask_ps(_mm_cmpeq_ps(_mm_loadu_ps(row + 4 * q), vv))) << (4 * q);
-#else
-    for (int x = 0; x < kBrickSize; ++x) mask |= static_cast<std::uint32_t>(row[x] == v) << x;
-#endif
-    return mask;
-  };
+  const auto equalTo = [values](int y, float v) { return equalMask16(values + y * kBrickSize, v); };
   const auto u8 = [](int c) { return static_cast<std::uint8_t>(c); };
   for (int y = 0; y < kBrickSize; ++y)
     while (rows[y] != 0) {

@@ -1,0 +1,65 @@
+// Parameters of a map and of one insertion.
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+#include "rtog/core/log_odds.hpp"
+#include "rtog/core/rtree.hpp"
+
+namespace rtog {
+
+/// Inverse sensor model used to turn a beam into cell updates.
+enum class SensorModel {
+  BeamBased,     ///< ray traced: free along the beam, occupied at its end
+  BeamEndPoint,  ///< end points only
+};
+
+/// When adjacent leaves are merged into one cuboid.
+enum class MergePolicy {
+  Off,      ///< every leaf stays one cell
+  Clamped,  ///< cells whose log-odds converged to the same clamping bound (seed §2.5.2)
+  Equal,    ///< any cells with bit-identical log-odds (lossless as well; more merging)
+};
+
+const char* toString(SensorModel m);
+const char* toString(MergePolicy m);
+SensorModel sensorModelFromString(const std::string& s);  ///< throws std::invalid_argument
+MergePolicy mergePolicyFromString(const std::string& s);  ///< throws std::invalid_argument
+
+struct MapParams {
+  double resolution = 0.05;              ///< Cell edge length [m]. (Default: 0.05)
+  LogOddsParams log_odds;                ///< Sensor and clamping probabilities. (Default: OctoMap's)
+  MergePolicy merge = MergePolicy::Clamped;  ///< Leaf merging. (Default: Clamped)
+  RTreeParams rtree;                     ///< Node capacities of the index. (Default: 16/6)
+
+  void validate() const;
+};
+
+/// The machine's hardware threads (at least 1): the default thread count of an insertion.
+int defaultThreadCount();
+
+/// Per-call insertion settings.
+struct InsertParams {
+  SensorModel model = SensorModel::BeamBased;  ///< (Default: BeamBased)
+  /// Beams longer than this are cut here: free up to the cut, nothing occupied. <= 0 means
+  /// unlimited. (Default: -1)
+  double max_range = -1.0;
+  /// Beams longer than this many cells (after the max_range cut) are skipped and counted in
+  /// InsertStats::skipped_too_long: a bound on the cost of one beam, so that garbage ranges
+  /// (a 100 km reading) cannot make one scan take minutes and millions of leaves. 65,536 cells
+  /// are 3.3 km at 5 cm, 655 m at 1 cm. 0: no bound (the caller's call). (Default: 65536)
+  std::uint32_t max_ray_cells = std::uint32_t{1} << 16;
+  /// Trace each beam to the centre of its end cell and beams ending in the same cell once
+  /// (OctoMap's `discretize`): much faster for dense clouds. (Default: false)
+  bool discretize = false;
+  /// Threads tracing and applying beams; the map is bit-identical for any count, so the default
+  /// is the machine's hardware threads. (Default: defaultThreadCount())
+  int threads = defaultThreadCount();
+  /// Scans whose origin and end cells all lie in one z-layer (2D range scans) update the log-odds
+  /// of their bricks' layers in place and are covered with leaves when the map is next read,
+  /// instead of reshaping leaves at every scan. The cells are the same either way. (Default: true)
+  bool planar_cache = true;
+};
+
+}  // namespace rtog

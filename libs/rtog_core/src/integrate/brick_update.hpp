@@ -1,0 +1,40 @@
+// The per-brick update: one brick's marks of a scan applied to its leaves, with splits of
+// merged cuboids that disagree and merges of equal neighbours (seed §2.5).
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "integrate/update_batch.hpp"
+#include "rtog/core/stats.hpp"
+#include "storage/map_store.hpp"
+
+namespace rtog {
+
+/// Per-thread state of applying bricks.
+struct alignas(64) ApplyContext {
+  std::vector<std::int32_t> local;  // brick-local cell -> leaf index, -1 when none
+  std::vector<std::uint32_t> candidates;
+  std::vector<std::uint32_t> reshaped;  // bricks whose leaf nodes changed
+  UpdateBatch::BrickUpdates merged;     // union of one brick's updates from several batches
+  std::vector<float> values;            // brick-local cell -> log-odds, for a rebuild
+  std::vector<LeafEntry> rebuilt;
+  // The reshaped bricks' leaf-node boxes, taken while their leaves are in the cache: a rebuild
+  // of the upper tree reads them instead of every leaf again.
+  std::vector<LocalBox> node_boxes;
+  std::vector<std::uint32_t> reshaped_boxes;  // first of each reshaped brick's boxes
+  std::int64_t leaf_delta = 0;
+  InsertStats stats;
+
+  /// Ready for a new batch.
+  void reset();
+};
+
+/// Applies a brick's updates (occupied winning over free) to the leaves of brick `slot`. The
+/// upper tree is not touched: the brick is recorded in ctx.reshaped if its leaf nodes changed.
+void applyBrick(MapStore& store, const UpdateBatch::BrickUpdates& upd, std::uint32_t slot, ApplyContext& ctx);
+
+/// Records brick `slot` as reshaped, with its leaf-node boxes.
+void noteReshaped(const MapStore& store, std::uint32_t slot, ApplyContext& ctx);
+
+}  // namespace rtog

@@ -1,0 +1,182 @@
+// Insertion: beams -> per-scan update batches (per thread) -> one sweep over the touched bricks.
+#include "integrate/scan_integrator.hpp"
+
+#include <algorithm>
+#include <mutex>
+#include <stdexcept>
+
+#include "integrate/batch_apply.hpp"
+#include "integrate/beams.hpp"
+#include "integrate/planar/fan_skip.hpp"
+#include "parallel/parallel.hpp"
+
+namespace rtog {
+namespace {
+
+// Idle insertion buffers: as many as maps insert at one time, up to kKeep.
+struct ScratchPool {
+  static constexpr std::size_t kKeep = 4;
+  std::mutex mutex;
+  std::vector<std::unique_ptr<InsertScratch>> idle;
+  static ScratchPool& instance() {
+    static ScratchPool pool;
+    return pool;
+  }
+};
+
+}  // namespace
+
+ScratchScope::ScratchScope(std::unique_ptr<InsertScratch>& slot) : slot_(slot), owner_(slot == nullptr) {
+  if (!owner_) return;
+  ScratchPool& pool = ScratchPool::instance();
+  {
+    const std::lock_guard<std::mutex> lock(pool.mutex);
+    if (!pool.idle.empty()) {
+      slot_ = std::move(pool.idle.back());
+      pool.idle.pop_back();
+    }
+  }
+  if (!slot_) slot_ = std::make_unique<InsertScratch>();
+}
+
+ScratchScope::~ScratchScope() {
+  if (!owner_) return;
+  ScratchPool& pool = ScratchPool::instance();
+  const std::lock_guard<std::mutex> lock(pool.mutex);
+  if (pool.idle.size() < ScratchPool::kKeep) pool.idle.push_back(std::move(slot_));
+  slot_.reset();
+}
+
+void releaseInsertBuffers() {
+  std::vector<std::unique_ptr<InsertScratch>> idle;
+  {
+    ScratchPool& pool = ScratchPool::instance();
+    const std::lock_guard<std::mutex> lock(pool.mutex);
+    idle.swap(pool.idle);
+  }
+}  // freed here, outside the lock
+
+InsertStats ScanIntegrator::insert(const Eigen::Vector3d& origin, const Eigen::Vector3f* points, std::size_t count,
+                                   const InsertParams& ip, const std::uint8_t* is_hit,
+                                   const std::function<void()>& flush_pending) {
+  if (ip.threads < 1) throw std::invalid_argument("InsertParams: threads must be >= 1");
+  InsertScratch& scratch = scratch_;
+  Key lo, hi;
+  InsertStats stats;
+  const bool planar = ip.planar_cache && preparePlanarBeams(origin, points, count, ip, is_hit, lo, hi, stats);
+  if (!planar) flush_pending();
+  // Below a few thousand beams a thread costs more than it saves.
+  const std::size_t threads = std::min<std::size_t>(static_cast<std::size_t>(ip.threads), 1 + count / 4096);
+  if (scratch.batches.size() < threads) scratch.batches.resize(threads);
+  if (planar && scratch.planar_batches.size() < threads) scratch.planar_batches.resize(threads);
+  std::vector<InsertStats> part(threads);
+  // Chunks taken as threads become free, traced independently; their union does not depend on
+  // the split. Small chunks (a sixteenth of a thread's share, 256 to 2,048 beams) balance a
+  // single long-range scan. With discretized end points a thread traces each end cell once, and
+  // neighbouring beams share end cells across a chunk border: then four large chunks per thread
+  // (two fixed halves were too uneven, a depth image's rows differing in cost).
+  const std::size_t chunk = ip.discretize ? std::max<std::size_t>(2048, (count + 4 * threads - 1) / (4 * threads))
+                                          : std::clamp<std::size_t>(count / (16 * threads), 256, 2048);
+  parallel::ChunkClaims claims((count + chunk - 1) / chunk, threads);
+  const Key origin_key = planar ? store_.lattice.key(origin) : Key{};
+  const BeamRules rules(store_.lattice, ip);
+  parallel::run(threads, [&](std::size_t t) {
+    InsertStats own;  // counted locally: neighbouring entries of `part` share a cache line
+    if (planar) {
+      scratch.planar_batches[t].reset(lo, hi);
+    } else {
+      scratch.batches[t].clear();
+    }
+    for (std::size_t c; (c = claims.next(t)) != parallel::ChunkClaims::kNone;) {
+      const std::size_t first = c * chunk, n = std::min(chunk, count - first);
+      const std::uint8_t* hits = is_hit ? is_hit + first : nullptr;
+      if (planar) {
+        PlanarBatch& batch = scratch.planar_batches[t];
+        for (std::size_t i = first; i < first + n; ++i) {
+          const PlanarBeam& beam = scratch.planar_beams[i];
+          if (!beam.traced) continue;
+          rules.mark(beam.hit, beam.end, batch, [&] { batch.markRayFree(beam.seg, origin_key, beam.skip_runs); });
+        }
+      } else {
+        traceBeams(store_.lattice, origin, points + first, n, ip, hits, scratch.batches[t], own);
+      }
+    }
+    if (planar) {
+      scratch.planar_batches[t].finalize();
+    } else {
+      scratch.batches[t].finalize();
+    }
+    part[t] = own;
+  });
+  for (std::size_t t = 0; t < threads; ++t) stats += part[t];
+  if (planar) {
+    planar_.apply(store_, scratch.planar_batches, threads, lo.z, stats);
+  } else {
+    std::vector<const UpdateBatch*> batches;
+    for (std::size_t t = 0; t < threads; ++t) batches.push_back(&scratch.batches[t]);
+    applyBatches(store_, batches, stats, static_cast<int>(threads), scratch.apply_ctx);
+  }
+  return stats;
+}
+
+bool ScanIntegrator::preparePlanarBeams(const Eigen::Vector3d& origin, const Eigen::Vector3f* points,
+                                        std::size_t count, const InsertParams& ip, const std::uint8_t* is_hit, Key& lo,
+                                        Key& hi, InsertStats& stats) {
+  const Lattice& lattice = store_.lattice;
+  // A planar batch of more than this many bricks (16 MiB: a scan 400 m wide at 5 cm) takes
+  // the general path instead.
+  constexpr std::size_t kMaxPlanarTiles = std::size_t{1} << 18;
+  Key origin_key;
+  if (!lattice.tryKey(origin, origin_key)) return false;
+  const Eigen::Vector3d origin_l = lattice.toLattice(origin);
+  lo = hi = origin_key;
+  // Grown beam by beam: a volumetric scan usually leaves the layer within its first beams, and
+  // sizing for all of them (a depth image: 307,200) cost more than its whole planar test.
+  std::vector<PlanarBeam>& beams = scratch_.planar_beams;
+  beams.clear();
+  InsertStats counts;  // into `stats` only if the scan is planar: else the general path counts
+  const BeamRules rules(lattice, ip);
+  Eigen::Vector3d end;
+  for (std::size_t i = 0; i < count; ++i) {
+    PlanarBeam& beam = beams.emplace_back();
+    const BeamEnd kind =
+        rules.classify(origin, points[i].cast<double>(), is_hit == nullptr || is_hit[i] != 0, end, beam.end);
+    beam.traced = false;
+    beam.skip_runs = 0;
+    if (kind != BeamEnd::Hit && kind != BeamEnd::Truncated) {
+      BeamRules::count(kind, counts);
+      continue;
+    }
+    if (beam.end.z != origin_key.z) return false;
+    lo = Key{std::min(lo.x, beam.end.x), std::min(lo.y, beam.end.y), lo.z};
+    hi = Key{std::max(hi.x, beam.end.x), std::max(hi.y, beam.end.y), hi.z};
+    beam.traced = true;
+    beam.hit = kind == BeamEnd::Hit;
+    BeamRules::count(kind, counts);
+    beam.seg = planarSegment(origin_l, rules.walkEnd(end, beam.end), origin_key, beam.end);
+  }
+  if (PlanarBatch::tilesFor(lo, hi) > kMaxPlanarTiles) return false;
+  // Discretized beams are traced once per end cell, which a skip could not rely on.
+  if (rules.tracesFree() && !rules.discretize()) fanSkipRuns(beams.data(), count);
+  stats += counts;
+  return true;
+}
+
+void ScanIntegrator::traceBeams(const Lattice& lattice, const Eigen::Vector3d& origin, const Eigen::Vector3f* points,
+                                std::size_t count, const InsertParams& ip, const std::uint8_t* is_hit,
+                                UpdateBatch& batch, InsertStats& stats) {
+  const Key origin_key = lattice.key(origin);  // throws for a bad origin
+  const Eigen::Vector3d origin_l = lattice.toLattice(origin);
+  const BeamRules rules(lattice, ip);
+  Eigen::Vector3d end;
+  Key end_key;
+  for (std::size_t i = 0; i < count; ++i) {
+    const BeamEnd kind =
+        rules.classify(origin, points[i].cast<double>(), is_hit == nullptr || is_hit[i] != 0, end, end_key);
+    if (!BeamRules::count(kind, stats)) continue;
+    rules.mark(kind == BeamEnd::Hit, end_key, batch,
+               [&] { batch.queueRayFree(origin_l, rules.walkEnd(end, end_key), origin_key, end_key); });
+  }
+}
+
+}  // namespace rtog

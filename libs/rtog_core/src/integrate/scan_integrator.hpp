@@ -1,0 +1,80 @@
+// The scan integrator: one scan's beams traced into update batches (in parallel), then applied
+// to the map, through the planar cache when the scan lies in one z-layer.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "integrate/brick_update.hpp"
+#include "integrate/planar/planar_batch.hpp"
+#include "integrate/planar/planar_cache.hpp"
+#include "integrate/update_batch.hpp"
+#include "rtog/core/params.hpp"
+#include "rtog/core/stats.hpp"
+#include "storage/map_store.hpp"
+
+namespace rtog {
+
+/// Buffers of one insertion: per-thread update batches and apply contexts, a planar scan's
+/// beams and batches. A map holds them only while it inserts: they come from a process-wide
+/// pool and go back to it, so maps do not each keep buffers the size of their largest scan
+/// (a particle filter keeps a map per particle; one VLP-16 scan's batch is 20 MB), and a new
+/// map starts with buffers already faulted in.
+struct InsertScratch {
+  std::vector<UpdateBatch> batches;  // per thread
+  std::vector<ApplyContext> apply_ctx;
+  std::vector<PlanarBatch> planar_batches;  // per thread
+  std::vector<PlanarBeam> planar_beams;
+};
+
+/// Holds `slot` filled for its lifetime, from the pool unless an enclosing scope holds it.
+class ScratchScope {
+ public:
+  explicit ScratchScope(std::unique_ptr<InsertScratch>& slot);
+  ~ScratchScope();
+  ScratchScope(const ScratchScope&) = delete;
+  ScratchScope& operator=(const ScratchScope&) = delete;
+  InsertScratch& operator*() const { return *slot_; }
+
+ private:
+  std::unique_ptr<InsertScratch>& slot_;
+  bool owner_;
+};
+
+/// Frees the pool's idle buffers (up to four are kept: one per map inserting at a time).
+void releaseInsertBuffers();
+
+class ScanIntegrator {
+ public:
+  ScanIntegrator(MapStore& store, PlanarCache& planar, InsertScratch& scratch)
+      : store_(store), planar_(planar), scratch_(scratch) {}
+
+  /// Integrates one scan (OccupancyMap::insertPointCloud). flush_pending() is called first
+  /// if the scan does not go through the planar cache.
+  InsertStats insert(const Eigen::Vector3d& origin, const Eigen::Vector3f* points, std::size_t count,
+                     const InsertParams& ip, const std::uint8_t* is_hit, const std::function<void()>& flush_pending);
+
+  /// Traces beams into `batch` (no change to the map). Throws std::out_of_range if the origin
+  /// has no key.
+  static void traceBeams(const Lattice& lattice, const Eigen::Vector3d& origin, const Eigen::Vector3f* points,
+                         std::size_t count, const InsertParams& ip, const std::uint8_t* is_hit, UpdateBatch& batch,
+                         InsertStats& stats);
+
+ private:
+  /// True if every traced beam of the scan stays in the origin's z-layer and the scan is not too
+  /// wide for a planar batch: then the beams in exact planar form, with the runs each can skip
+  /// (fanSkipRuns), are in scratch_.planar_beams, [lo, hi] bounds their cells in x and y, and
+  /// `stats` counts them.
+  bool preparePlanarBeams(const Eigen::Vector3d& origin, const Eigen::Vector3f* points, std::size_t count,
+                          const InsertParams& ip, const std::uint8_t* is_hit, Key& lo, Key& hi, InsertStats& stats);
+
+  MapStore& store_;
+  PlanarCache& planar_;
+  InsertScratch& scratch_;
+};
+
+}  // namespace rtog

@@ -1,0 +1,52 @@
+#include "map/map_engine.hpp"
+
+#include "integrate/batch_apply.hpp"
+
+namespace rtog {
+
+InsertStats MapEngine::flush() {
+  // Under the lock, so that concurrent readers cover once: the later ones find no layers.
+  const std::lock_guard<std::mutex> lock(cover_mutex);
+  const InsertStats stats = planar.cover(store);
+  cover_pending.store(false, std::memory_order_release);
+  return stats;
+}
+
+void MapEngine::clear() {
+  store.clear();
+  planar.clear();
+  cover_pending.store(false, std::memory_order_release);
+}
+
+InsertStats MapEngine::insertPointCloud(const Eigen::Vector3d& origin, const Eigen::Vector3f* points,
+                                        std::size_t count, const InsertParams& ip, const std::uint8_t* is_hit) {
+  const ScratchScope scope(scratch);
+  const InsertStats stats = ScanIntegrator(store, planar, *scope).insert(origin, points, count, ip, is_hit, [this] {
+    if (cover_pending.load(std::memory_order_acquire)) flush();
+  });
+  if (!planar.empty()) cover_pending.store(true, std::memory_order_release);
+  return stats;
+}
+
+InsertStats MapEngine::applyStepRuns(std::int32_t z, const StepRun* runs, std::size_t n, const StepRule& rule,
+                                     std::vector<float>* after) {
+  if (after) after->clear();
+  if (n == 0) return {};
+  const InsertStats stats = planar.applyStepRuns(store, z, runs, n, rule, after);
+  cover_pending.store(true, std::memory_order_release);
+  return stats;
+}
+
+void MapEngine::computeUpdate(const Eigen::Vector3d& origin, const Eigen::Vector3f* points, std::size_t count,
+                              const InsertParams& ip, const std::uint8_t* is_hit, UpdateBatch& batch,
+                              InsertStats& stats) const {
+  ScanIntegrator::traceBeams(store.lattice, origin, points, count, ip, is_hit, batch, stats);
+}
+
+void MapEngine::applyUpdate(const std::vector<const UpdateBatch*>& batches, InsertStats& stats, int threads) {
+  const ScratchScope scope(scratch);
+  ensureCovered();
+  applyBatches(store, batches, stats, threads, (*scope).apply_ctx);
+}
+
+}  // namespace rtog

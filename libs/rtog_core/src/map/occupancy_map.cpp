@@ -1,0 +1,62 @@
+// OccupancyMap: the public face of MapEngine. Readers cover the planar cache first.
+#include "rtog/core/occupancy_map.hpp"
+
+#include "integrate/scan_integrator.hpp"
+#include "map/map_engine.hpp"
+
+namespace rtog {
+
+OccupancyMap::OccupancyMap(const MapParams& params) : engine_(std::make_unique<MapEngine>(params)) {}
+
+OccupancyMap::OccupancyMap(const OccupancyMap& other) {
+  other.engine_->ensureCovered();
+  engine_ = std::make_unique<MapEngine>(other.engine_->store);
+}
+
+OccupancyMap::OccupancyMap(OccupancyMap&& other) : engine_(std::make_unique<MapEngine>(other.params())) {
+  *this = std::move(other);
+}
+
+OccupancyMap::~OccupancyMap() = default;
+
+OccupancyMap& OccupancyMap::operator=(const OccupancyMap& other) {
+  if (this != &other) {
+    other.engine_->ensureCovered();
+    engine_->clear();
+    engine_->store = other.engine_->store;
+  }
+  return *this;
+}
+
+OccupancyMap& OccupancyMap::operator=(OccupancyMap&& other) {
+  if (this != &other) {
+    other.engine_->ensureCovered();
+    engine_->clear();
+    engine_->store = std::move(other.engine_->store);
+    // The moved-from map: empty, with its parameters.
+    other.engine_ = std::make_unique<MapEngine>(engine_->store.params);
+  }
+  return *this;
+}
+
+const MapParams& OccupancyMap::params() const { return engine_->store.params; }
+const Lattice& OccupancyMap::lattice() const { return engine_->store.lattice; }
+const LogOddsModel& OccupancyMap::logOddsModel() const { return engine_->store.model; }
+
+void OccupancyMap::clear() { engine_->clear(); }
+InsertStats OccupancyMap::flush() { return engine_->flush(); }
+bool OccupancyMap::hasPendingCover() const { return engine_->cover_pending.load(std::memory_order_acquire); }
+
+InsertStats OccupancyMap::insertPointCloud(const Eigen::Vector3d& origin, const Eigen::Vector3f* points,
+                                           std::size_t count, const InsertParams& ip, const std::uint8_t* is_hit) {
+  return engine_->insertPointCloud(origin, points, count, ip, is_hit);
+}
+
+InsertStats OccupancyMap::applyStepRuns(std::int32_t z, const StepRun* runs, std::size_t n, const StepRule& rule,
+                                        std::vector<float>* after) {
+  return engine_->applyStepRuns(z, runs, n, rule, after);
+}
+
+void OccupancyMap::releaseInsertBuffers() { rtog::releaseInsertBuffers(); }
+
+}  // namespace rtog

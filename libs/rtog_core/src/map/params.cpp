@@ -1,0 +1,72 @@
+// Parameters and statistics: names, validation, sums.
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+#include <thread>
+
+#include "rtog/core/params.hpp"
+#include "rtog/core/stats.hpp"
+
+namespace rtog {
+
+int defaultThreadCount() {
+  static const int n = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  return n;
+}
+
+const char* toString(SensorModel m) { return m == SensorModel::BeamBased ? "beam" : "endpoint"; }
+
+const char* toString(MergePolicy m) {
+  switch (m) {
+    case MergePolicy::Off: return "off";
+    case MergePolicy::Clamped: return "clamped";
+    default: return "equal";
+  }
+}
+
+SensorModel sensorModelFromString(const std::string& s) {
+  if (s == "beam" || s == "beam_based" || s == "BeamBased") return SensorModel::BeamBased;
+  if (s == "endpoint" || s == "beam_end_point" || s == "BeamEndPoint") return SensorModel::BeamEndPoint;
+  throw std::invalid_argument("unknown sensor model '" + s + "' (expected 'beam' or 'endpoint')");
+}
+
+MergePolicy mergePolicyFromString(const std::string& s) {
+  if (s == "off" || s == "false" || s == "0") return MergePolicy::Off;
+  if (s == "clamped" || s == "true" || s == "1") return MergePolicy::Clamped;
+  if (s == "equal") return MergePolicy::Equal;
+  throw std::invalid_argument("unknown merge policy '" + s + "' (expected 'off', 'clamped' or 'equal')");
+}
+
+void MapParams::validate() const {
+  if (!(resolution > 0.0) || !std::isfinite(resolution) || resolution < 1e-4 || resolution > 1e3)
+    throw std::invalid_argument("MapParams: resolution must lie in [1e-4, 1e3] m, got " + std::to_string(resolution));
+  log_odds.validate();
+  rtree.validate();
+}
+
+InsertStats& InsertStats::operator+=(const InsertStats& o) {
+  rays_hit += o.rays_hit;
+  rays_truncated += o.rays_truncated;
+  skipped_non_finite += o.skipped_non_finite;
+  skipped_zero_length += o.skipped_zero_length;
+  skipped_out_of_range += o.skipped_out_of_range;
+  skipped_too_long += o.skipped_too_long;
+  cells_occupied += o.cells_occupied;
+  cells_free += o.cells_free;
+  cells_unchanged += o.cells_unchanged;
+  leaves_created += o.leaves_created;
+  leaves_merged += o.leaves_merged;
+  leaves_split += o.leaves_split;
+  return *this;
+}
+
+bool InsertStats::operator==(const InsertStats& o) const {
+  return rays_hit == o.rays_hit && rays_truncated == o.rays_truncated && skipped_non_finite == o.skipped_non_finite &&
+         skipped_zero_length == o.skipped_zero_length && skipped_out_of_range == o.skipped_out_of_range &&
+         skipped_too_long == o.skipped_too_long &&
+         cells_occupied == o.cells_occupied && cells_free == o.cells_free && cells_unchanged == o.cells_unchanged &&
+         leaves_created == o.leaves_created && leaves_merged == o.leaves_merged && leaves_split == o.leaves_split;
+}
+
+}  // namespace rtog

@@ -1,0 +1,206 @@
+#include "storage/leaf_index.hpp"
+
+#include <algorithm>
+
+#include "parallel/parallel.hpp"
+#include "storage/morton_order.hpp"
+#include "util/radix_sort.hpp"
+
+namespace rtog {
+
+void LeafIndex::clear() {
+  upper_.clear();
+  brick_index_.clear();
+  bricks_.clear();
+  leaf_count_ = 0;
+}
+
+std::uint32_t LeafIndex::brickSlot(const Key& brick) {
+  const auto next = static_cast<std::uint32_t>(bricks_.size());
+  const std::uint32_t slot = brick_index_.findOrInsert(packKey(brick), next);
+  if (slot == next) bricks_.push_back(Brick{brick, {}, {}});
+  return slot;
+}
+
+const Brick* LeafIndex::findBrick(const Key& brick) const {
+  const std::uint32_t slot = brick_index_.find(packKey(brick));
+  return slot == detail::FlatHashMap64::kAbsent ? nullptr : &bricks_[slot];
+}
+
+void LeafIndex::reserveBricks(std::size_t more) {
+  // Still growing geometrically.
+  if (bricks_.capacity() < bricks_.size() + more)
+    bricks_.reserve(std::max(bricks_.size() + more, 2 * bricks_.capacity()));
+}
+
+Box LeafIndex::leafNodeBox(const Brick& b, std::size_t node) const {
+  if (node * leafNodeSize() >= b.leaves.size()) return Box::empty();
+  return localNodeBox(b.leaves, node).global(brickOrigin(b.brick));
+}
+
+LocalBox LeafIndex::localNodeBox(const std::vector<LeafEntry>& leaves, std::size_t node) const {
+  // In brick-local bytes, one conversion at the end.
+  const std::size_t first = node * leafNodeSize(), last = std::min(leaves.size(), first + leafNodeSize());
+  LocalBox united = leaves[first];
+  for (std::size_t i = first + 1; i < last; ++i)
+    for (int a = 0; a < 3; ++a) {
+      united.lo[a] = std::min(united.lo[a], leaves[i].lo[a]);
+      united.hi[a] = std::max(united.hi[a], leaves[i].hi[a]);
+    }
+  return united;
+}
+
+const LeafEntry* LeafIndex::findLeaf(const Key& k) const {
+  if (!keyInRange(k)) return nullptr;
+  const Brick* b = findBrick(brickOf(k));
+  if (!b) return nullptr;
+  const Key l = localKey(localIndex(k));
+  // Leaf-node boxes first, then the entries of the one node that can hold the cell.
+  for (std::size_t n = 0; n < b->nodes.size(); ++n) {
+    if (!upper_.box(b->nodes[n]).contains(k)) continue;
+    const std::size_t first = n * leafNodeSize(), last = std::min(b->leaves.size(), first + leafNodeSize());
+    for (std::size_t i = first; i < last; ++i)
+      if (b->leaves[i].contains(l)) return &b->leaves[i];
+  }
+  return nullptr;
+}
+
+void LeafIndex::syncLeafNodes(std::uint32_t slot) {
+  Brick& br = bricks_[slot];
+  const std::size_t nodes = leafNodeCount(br);
+  for (std::size_t n = 0; n < nodes; ++n) {
+    const Box box = leafNodeBox(br, n);
+    if (n < br.nodes.size()) {
+      if (upper_.box(br.nodes[n]) != box) upper_.updateBox(br.nodes[n], box);
+    } else {
+      br.nodes.push_back(upper_.insert(box, LeafNodeRef{slot, static_cast<std::uint32_t>(n)}));
+    }
+  }
+  while (br.nodes.size() > nodes) {
+    upper_.remove(br.nodes.back());
+    br.nodes.pop_back();
+  }
+}
+
+void LeafIndex::refreshUpperTree(std::vector<std::uint32_t>& reshaped, int threads,
+                                 const std::function<std::vector<const LocalBox*>()>& boxes_of) {
+  // Leaf nodes whose boxes changed go into the upper tree one by one, unless they are many
+  // compared with the tree (a first scan, a new area): then one bulk load is cheaper.
+  std::size_t touched_nodes = 0;
+  for (const std::uint32_t slot : reshaped) touched_nodes += leafNodeCount(bricks_[slot]);
+  if (touched_nodes * 2 > upper_.size()) {
+    rebuildUpperTree(threads, boxes_of ? boxes_of() : std::vector<const LocalBox*>{});
+  } else {
+    // In slot order: the tree must not depend on which thread applied which brick.
+    std::sort(reshaped.begin(), reshaped.end());
+    for (const std::uint32_t slot : reshaped) syncLeafNodes(slot);
+  }
+}
+
+void LeafIndex::rebuildUpperTree(int threads, const std::vector<const LocalBox*>& boxes_of) {
+  // Leaf nodes go to the bulk load in Morton order of their bricks, and a brick's nodes follow
+  // its leaves, which are in Morton order of their first cells when packed: close to the order
+  // of the nodes' own Morton codes without sorting the nodes (the load runs on one thread).
+  const auto slots = static_cast<std::uint32_t>(bricks_.size());
+  std::vector<std::pair<std::uint64_t, std::uint32_t>> order(slots);
+  for (std::uint32_t slot = 0; slot < slots; ++slot) order[slot] = {mortonCode(bricks_[slot].brick), slot};
+  // A first scan's bricks got their slots in this order already (update batches are in it).
+  if (!std::is_sorted(order.begin(), order.end())) detail::radixSortByKey(order);
+  // Handles are the nodes' positions in the load, so each brick knows its own before the load.
+  std::vector<std::uint32_t> first_node(slots + 1, 0);
+  for (std::uint32_t i = 0; i < slots; ++i)
+    first_node[i + 1] = first_node[i] + static_cast<std::uint32_t>(leafNodeCount(bricks_[order[i].second]));
+  std::vector<std::pair<Box, LeafNodeRef>> nodes(first_node[slots]);
+  std::vector<std::uint32_t> rank(slots);  // of each slot in `order`
+  for (std::uint32_t i = 0; i < slots; ++i) rank[order[i].second] = i;
+  // The leaf nodes' boxes read every leaf of the map: the threads take ranges of slots, not of
+  // `order`, whose neighbours' bricks (written here) would share cache lines.
+  const auto collect = [&](std::size_t begin, std::size_t end) {
+    for (auto slot = static_cast<std::uint32_t>(begin); slot < end; ++slot) {
+      const std::uint32_t i = rank[slot];
+      Brick& br = bricks_[slot];
+      br.nodes.resize(first_node[i + 1] - first_node[i]);
+      const LocalBox* boxes = boxes_of.empty() ? nullptr : boxes_of[slot];
+      const Key origin = brickOrigin(br.brick);
+      for (std::uint32_t k = 0; k < br.nodes.size(); ++k) {
+        br.nodes[k] = first_node[i] + k;
+        nodes[br.nodes[k]] = {boxes ? boxes[k].global(origin) : leafNodeBox(br, k), LeafNodeRef{slot, k}};
+      }
+    }
+  };
+  // Below some thousand bricks (or nodes) a thread costs more than it saves.
+  const auto parts = [threads](std::size_t count) {
+    return std::min<std::size_t>(static_cast<std::size_t>(std::max(threads, 1)), 1 + count / 1024);
+  };
+  parallel::forRanges(slots, parts(slots), collect);
+  upper_.bulkLoad(std::move(nodes), RTree<LeafNodeRef>::Packing::AsGiven,
+                  [&](std::size_t count, const std::function<void(std::size_t, std::size_t)>& fn) {
+                    parallel::forRanges(count, parts(count), fn);
+                  });
+}
+
+void LeafIndex::packLeaves(std::uint32_t slot, const std::vector<std::int32_t>& local) {
+  Brick& br = bricks_[slot];
+  std::vector<LeafEntry> live, packed;  // packed: exact capacity
+  if (br.leaves.size() * 16 >= static_cast<std::size_t>(kBrickCells)) {
+    // Dense brick: one pass over the cells in Morton order, taking each live leaf at its first cell.
+    for (const std::uint16_t idx : mortonOrder()) {
+      const std::int32_t i = local[idx];
+      if (i < 0) continue;
+      const LeafEntry& e = br.leaves[static_cast<std::size_t>(i)];
+      if (localIndex(e.lo[0], e.lo[1], e.lo[2]) == idx) live.push_back(e);
+    }
+    packed.assign(live.begin(), live.end());
+  } else {
+    // Sparse brick: the few live leaves by the Morton rank of their first cell.
+    for (const LeafEntry& e : br.leaves)
+      if (e.lo[0] != kDead) live.push_back(e);
+    assignByFirstCell(live, packed);
+  }
+  br.leaves.swap(packed);
+}
+
+std::size_t LeafIndex::memoryBytes() const {
+  std::size_t bytes = upper_.memoryBytes() + brick_index_.memoryBytes() + bricks_.capacity() * sizeof(Brick);
+  for (const Brick& b : bricks_) bytes += b.leaves.capacity() * sizeof(LeafEntry) + b.nodes.heapBytes();
+  return bytes;
+}
+
+std::string LeafIndex::checkInvariants(const LogOddsModel& model, const std::function<bool(float)>& mergeable) const {
+  // Leaf-node boxes may overlap (inner boxes of an R-tree); leaves may not, checked below.
+  std::string err = upper_.checkInvariants(false);
+  if (!err.empty()) return "R-tree: " + err;
+  std::size_t leaves = 0, nodes = 0;
+  std::vector<std::uint8_t> painted(kBrickCells);
+  for (std::size_t slot = 0; slot < bricks_.size(); ++slot) {
+    const Brick& b = bricks_[slot];
+    if (brick_index_.find(packKey(b.brick)) != slot) return "brick index does not point at brick " + toString(b.brick);
+    if (b.nodes.size() != leafNodeCount(b)) return "brick " + toString(b.brick) + " has the wrong number of leaf nodes";
+    for (std::size_t n = 0; n < b.nodes.size(); ++n) {
+      const Handle h = b.nodes[n];
+      if (!upper_.valid(h)) return "leaf node with a dead handle";
+      const LeafNodeRef r = upper_.payload(h);
+      if (r.brick != slot || r.node != n) return "leaf node reference mismatch";
+      if (upper_.box(h) != leafNodeBox(b, n)) return "leaf node box is not the tight union of its entries";
+    }
+    nodes += b.nodes.size();
+    std::fill(painted.begin(), painted.end(), 0);
+    for (const LeafEntry& e : b.leaves) {
+      ++leaves;
+      for (int a = 0; a < 3; ++a)
+        if (e.lo[a] > e.hi[a] || e.hi[a] >= kBrickSize) return "malformed leaf in brick " + toString(b.brick);
+      const Box gb = e.global(brickOrigin(b.brick));
+      if (!(e.value >= model.clampMin() && e.value <= model.clampMax())) return "leaf value outside the clamping bounds";
+      if (gb.volume() > 1 && !mergeable(e.value))
+        return "merged leaf " + toString(gb) + " holds a value its policy does not merge";
+      bool overlap = false;
+      e.forEachCell([&](int i) { overlap |= painted[static_cast<std::size_t>(i)]++ != 0; });
+      if (overlap) return "leaves overlap at " + toString(gb);
+    }
+  }
+  if (leaves != leaf_count_) return "leaf count mismatch";
+  if (nodes != upper_.size()) return "upper tree and bricks disagree on the number of leaf nodes";
+  return {};
+}
+
+}  // namespace rtog
