@@ -12,8 +12,9 @@ using detail::coverGreedily;
 /// applyBrick()'s way for a brick without leaves under equal-value merging: each class of
 /// fresh cells has one value, so the greedy cover of each class's mask gives the leaves, the
 /// same boxes as rebuildBrick()'s cover (which never joins cells of different values).
-static void coverFreshBrick(MapStore& store, const UpdateBatch::BrickUpdates& upd, std::uint32_t slot,
-                            ApplyContext& ctx);
+// Out of line: inlined into applyBrick(), the cover ran 19 % more instructions (callgrind, VLP-16).
+[[gnu::noinline]] static void coverFreshBrick(MapStore& store, const UpdateBatch::BrickUpdates& upd,
+                                              std::uint32_t slot, ApplyContext& ctx);
 /// applyBrick()'s way for a brick with many updates: values into a dense table, updated
 /// there, and the brick covered anew with boxes of equal (mergeable) value. Costs O(4096)
 /// instead of a split and merges per updated cell.
@@ -21,6 +22,13 @@ static void rebuildBrick(MapStore& store, const UpdateBatch::BrickUpdates& upd, 
                          ApplyContext& ctx);
 static std::size_t mergeInBrick(const MapStore& store, std::vector<LeafEntry>& leaves,
                                 std::vector<std::int32_t>& local, const std::vector<std::uint32_t>& candidates);
+
+std::size_t ApplyContext::memoryBytes() const {
+  return sizeof(*this) + local.capacity() * sizeof(std::int32_t) + candidates.capacity() * sizeof(std::uint32_t) +
+         reshaped.capacity() * sizeof(std::uint32_t) + values.capacity() * sizeof(float) +
+         rebuilt.capacity() * sizeof(LeafEntry) + node_boxes.capacity() * sizeof(LocalBox) +
+         reshaped_boxes.capacity() * sizeof(std::uint32_t);
+}
 
 void ApplyContext::reset() {
   local.assign(kBrickCells, -1);

@@ -28,6 +28,7 @@ struct alignas(64) ApplyContext {
 
   /// Ready for a new batch.
   void reset();
+  std::size_t memoryBytes() const;
 };
 
 /// Applies a brick's updates (occupied winning over free) to the leaves of brick `slot`. The

@@ -20,11 +20,13 @@ void MapEngine::clear() {
 
 InsertStats MapEngine::insertPointCloud(const Eigen::Vector3d& origin, const Eigen::Vector3f* points,
                                         std::size_t count, const InsertParams& ip, const std::uint8_t* is_hit) {
-  const ScratchScope scope(scratch);
+  ScratchScope scope(scratch);
   const InsertStats stats = ScanIntegrator(store, planar, *scope).insert(origin, points, count, ip, is_hit, [this] {
     if (cover_pending.load(std::memory_order_acquire)) flush();
   });
   if (!planar.empty()) cover_pending.store(true, std::memory_order_release);
+  // Buffers kept for the next scan may add half the map's own bytes to what the process holds.
+  scope.keepAtMost(store.index.memoryBytes() / 2 + planar.memoryBytes());
   return stats;
 }
 

@@ -39,17 +39,17 @@ std::optional<float> OccupancyMap::logOdds(const Key& k) const {
 
 double OccupancyMap::occupancy(const Key& k) const {
   const auto l = logOdds(k);
-  return probability(l ? *l : logOddsModel().prior());
+  return probability(l ? *l : engine_->store.model.prior());
 }
 
 CellState OccupancyMap::state(const Key& k) const {
   const auto l = logOdds(k);
-  return l ? logOddsModel().classify(*l) : CellState::Unknown;
+  return l ? engine_->store.model.classify(*l) : CellState::Unknown;
 }
 
 CellState OccupancyMap::stateAt(const Eigen::Vector3d& p) const {
   Key k;
-  return lattice().tryKey(p, k) ? state(k) : CellState::Unknown;
+  return engine_->store.lattice.tryKey(p, k) ? state(k) : CellState::Unknown;
 }
 
 BoxSummary OccupancyMap::summarize(const Box& b) const {

@@ -62,6 +62,7 @@ class PlanarBatch {
   int brickY0() const { return by0_; }
   int width() const { return width_; }  ///< bricks along x
   const std::vector<Tile>& tiles() const { return tiles_; }
+  std::size_t memoryBytes() const { return tiles_.capacity() * sizeof(Tile) + columns_.capacity() * sizeof(ColumnTile); }
 
  private:
   static int bitOf(int x, int y) { return (x & (kBrickSize - 1)) | ((y & (kBrickSize - 1)) << kBrickBits); }
