@@ -163,7 +163,14 @@ void writeMarkdown(const std::vector<Result>& results, const RunInfo& run, std::
      << "Machine: " << field("cpu") << ", " << field("cores") << " cores, " << field("memory") << " RAM"
      << (run.machine.count("os") ? ", " + field("os") : std::string()) << "; " << field("compiler") << "; OctoMap " << field("octomap") << ", MRPT " << field("mrpt") << "; "
      << field("date") << ".\n\n"
-     << "Reproduce: `./build/apps/rtog-bench/rtog-bench --markdown doc/benchmarks.md --json doc/benchmarks.json "
+     << "Reproduce: `./build/apps/rtog-bench/rtog-bench"
+     << (run.repeats != Options{}.repeats ? " --repeats " + std::to_string(run.repeats) : std::string())
+     << (run.min_seconds != Options{}.min_seconds ? " --min-seconds " + [&] {
+           std::ostringstream v;
+           v << run.min_seconds;
+           return v.str();
+         }() : std::string())
+     << " --markdown doc/benchmarks.md --json doc/benchmarks.json "
         "--img-dir doc/img`; to render this report again from the JSON without measuring, "
         "`--from-json doc/benchmarks.json` in place of `--json`.\n\n";
 
