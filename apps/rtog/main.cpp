@@ -35,6 +35,16 @@ int main(int argc, char** argv) {
                     std::to_string(rtog::InsertParams{}.max_ray_cells) + " cells are skipped and counted either way)")
       ->capture_default_str()
       ->check(number(Sign::NonNegative));
+  rtog::SensorChannel channel;
+  auto* miss_rate = b->add_option("--miss-rate", channel.miss_rate,
+                                  "The sensor as a channel: P(no detection | occupied), with --false-alarm-rate "
+                                  "(replaces OctoMap's hit/miss probabilities)")
+                        ->check(number(Sign::Positive));
+  auto* false_alarm = b->add_option("--false-alarm-rate", channel.false_alarm_rate,
+                                    "The sensor as a channel: P(detection | free), with --miss-rate")
+                          ->check(number(Sign::Positive));
+  miss_rate->needs(false_alarm);
+  false_alarm->needs(miss_rate);
   b->add_option("--threads", build.insert.threads, "Threads tracing beams")->capture_default_str()->check(rtog::app::checks::integer(1, 256));
   b->add_flag("--discretize", build.insert.discretize, "Trace beams to end-cell centres, once per cell (OctoMap's discretize)");
   b->add_option("--stride", build.stride, "Use every n-th pixel")->capture_default_str()->check(rtog::app::checks::integer(1, 1 << 16));
@@ -69,6 +79,10 @@ int main(int argc, char** argv) {
     if (b->parsed()) {
       build.insert.model = rtog::sensorModelFromString(model);
       build.map.merge = rtog::mergePolicyFromString(merge);
+      if (miss_rate->count() > 0) {
+        if (!build.ini_path.empty()) throw std::invalid_argument("--miss-rate/--false-alarm-rate: with --ini, set missRate and falseAlarmRate in its _insertOpts");
+        build.map.log_odds = rtog::withChannel(build.map.log_odds, channel);
+      }
       build.progress_bar = isatty(STDOUT_FILENO) != 0;
       return rtog::cli::build(build, std::cout);
     }

@@ -134,4 +134,25 @@ TEST(CliInputs, NumericOptionsMustBeFiniteNumbers) {
   EXPECT_EQ(run(tum + fast + coarse + "--max-range 3.5", &out), 0) << out;
 }
 
+// The sensor stated as a miss / false-alarm channel: both rates or neither, finite, a channel
+// that speaks for occupied; rates equivalent to the default probabilities build the same map.
+TEST(CliInputs, MissAndFalseAlarmRatesStateTheSensor) {
+  const std::string tum = std::string("build --tum ") + RTOG_TEST_TUM_DIR + " --stride 16 --resolution 0.2 ";
+  std::string out;
+  EXPECT_EQ(run(tum + "--miss-rate 0.1", &out), 2) << out;
+  EXPECT_NE(out.find("--false-alarm-rate"), std::string::npos) << out;
+  EXPECT_EQ(run(tum + "--miss-rate nan --false-alarm-rate 0.1", &out), 2) << out;
+  EXPECT_NE(out.find("--miss-rate: must be a finite number"), std::string::npos) << out;
+  EXPECT_EQ(run(tum + "--miss-rate 0.6 --false-alarm-rate 0.5", &out), 1) << out;
+  EXPECT_NE(out.find("below 1"), std::string::npos) << out;
+  const std::string dir = scratch("channel"), plain = dir + "/plain.rtog", channel = dir + "/channel.rtog";
+  ASSERT_EQ(run(tum + "--out " + plain, &out), 0) << out;
+  ASSERT_EQ(run(tum + "--miss-rate 0.53333333333333333 --false-alarm-rate 0.2 --out " + channel, &out), 0) << out;
+  EXPECT_EQ(plyOf(channel), plyOf(plain));
+  EXPECT_GT(plyOf(plain).size(), 10000u);
+  // A surer sensor: fewer beams make a cell occupied, so the map differs.
+  ASSERT_EQ(run(tum + "--miss-rate 0.05 --false-alarm-rate 0.05 --out " + channel, &out), 0) << out;
+  EXPECT_NE(plyOf(channel), plyOf(plain));
+}
+
 }  // namespace

@@ -47,6 +47,17 @@ void CRTreeOccupancyGridMap::TInsertionOptions::loadFromConfigFile(const mrpt::c
   sensorModel = s.read_string(sec, "sensorModel", sensorModel);
   maxOccupancyUpdateCertainty = s.read_float(sec, "maxOccupancyUpdateCertainty", maxOccupancyUpdateCertainty);
   maxFreenessUpdateCertainty = s.read_float(sec, "maxFreenessUpdateCertainty", maxFreenessUpdateCertainty);
+  // Read as 0 where absent: a section without them states the sensor by the certainties.
+  missRate = s.read_float(sec, "missRate", 0.0f);
+  falseAlarmRate = s.read_float(sec, "falseAlarmRate", 0.0f);
+  if (missRate != 0.0f || falseAlarmRate != 0.0f) {
+    // The sensor stated as a channel: the certainties follow from it, so they may not be given too.
+    for (const char* k : {"maxOccupancyUpdateCertainty", "maxFreenessUpdateCertainty"})
+      if (s.keyExists(sec, k))
+        badOption(sec, "missRate/falseAlarmRate",
+                  std::string("state the sensor by the rates or by the certainties, not both (") + k + " is set)");
+    applySensorChannel(sec);
+  }
   maxFreenessInvalidRanges = s.read_float(sec, "maxFreenessInvalidRanges", maxFreenessInvalidRanges);
   considerInvalidRangesAsFreeSpace =
       s.read_bool(sec, "considerInvalidRangesAsFreeSpace", considerInvalidRangesAsFreeSpace);
@@ -74,6 +85,7 @@ void CRTreeOccupancyGridMap::TInsertionOptions::loadFromConfigFile(const mrpt::c
   // COccupancyGridMap2D's keys that concern what rtog does not build (its CFD features).
   reportUnknownKeys(s, sec,
                     {"sensorModelPreset", "sensorModel", "maxOccupancyUpdateCertainty", "maxFreenessUpdateCertainty",
+                     "missRate", "falseAlarmRate",
                      "maxFreenessInvalidRanges", "considerInvalidRangesAsFreeSpace", "horizontalTolerance",
                      "useMapAltitude", "mapAltitude", "wideningBeamsWithDistance", "clampingMin", "clampingMax",
                      "occupiedThreshold", "maxDistanceInsertion", "decimation", "decimation_3d_range", "mergePolicy",
@@ -96,8 +108,13 @@ void CRTreeOccupancyGridMap::TInsertionOptions::saveToConfigFile(mrpt::config::C
   c.write(sec, "useMapAltitude", useMapAltitude);
   c.write(sec, "mapAltitude", mapAltitude);
   c.write(sec, "wideningBeamsWithDistance", wideningBeamsWithDistance);
-  c.write(sec, "maxOccupancyUpdateCertainty", maxOccupancyUpdateCertainty);
-  c.write(sec, "maxFreenessUpdateCertainty", maxFreenessUpdateCertainty);
+  if (missRate != 0.0f || falseAlarmRate != 0.0f) {  // read back, the rates give these certainties
+    c.write(sec, "missRate", missRate);
+    c.write(sec, "falseAlarmRate", falseAlarmRate);
+  } else {
+    c.write(sec, "maxOccupancyUpdateCertainty", maxOccupancyUpdateCertainty);
+    c.write(sec, "maxFreenessUpdateCertainty", maxFreenessUpdateCertainty);
+  }
   c.write(sec, "clampingMin", clampingMin);
   c.write(sec, "clampingMax", clampingMax);
   c.write(sec, "occupiedThreshold", occupiedThreshold);
@@ -112,6 +129,20 @@ void CRTreeOccupancyGridMap::TInsertionOptions::saveToConfigFile(mrpt::config::C
     c.write(sec, "rotatingScan_minElevation_deg", rotatingScan_minElevation_deg);
     c.write(sec, "rotatingScan_maxElevation_deg", rotatingScan_maxElevation_deg);
   }
+}
+
+void CRTreeOccupancyGridMap::TInsertionOptions::applySensorChannel(const std::string& sec) {
+  if (!(std::isfinite(missRate) && std::isfinite(falseAlarmRate) && missRate > 0.0f && falseAlarmRate > 0.0f))
+    badOption(sec, "missRate/falseAlarmRate", "set both, each in (0, 1), or neither; got " + std::to_string(missRate) +
+                                                  " and " + std::to_string(falseAlarmRate));
+  LogOddsParams p;
+  try {
+    p = withChannel(p, SensorChannel{missRate, falseAlarmRate});
+  } catch (const std::invalid_argument& e) {
+    badOption(sec, "missRate/falseAlarmRate", e.what());
+  }
+  maxOccupancyUpdateCertainty = static_cast<float>(p.prob_hit);
+  maxFreenessUpdateCertainty = static_cast<float>(1.0 - p.prob_miss);
 }
 
 void CRTreeOccupancyGridMap::TInsertionOptions::validate() const {

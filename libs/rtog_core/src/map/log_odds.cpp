@@ -28,6 +28,38 @@ void LogOddsParams::validate() const {
     throw std::invalid_argument("LogOddsParams: need clamp_min < prior < clamp_max");
 }
 
+void SensorChannel::validate() const {
+  const auto open01 = [](double r, const char* name) {
+    if (!(r > 0.0 && r < 1.0))
+      throw std::invalid_argument(std::string("SensorChannel: ") + name + " must lie in (0, 1), got " +
+                                  std::to_string(r));
+  };
+  open01(miss_rate, "miss_rate");
+  open01(false_alarm_rate, "false_alarm_rate");
+  if (!(miss_rate + false_alarm_rate < 1.0))
+    throw std::invalid_argument("SensorChannel: miss_rate + false_alarm_rate must be below 1, got " +
+                                std::to_string(miss_rate + false_alarm_rate));
+}
+
+LogOddsParams withChannel(LogOddsParams p, const SensorChannel& c) {
+  c.validate();
+  const double l0 = logit(p.prior);
+  p.prob_hit = probability(l0 + std::log((1.0 - c.miss_rate) / c.false_alarm_rate));
+  p.prob_miss = probability(l0 + std::log(c.miss_rate / (1.0 - c.false_alarm_rate)));
+  return p;
+}
+
+SensorChannel channelOf(const LogOddsParams& p) {
+  p.validate();
+  // a = (1 - m) / f and b = m / (1 - f), the odds ratios of a detection and of none.
+  const double l0 = logit(p.prior);
+  const double a = std::exp(logit(p.prob_hit) - l0), b = std::exp(logit(p.prob_miss) - l0);
+  SensorChannel c;
+  c.false_alarm_rate = (1.0 - b) / (a - b);
+  c.miss_rate = b * (a - 1.0) / (a - b);
+  return c;
+}
+
 LogOddsModel::LogOddsModel(const LogOddsParams& p) : params_(p) {
   p.validate();
   l0_ = static_cast<float>(logit(p.prior));

@@ -30,6 +30,28 @@ struct LogOddsParams {
   void validate() const;
 };
 
+/// The sensor stated as a binary asymmetric channel (seed §2; Robbiano et al., 2019): for each
+/// cell a beam reports a detection (it ended there) or none (it passed through). A sensor that
+/// misses an occupied cell with probability m = miss_rate and reports a free cell as occupied
+/// with probability f = false_alarm_rate changes a cell's log-odds, by Bayes' rule, by
+///   log((1 - m) / f)      for a detection,   and   log(m / (1 - f))   for none,
+/// which are the l_meas - l0 of the inverse model with prob_hit = sigmoid(l0 + log((1 - m) / f))
+/// and prob_miss = sigmoid(l0 + log(m / (1 - f))). The defaults are the channel of the default
+/// LogOddsParams (OctoMap's 0.7 / 0.4 at prior 0.5).
+struct SensorChannel {
+  double miss_rate = 8.0 / 15.0;   ///< P(no detection | occupied). (Default: 8/15)
+  double false_alarm_rate = 0.2;   ///< P(detection | free). (Default: 0.2)
+
+  /// Throws std::invalid_argument unless both rates lie in (0, 1) and miss_rate +
+  /// false_alarm_rate < 1 (else a detection would not speak for occupied).
+  void validate() const;
+};
+
+/// `p` with prob_hit and prob_miss those of the channel, for p's prior.
+LogOddsParams withChannel(LogOddsParams p, const SensorChannel& channel);
+/// The channel whose hit and miss probabilities are p's (p must be valid).
+SensorChannel channelOf(const LogOddsParams& p);
+
 /// The parameters converted once into the float log-odds the cells store.
 class LogOddsModel {
  public:

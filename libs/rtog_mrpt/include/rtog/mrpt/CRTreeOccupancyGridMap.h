@@ -42,6 +42,9 @@ class CRTreeOccupancyGridMap : public mrpt::maps::CMetricMap {
     void saveToConfigFile(mrpt::config::CConfigFileBase& target, const std::string& section) const override;
     /// Throws std::invalid_argument naming the first bad option.
     void validate() const;
+    /// Sets maxOccupancyUpdateCertainty and maxFreenessUpdateCertainty from missRate and
+    /// falseAlarmRate (both set); throws std::invalid_argument naming `section` otherwise.
+    void applySensorChannel(const std::string& section = "insertOpts");
 
     /// Whose update rule the map follows (doc/mrpt_map.md): "mrpt_grid", COccupancyGridMap2D's
     /// (int8 log-odds, the occupied step three times the free one, a step per beam in beam order,
@@ -55,6 +58,13 @@ class CRTreeOccupancyGridMap : public mrpt::maps::CMetricMap {
     /// 1 - P(occupied) of a cell a beam crosses; 0 means "same as maxOccupancyUpdateCertainty",
     /// as in COccupancyGridMap2D. (Default: 0)
     float maxFreenessUpdateCertainty{0.0f};
+    /// The sensor stated as a miss / false-alarm channel instead (rtog::SensorChannel):
+    /// P(no detection | occupied). Set with falseAlarmRate, the pair replaces
+    /// maxOccupancyUpdateCertainty and maxFreenessUpdateCertainty, which are read from it
+    /// (prior 0.5); a section may state the sensor one way only. 0: not used. (Default: 0)
+    float missRate{0.0f};
+    /// P(detection | free), with missRate. 0: not used. (Default: 0)
+    float falseAlarmRate{0.0f};
     /// mrpt_grid: P(free) of a cell crossed by a no-return beam; 0 means "same as
     /// maxOccupancyUpdateCertainty", as in COccupancyGridMap2D. (Default: 0)
     float maxFreenessInvalidRanges{0.0f};
