@@ -4,26 +4,9 @@
 #include <random>
 #include <vector>
 
-#include "util/radix_sort.hpp"
 #include "util/small_vector.hpp"
 
 using namespace rtog;
-
-TEST(RadixSort, OrdersPairsAsStdSortDoes) {
-  std::mt19937_64 rng(11);
-  for (const std::size_t n : {0u, 1u, 2u, 7u, 1000u, 20000u})
-    for (const std::uint64_t mask :
-         {~std::uint64_t{0}, std::uint64_t{0xFFFF}, std::uint64_t{0xF0F000}, std::uint64_t{7}}) {
-      // Keys in index order, as callers build them: duplicates must stay in index order.
-      std::vector<std::pair<std::uint64_t, std::uint32_t>> items(n);
-      const std::uint64_t high = rng() & ~mask;  // bytes all keys share
-      for (std::size_t i = 0; i < n; ++i) items[i] = {high | (rng() & mask), static_cast<std::uint32_t>(i)};
-      auto expected = items;
-      std::sort(expected.begin(), expected.end());
-      detail::radixSortByKey(items);
-      ASSERT_EQ(items, expected) << n << " keys, mask " << mask;
-    }
-}
 
 TEST(SmallVector, BehavesAsStdVectorInlineAndOnTheHeap) {
   // Random pushes, pops, resizes, copies and moves, checked against std::vector after each.

@@ -1,6 +1,5 @@
 #include "integrate/update_batch.hpp"
 
-#include "util/radix_sort.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -173,13 +172,13 @@ bool UpdateBatch::walkInWindow(std::vector<std::uint32_t>& lanes) {
 
 void UpdateBatch::finalize() {
   walkQueued();
-  // Sorted by a radix sort of the codes, computed from the packed keys kept beside the bricks:
+  // Sorted as (code, slot) pairs, the codes computed from the packed keys kept beside the bricks:
   // reading the bricks (1 KiB apart) missed the cache on most of a comparison sort's comparisons.
   std::vector<std::pair<std::uint64_t, std::uint32_t>>& order = order_scratch_;
   order.clear();
   for (std::uint32_t slot = 0; slot < packed_keys_.size(); ++slot)
     order.emplace_back(mortonCode(unpackKey(packed_keys_[slot])), slot);
-  detail::radixSortByKey(order);
+  std::sort(order.begin(), order.end());
   sorted_.clear();
   sorted_keys_.clear();
   sorted_codes_.clear();

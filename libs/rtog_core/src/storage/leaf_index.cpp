@@ -4,7 +4,6 @@
 
 #include "parallel/parallel.hpp"
 #include "storage/morton_order.hpp"
-#include "util/radix_sort.hpp"
 
 namespace rtog {
 
@@ -105,7 +104,7 @@ void LeafIndex::rebuildUpperTree(int threads, const std::vector<const LocalBox*>
   std::vector<std::pair<std::uint64_t, std::uint32_t>> order(slots);
   for (std::uint32_t slot = 0; slot < slots; ++slot) order[slot] = {mortonCode(bricks_[slot].brick), slot};
   // A first scan's bricks got their slots in this order already (update batches are in it).
-  if (!std::is_sorted(order.begin(), order.end())) detail::radixSortByKey(order);
+  if (!std::is_sorted(order.begin(), order.end())) std::sort(order.begin(), order.end());
   // Handles are the nodes' positions in the load, so each brick knows its own before the load.
   std::vector<std::uint32_t> first_node(slots + 1, 0);
   for (std::uint32_t i = 0; i < slots; ++i)
