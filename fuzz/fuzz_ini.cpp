@@ -18,6 +18,7 @@
 
 #include "rtog/mrpt/CRTreeBackedGridMap2D.h"
 #include "rtog/mrpt/CRTreeOccupancyGridMap.h"
+#include "rtog/mrpt/ini_checks.h"
 #include "rtog/mrpt/register_classes.h"
 #include "null_stderr.hpp"
 
@@ -70,6 +71,7 @@ void useMap(mrpt::maps::CMetricMap& m) {
 void createMaps(const mrpt::config::CConfigFileBase& cfg, const std::string& sec) {
   mrpt::maps::TSetOfMetricMapInitializers inits;
   try {
+    rtog::checkMapCounts(cfg, sec);  // as rtog build does: MRPT reads "-1" as four billion maps
     inits.loadFromConfigFile(cfg, sec);
   } catch (const std::exception&) {
     return;

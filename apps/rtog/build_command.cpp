@@ -20,6 +20,7 @@
 #include "rtog/app/output_files.hpp"
 #include "rtog/image/tum_dataset.hpp"
 #include "rtog/mrpt/CRTreeOccupancyGridMap.h"
+#include "rtog/mrpt/ini_checks.h"
 #include "rtog/mrpt/rawlog_poses.h"
 
 namespace rtog::cli {
@@ -94,6 +95,7 @@ std::shared_ptr<CRTreeOccupancyGridMap> makeMap(const BuildOptions& o) {
   mrpt::config::CConfigFile cfg(o.ini_path);
   if (!cfg.sectionExists(o.ini_section))
     throw std::invalid_argument("'" + o.ini_path + "' has no section [" + o.ini_section + "]");
+  checkMapCounts(cfg, o.ini_section);
   mrpt::maps::TSetOfMetricMapInitializers inits;
   inits.loadFromConfigFile(cfg, o.ini_section);
   mrpt::maps::CMultiMetricMap multi;

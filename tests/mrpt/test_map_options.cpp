@@ -11,6 +11,7 @@
 
 #include "rtog/mrpt/CRTreeBackedGridMap2D.h"
 #include "rtog/mrpt/CRTreeOccupancyGridMap.h"
+#include "rtog/mrpt/ini_checks.h"
 
 using rtog::CRTreeOccupancyGridMap;
 
@@ -272,4 +273,25 @@ TEST(MapOptions, WideningBeamsRefusedInMrptGridPreset) {
   } catch (const std::exception& e) {
     EXPECT_NE(std::string(e.what()).find("wideningBeamsWithDistance"), std::string::npos) << e.what();
   }
+}
+
+// MRPT reads "<map>_count" unsigned: "-1" would make four billion map definitions (rtog_fuzz_ini
+// ran out of memory on it). The check refuses such counts by key, before MRPT's loader runs.
+TEST(MapOptions, MapCountsAreBoundedBeforeMrptReadsThem) {
+  const auto counts = [](const std::string& kv) {
+    mrpt::config::CConfigFileMemory cfg("[MappingApplication]\n" + kv + "\n");
+    rtog::checkMapCounts(cfg, "MappingApplication");
+  };
+  for (const std::string bad : {"rtreeOccupancyGrid_count=-1", "occupancyGrid_count = 4294967295",
+                                "RTREEOCCUPANCYGRID_COUNT=1001", "octoMap_count=lots"}) {
+    try {
+      counts(bad);
+      ADD_FAILURE() << "accepted " << bad;
+    } catch (const std::invalid_argument& e) {
+      const std::string key = bad.substr(0, bad.find_first_of(" ="));
+      EXPECT_NE(std::string(e.what()).find(key), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("[MappingApplication]"), std::string::npos) << e.what();
+    }
+  }
+  EXPECT_NO_THROW(counts("rtreeOccupancyGrid_count=2 // two maps\noccupancyGrid_count=0\nresolution=-1"));
 }

@@ -1,8 +1,12 @@
 #include "options_check.hpp"
 
+#include "rtog/mrpt/ini_checks.h"
+
 #include <strings.h>
 
+#include <cctype>
 #include <cmath>
+#include <cstdlib>
 #include <iostream>
 #include <mutex>
 #include <set>
@@ -51,6 +55,24 @@ void checkGridExtent(const std::string& section, float min_x, float max_x, float
   };
   if (!(std::isfinite(min_x) && std::isfinite(max_x) && min_x < max_x)) bad("min_x/max_x");
   if (!(std::isfinite(min_y) && std::isfinite(max_y) && min_y < max_y)) bad("min_y/max_y");
+}
+
+void checkMapCounts(const mrpt::config::CConfigFileBase& cfg, const std::string& section) {
+  std::vector<std::string> keys;
+  cfg.getAllKeys(section, keys);
+  for (const std::string& key : keys) {
+    constexpr const char* kSuffix = "_count";  // MRPT's keys are case-insensitive
+    if (key.size() <= 6 || strcasecmp(key.c_str() + key.size() - 6, kSuffix) != 0) continue;
+    const std::string value = cfg.read_string(section, key, "");
+    // As MRPT reads it: the leading number, whatever follows (a comment).
+    const char* p = value.c_str();
+    while (std::isspace(static_cast<unsigned char>(*p))) ++p;
+    char* end = nullptr;
+    const long long n = std::strtoll(p, &end, 10);
+    if (end == p || n < 0 || n > kMaxMapCount)
+      throw std::invalid_argument("rtog: invalid option [" + section + "] " + key + ": must be a map count in [0, " +
+                                  std::to_string(kMaxMapCount) + "], got '" + value + "'");
+  }
 }
 
 }  // namespace rtog
