@@ -1,6 +1,12 @@
 #include "rtog/core/log_odds.hpp"
 
 namespace rtog {
+namespace {
+void requireOpenUnit(const char* type, const char* name, double v) {
+  if (!(v > 0.0 && v < 1.0))
+    throw std::invalid_argument(std::string(type) + ": " + name + " must lie in (0, 1), got " + std::to_string(v));
+}
+}  // namespace
 
 const char* toString(CellState s) {
   switch (s) {
@@ -11,11 +17,7 @@ const char* toString(CellState s) {
 }
 
 void LogOddsParams::validate() const {
-  const auto open01 = [](double p, const char* name) {
-    if (!(p > 0.0 && p < 1.0))
-      throw std::invalid_argument(std::string("LogOddsParams: ") + name + " must lie in (0, 1), got " +
-                                  std::to_string(p));
-  };
+  const auto open01 = [](double p, const char* name) { requireOpenUnit("LogOddsParams", name, p); };
   open01(prob_hit, "prob_hit");
   open01(prob_miss, "prob_miss");
   open01(clamp_min, "clamp_min");
@@ -29,11 +31,7 @@ void LogOddsParams::validate() const {
 }
 
 void SensorChannel::validate() const {
-  const auto open01 = [](double r, const char* name) {
-    if (!(r > 0.0 && r < 1.0))
-      throw std::invalid_argument(std::string("SensorChannel: ") + name + " must lie in (0, 1), got " +
-                                  std::to_string(r));
-  };
+  const auto open01 = [](double r, const char* name) { requireOpenUnit("SensorChannel", name, r); };
   open01(miss_rate, "miss_rate");
   open01(false_alarm_rate, "false_alarm_rate");
   if (!(miss_rate + false_alarm_rate < 1.0))

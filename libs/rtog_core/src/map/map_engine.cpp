@@ -26,7 +26,7 @@ InsertStats MapEngine::insertPointCloud(const Eigen::Vector3d& origin, const Eig
   });
   if (!planar.empty()) cover_pending.store(true, std::memory_order_release);
   // Buffers kept for the next scan may add half the map's own bytes to what the process holds.
-  scope.keepAtMost(store.index.memoryBytes() / 2 + planar.memoryBytes());
+  scope.keepAtMost(store.index.memoryBytesAtLeast() / 2 + planar.memoryBytes());
   return stats;
 }
 

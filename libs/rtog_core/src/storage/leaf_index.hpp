@@ -114,6 +114,12 @@ class LeafIndex {
   }
 
   std::size_t memoryBytes() const;
+  /// A lower bound of memoryBytes() in O(1) (leaves counted at their size, not capacity): for the
+  /// insertion path, which must not walk every brick after every scan.
+  std::size_t memoryBytesAtLeast() const {
+    return upper_.memoryBytes() + brick_index_.memoryBytes() + bricks_.capacity() * sizeof(Brick) +
+           leaf_count_ * sizeof(LeafEntry);
+  }
   /// Empty if the R-tree, the brick index and the leaves are sound and agree; else the first
   /// problem. Leaf values must lie in the model's bounds, merged ones be `mergeable`.
   std::string checkInvariants(const LogOddsModel& model, const std::function<bool(float)>& mergeable) const;
