@@ -3,6 +3,8 @@
 // TMatchingOptions) and map definitions (the CMultiMetricMap sections that create a
 // CRTreeOccupancyGridMap or CRTreeBackedGridMap2D). A bad value must be an exception naming it;
 // a map created from accepted values must work (a short fixed scan is inserted and scored).
+#include <strings.h>
+
 #include <cmath>
 #include <cstdint>
 #include <exception>
@@ -68,11 +70,34 @@ void useMap(mrpt::maps::CMetricMap& m) {
   (void)m.isEmpty();
 }
 
-void createMaps(const mrpt::config::CConfigFileBase& cfg, const std::string& sec) {
+bool isOurMapCount(const std::string& key) {
+  for (const char* name : {"rtreeOccupancyGrid_count", "rtog::CRTreeOccupancyGridMap_count", "rtreeGridMap2D_count",
+                           "rtog::CRTreeBackedGridMap2D_count"})
+    if (strcasecmp(key.c_str(), name) == 0) return true;
+  return false;
+}
+
+// The section with every stock map's count set to 0. MRPT 2.5.8's TSetOfMetricMapInitializers holds
+// a new definition by raw pointer while its loadFromConfigFile runs, so a stock map's loader that
+// throws on a bad value (e.g. COccupancyGridMap2D's likelihoodMethod) leaks it: MRPT's code, not
+// ours. Our own definitions keep a load error and raise it at creation for that reason.
+mrpt::config::CConfigFileMemory withOurMapsOnly(const mrpt::config::CConfigFileMemory& cfg, const std::string& sec) {
+  std::string text;
+  cfg.getContent(text);
+  mrpt::config::CConfigFileMemory ours(text);
+  std::vector<std::string> keys;
+  ours.getAllKeys(sec, keys);
+  for (const std::string& key : keys)
+    if (key.size() > 6 && strcasecmp(key.c_str() + key.size() - 6, "_count") == 0 && !isOurMapCount(key))
+      ours.write(sec, key, 0);
+  return ours;
+}
+
+void createMaps(const mrpt::config::CConfigFileMemory& all, const std::string& sec) {
   mrpt::maps::TSetOfMetricMapInitializers inits;
   try {
-    rtog::checkMapCounts(cfg, sec);  // as rtog build does: MRPT reads "-1" as four billion maps
-    inits.loadFromConfigFile(cfg, sec);
+    rtog::checkMapCounts(all, sec);  // as rtog build does: MRPT reads "-1" as four billion maps
+    inits.loadFromConfigFile(withOurMapsOnly(all, sec), sec);
   } catch (const std::exception&) {
     return;
   }
@@ -80,7 +105,7 @@ void createMaps(const mrpt::config::CConfigFileBase& cfg, const std::string& sec
   for (const auto& def : inits) {
     const bool ours = dynamic_cast<const CRTreeOccupancyGridMap::TMapDefinition*>(def.get()) ||
                       dynamic_cast<const rtog::CRTreeBackedGridMap2D::TMapDefinition*>(def.get());
-    if (!ours || made++ == kMaxMaps) continue;  // stock MRPT maps are MRPT's code
+    if (!ours || made++ == kMaxMaps) continue;
     std::unique_ptr<mrpt::maps::CMetricMap> m;
     try {
       m.reset(mrpt::maps::internal::TMetricMapTypesRegistry::Instance().factoryMapObjectFromDefinition(*def));

@@ -13,8 +13,6 @@ src=$(cd "$(dirname "$0")" && pwd)
 export ASAN_SYMBOLIZER_PATH=${ASAN_SYMBOLIZER_PATH:-/usr/lib/llvm-14/bin/llvm-symbolizer}
 export ASAN_OPTIONS=${ASAN_OPTIONS:-abort_on_error=1}
 export UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}
-# MRPT's own leaks (each named there), not rtog's.
-export LSAN_OPTIONS=${LSAN_OPTIONS:-suppressions=$src/lsan.supp}
 for t in "${targets[@]}"; do
   corpus=$build/fuzz/corpus/$t findings=$build/fuzz/findings/$t log=$build/fuzz/$t.log
   mkdir -p "$corpus" "$findings"
