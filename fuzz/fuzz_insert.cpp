@@ -64,7 +64,11 @@ mrpt::poses::CPose3D pose(Fdp& in, double extent) {
 CRTreeOccupancyGridMap::TInsertionOptions insertionOptions(Fdp& in) {
   CRTreeOccupancyGridMap::TInsertionOptions io;
   io.sensorModelPreset = in.ConsumeBool() ? "mrpt_grid" : "octomap";
-  io.sensorModel = in.ConsumeBool() ? "beam" : "endpoint";
+  const char* models[] = {"beam", "endpoint", "rangeNoise"};  // rangeNoise with mrpt_grid: refused
+  io.sensorModel = models[in.ConsumeIntegralInRange<int>(0, 2)];
+  io.rangeNoiseStd = static_cast<float>(value(in, 0.0, 0.3));
+  io.rangeNoiseStdPerMeter = static_cast<float>(value(in, 0.0, 0.05));
+  io.rangeNoiseCutoff = static_cast<float>(value(in, 0.5, 10.0));
   const char* merges[] = {"off", "clamped", "equal"};
   io.mergePolicy = merges[in.ConsumeIntegralInRange<int>(0, 2)];
   io.maxOccupancyUpdateCertainty = static_cast<float>(value(in, 0.5, 1.0));
@@ -192,7 +196,12 @@ void fuzzCore(Fdp& in) {
   const rtog::MergePolicy merges[] = {rtog::MergePolicy::Off, rtog::MergePolicy::Clamped, rtog::MergePolicy::Equal};
   mp.merge = merges[in.ConsumeIntegralInRange<int>(0, 2)];
   rtog::InsertParams ip;
-  ip.model = in.ConsumeBool() ? rtog::SensorModel::BeamBased : rtog::SensorModel::BeamEndPoint;
+  const rtog::SensorModel models[] = {rtog::SensorModel::BeamBased, rtog::SensorModel::BeamEndPoint,
+                                      rtog::SensorModel::RangeNoise};
+  ip.model = models[in.ConsumeIntegralInRange<int>(0, 2)];
+  ip.range_noise_std = value(in, 0.0, 0.3);
+  ip.range_noise_std_per_meter = value(in, 0.0, 0.05);
+  ip.range_noise_cutoff = value(in, 0.5, 10.0);
   ip.max_range = in.ConsumeFloatingPointInRange<double>(0.1, kMaxRange);
   ip.discretize = in.ConsumeBool();
   ip.planar_cache = in.ConsumeBool();

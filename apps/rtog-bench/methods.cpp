@@ -230,6 +230,10 @@ std::vector<std::unique_ptr<Method>> methodsFor(const Dataset& d, double res, co
   disc2.threads = 2;
   InsertParams beam2 = beam;
   beam2.threads = 2;
+  InsertParams noise = beam;  // the range-noise model at a Kinect-like sigma (doc/range-noise.md)
+  noise.model = SensorModel::RangeNoise;
+  noise.range_noise_std = 0.02;
+  noise.range_noise_std_per_meter = 0.01;
   m.push_back(std::make_unique<RtogMethod>("rtog beam, merge equal", res, MergePolicy::Equal, beam));
   m.push_back(std::make_unique<RtogMethod>("rtog beam, merge equal, 2 threads", res, MergePolicy::Equal, beam2));
   m.push_back(std::make_unique<RtogMethod>("rtog beam, merge off", res, MergePolicy::Off, beam));
@@ -237,6 +241,8 @@ std::vector<std::unique_ptr<Method>> methodsFor(const Dataset& d, double res, co
   m.push_back(std::make_unique<RtogMethod>("rtog beam discretize, merge equal", res, MergePolicy::Equal, disc));
   m.push_back(std::make_unique<RtogMethod>("rtog beam discretize, merge equal, 2 threads", res, MergePolicy::Equal, disc2));
   m.push_back(std::make_unique<RtogMethod>("rtog end point, merge equal", res, MergePolicy::Equal, endpoint));
+  m.push_back(std::make_unique<RtogMethod>("rtog range noise (sigma 0.02 m + 0.01 m/m), merge equal", res,
+                                           MergePolicy::Equal, noise));
   for (const bool lazy : {false, true})
     for (const bool discretize : {false, true})
       m.push_back(std::make_unique<OctomapMethod>(res, lazy, discretize, o.max_range));

@@ -80,6 +80,9 @@ std::shared_ptr<CRTreeOccupancyGridMap> makeMap(const BuildOptions& o) {
     io.sensorModelPreset = "octomap";
     const LogOddsParams& lp = o.map.log_odds;
     io.sensorModel = toString(o.insert.model);
+    io.rangeNoiseStd = float(o.insert.range_noise_std);
+    io.rangeNoiseStdPerMeter = float(o.insert.range_noise_std_per_meter);
+    io.rangeNoiseCutoff = float(o.insert.range_noise_cutoff);
     io.mergePolicy = toString(o.map.merge);
     io.discretize = o.insert.discretize;
     io.threads = o.insert.threads;
@@ -138,11 +141,7 @@ int build(const BuildOptions& o, std::ostream& out) {
   if (!o.tum_dir.empty()) {
     Progress progress(out, seq.frames.size(), o.progress_bar);
     const auto& io = map->insertionOptions;
-    InsertParams ip;
-    ip.model = sensorModelFromString(io.sensorModel);
-    ip.max_range = io.maxDistanceInsertion;
-    ip.discretize = io.discretize;
-    ip.threads = io.threads;
+    const InsertParams ip = io.toInsertParams();
     for (std::size_t i = 0; i < seq.frames.size(); ++i) {
       const image::WorldScan scan = image::loadDepthScan(seq.frames[i], seq.intrinsics, o.stride);
       timed([&] { map->lastInsertStats = map->map().insertPointCloud(scan.origin, scan.points, ip); });

@@ -27,7 +27,17 @@ int main(int argc, char** argv) {
   b->add_option("--section", build.ini_section, "Section of the map definition in --ini")->capture_default_str();
   b->add_option("--out", build.out_path, "Output map (.rtog)")->check(path);
   b->add_option("--resolution", build.map.resolution, "Cell size [m]")->capture_default_str()->check(number(Sign::Positive));
-  b->add_option("--model", model, "Sensor model: beam | endpoint")->capture_default_str();
+  b->add_option("--model", model, "Sensor model: beam | endpoint | rangeNoise")->capture_default_str();
+  auto* noise = b->add_option("--range-noise-std", build.insert.range_noise_std,
+                              "rangeNoise: range sigma at 0 m [m]")->capture_default_str()->check(number(Sign::NonNegative));
+  auto* noise_m = b->add_option("--range-noise-std-per-meter", build.insert.range_noise_std_per_meter,
+                                "rangeNoise: growth of sigma with range [m per m]")
+                      ->capture_default_str()
+                      ->check(number(Sign::NonNegative));
+  auto* noise_cut = b->add_option("--range-noise-cutoff", build.insert.range_noise_cutoff,
+                                  "rangeNoise: cells beyond the reading + this many sigma stay untouched (0.5 to 10)")
+                        ->capture_default_str()
+                        ->check(CLI::Range(0.5, 10.0));
   b->add_option("--merge", merge, "Leaf merging: off | clamped | equal")->capture_default_str();
   build.insert.max_range = 0.0;
   b->add_option("--max-range", build.insert.max_range,
@@ -79,6 +89,11 @@ int main(int argc, char** argv) {
     if (b->parsed()) {
       build.insert.model = rtog::sensorModelFromString(model);
       build.map.merge = rtog::mergePolicyFromString(merge);
+      const bool noise_flags = noise->count() + noise_m->count() + noise_cut->count() > 0;
+      if (noise_flags && build.insert.model != rtog::SensorModel::RangeNoise)
+        throw std::invalid_argument("--range-noise-*: only with --model rangeNoise");
+      if (noise_flags && !build.ini_path.empty())
+        throw std::invalid_argument("--range-noise-*: with --ini, set rangeNoiseStd, rangeNoiseStdPerMeter and rangeNoiseCutoff in its _insertOpts");
       if (miss_rate->count() > 0) {
         if (!build.ini_path.empty()) throw std::invalid_argument("--miss-rate/--false-alarm-rate: with --ini, set missRate and falseAlarmRate in its _insertOpts");
         build.map.log_odds = rtog::withChannel(build.map.log_odds, channel);

@@ -45,6 +45,9 @@ void CRTreeOccupancyGridMap::TInsertionOptions::loadFromConfigFile(const mrpt::c
                                                                   const std::string& sec) {
   sensorModelPreset = s.read_string(sec, "sensorModelPreset", sensorModelPreset);
   sensorModel = s.read_string(sec, "sensorModel", sensorModel);
+  rangeNoiseStd = s.read_float(sec, "rangeNoiseStd", rangeNoiseStd);
+  rangeNoiseStdPerMeter = s.read_float(sec, "rangeNoiseStdPerMeter", rangeNoiseStdPerMeter);
+  rangeNoiseCutoff = s.read_float(sec, "rangeNoiseCutoff", rangeNoiseCutoff);
   maxOccupancyUpdateCertainty = s.read_float(sec, "maxOccupancyUpdateCertainty", maxOccupancyUpdateCertainty);
   maxFreenessUpdateCertainty = s.read_float(sec, "maxFreenessUpdateCertainty", maxFreenessUpdateCertainty);
   // Read as 0 where absent: a section without them states the sensor by the certainties.
@@ -84,8 +87,8 @@ void CRTreeOccupancyGridMap::TInsertionOptions::loadFromConfigFile(const mrpt::c
   rotatingScan_maxElevation_deg = s.read_float(sec, "rotatingScan_maxElevation_deg", rotatingScan_maxElevation_deg);
   // COccupancyGridMap2D's keys that concern what rtog does not build (its CFD features).
   reportUnknownKeys(s, sec,
-                    {"sensorModelPreset", "sensorModel", "maxOccupancyUpdateCertainty", "maxFreenessUpdateCertainty",
-                     "missRate", "falseAlarmRate",
+                    {"sensorModelPreset", "sensorModel", "rangeNoiseStd", "rangeNoiseStdPerMeter", "rangeNoiseCutoff",
+                     "maxOccupancyUpdateCertainty", "maxFreenessUpdateCertainty", "missRate", "falseAlarmRate",
                      "maxFreenessInvalidRanges", "considerInvalidRangesAsFreeSpace", "horizontalTolerance",
                      "useMapAltitude", "mapAltitude", "wideningBeamsWithDistance", "clampingMin", "clampingMax",
                      "occupiedThreshold", "maxDistanceInsertion", "decimation", "decimation_3d_range", "mergePolicy",
@@ -102,6 +105,9 @@ void CRTreeOccupancyGridMap::TInsertionOptions::saveToConfigFile(mrpt::config::C
                                                                 const std::string& sec) const {
   c.write(sec, "sensorModelPreset", sensorModelPreset);
   c.write(sec, "sensorModel", sensorModel);
+  c.write(sec, "rangeNoiseStd", rangeNoiseStd);
+  c.write(sec, "rangeNoiseStdPerMeter", rangeNoiseStdPerMeter);
+  c.write(sec, "rangeNoiseCutoff", rangeNoiseCutoff);
   c.write(sec, "maxFreenessInvalidRanges", maxFreenessInvalidRanges);
   c.write(sec, "considerInvalidRangesAsFreeSpace", considerInvalidRangesAsFreeSpace);
   c.write(sec, "horizontalTolerance", mrpt::RAD2DEG(horizontalTolerance));
@@ -145,11 +151,33 @@ void CRTreeOccupancyGridMap::TInsertionOptions::applySensorChannel(const std::st
   maxFreenessUpdateCertainty = static_cast<float>(1.0 - p.prob_miss);
 }
 
+InsertParams CRTreeOccupancyGridMap::TInsertionOptions::toInsertParams() const {
+  InsertParams ip;
+  ip.model = sensorModelFromString(sensorModel);
+  ip.max_range = maxDistanceInsertion;
+  ip.discretize = discretize;
+  ip.threads = threads;
+  ip.planar_cache = planarCache;
+  ip.range_noise_std = rangeNoiseStd;
+  ip.range_noise_std_per_meter = rangeNoiseStdPerMeter;
+  ip.range_noise_cutoff = rangeNoiseCutoff;
+  return ip;
+}
+
 void CRTreeOccupancyGridMap::TInsertionOptions::validate() const {
   const std::string sec = "insertOpts";
   if (sensorModelPreset != "mrpt_grid" && sensorModelPreset != "octomap")
     badOption(sec, "sensorModelPreset", "must be mrpt_grid or octomap, got '" + sensorModelPreset + "'");
-  sensorModelFromString(sensorModel);  // throws std::invalid_argument with the accepted names
+  const SensorModel model = sensorModelFromString(sensorModel);  // throws with the accepted names
+  if (model == SensorModel::RangeNoise && mrptGrid())
+    badOption(sec, "sensorModel",
+              "rangeNoise needs sensorModelPreset = octomap (COccupancyGridMap2D's int8 steps have no graded update)");
+  if (!(std::isfinite(rangeNoiseStd) && rangeNoiseStd >= 0.0f))
+    badOption(sec, "rangeNoiseStd", "must be a finite sigma >= 0 [m], got " + std::to_string(rangeNoiseStd));
+  if (!(std::isfinite(rangeNoiseStdPerMeter) && rangeNoiseStdPerMeter >= 0.0f))
+    badOption(sec, "rangeNoiseStdPerMeter", "must be finite and >= 0 [m per m], got " + std::to_string(rangeNoiseStdPerMeter));
+  if (!(rangeNoiseCutoff >= 0.5f && rangeNoiseCutoff <= 10.0f))
+    badOption(sec, "rangeNoiseCutoff", "must lie in [0.5, 10] sigma, got " + std::to_string(rangeNoiseCutoff));
   if (!(maxFreenessInvalidRanges == 0.0f ||
         (isProbability(maxFreenessInvalidRanges) && maxFreenessInvalidRanges > 0.5f)))
     badOption(sec, "maxFreenessInvalidRanges", "must be 0 or lie in (0.5, 1), got " +

@@ -303,12 +303,7 @@ bool CRTreeOccupancyGridMap::internal_insertObservation(const mrpt::obs::CObserv
   ObservationBeams beams;
   if (!extractBeams(obs, robotPose ? *robotPose : CPose3D(), beams, true)) return false;
   syncParams();
-  InsertParams ip;
-  ip.model = sensorModelFromString(insertionOptions.sensorModel);
-  ip.max_range = insertionOptions.maxDistanceInsertion;
-  ip.discretize = insertionOptions.discretize;
-  ip.threads = insertionOptions.threads;
-  ip.planar_cache = insertionOptions.planarCache;
+  const InsertParams ip = insertionOptions.toInsertParams();
   lastInsertStats = map_.insertPointCloud(beams.origin, beams.points.data(), beams.points.size(), ip,
                                           beams.is_hit.data());
   totalInsertStats += lastInsertStats;

@@ -30,8 +30,9 @@ namespace rtog {
 // with OctoMap's rule and load as the octomap preset), lets the elevations be NaN (unset: the
 // lidar's calibration decides), numbers the likelihood method as COccupancyGridMap2D (0 was the
 // likelihood field before) and adds the options of its methods, the 2D view's band and
-// matchingOptions after the likelihood options.
-uint8_t CRTreeOccupancyGridMap::serializeGetVersion() const { return 2; }
+// matchingOptions after the likelihood options. Version 3 adds the range-noise options
+// (rangeNoiseStd, rangeNoiseStdPerMeter, rangeNoiseCutoff) after matchingOptions.
+uint8_t CRTreeOccupancyGridMap::serializeGetVersion() const { return 3; }
 
 void CRTreeOccupancyGridMap::serializeTo(mrpt::serialization::CArchive& out) const {
   out << genericMapParams;
@@ -52,6 +53,7 @@ void CRTreeOccupancyGridMap::serializeTo(mrpt::serialization::CArchive& out) con
       << lo.rayTracing_useDistanceFilter << lo.consensus_takeEachRange << lo.consensus_pow << lo.OWA_weights
       << lo.scanLikelihoodOnGridView << gridViewOptions.gridView_minZ << gridViewOptions.gridView_maxZ;
   out << matchingOptions.matching2D_minZ << matchingOptions.matching2D_maxZ;
+  out << io.rangeNoiseStd << io.rangeNoiseStdPerMeter << io.rangeNoiseCutoff;
   std::ostringstream os(std::ios::binary);
   map_.write(os);
   const std::string bytes = os.str();
@@ -64,7 +66,7 @@ void CRTreeOccupancyGridMap::serializeTo(mrpt::serialization::CArchive& out) con
 // anything is allocated (archive_read.hpp).
 void CRTreeOccupancyGridMap::serializeFrom(mrpt::serialization::CArchive& in, uint8_t version) {
   constexpr const char* kWho = "rtog::CRTreeOccupancyGridMap";
-  if (version > 2) MRPT_THROW_UNKNOWN_SERIALIZATION_VERSION(version);
+  if (version > 3) MRPT_THROW_UNKNOWN_SERIALIZATION_VERSION(version);
   mrpt::maps::TMapGenericParams generic;
   in >> generic;
   TInsertionOptions io;
@@ -111,6 +113,7 @@ void CRTreeOccupancyGridMap::serializeFrom(mrpt::serialization::CArchive& in, ui
   lo.likelihoodMethod = static_cast<TLikelihoodMethod>(method);
   TMatchingOptions mo;
   if (version >= 2) in >> mo.matching2D_minZ >> mo.matching2D_maxZ;
+  if (version >= 3) in >> io.rangeNoiseStd >> io.rangeNoiseStdPerMeter >> io.rangeNoiseCutoff;
   try {
     io.validate();
     lo.validate();

@@ -107,6 +107,10 @@ const UpdateBatch::BrickUpdates* unionOf(const UpdateBatch::BrickUpdates* const*
 
 }  // namespace
 
+namespace {
+void refreshFromContexts(LeafIndex& index, std::vector<ApplyContext>& contexts, std::size_t n, InsertStats& stats);
+}  // namespace
+
 void applyBatches(MapStore& store, const std::vector<const UpdateBatch*>& batches, InsertStats& stats, int threads,
                   std::vector<ApplyContext>& contexts) {
   if (threads < 1) throw std::invalid_argument("applyUpdate: threads must be >= 1");
@@ -151,6 +155,13 @@ void applyBatches(MapStore& store, const std::vector<const UpdateBatch*>& batche
     if (t == 0) groupByBrick(index, batches, groups);  // appliers finish what it published if it throws
     work(t);
   });
+  refreshFromContexts(index, contexts, n, stats);
+}
+
+namespace {
+
+// The upper tree brought up to date with the bricks the contexts reshaped.
+void refreshFromContexts(LeafIndex& index, std::vector<ApplyContext>& contexts, std::size_t n, InsertStats& stats) {
   std::vector<std::uint32_t> reshaped;
   for (std::size_t t = 0; t < n; ++t) {
     stats += contexts[t].stats;
@@ -164,6 +175,31 @@ void applyBatches(MapStore& store, const std::vector<const UpdateBatch*>& batche
         boxes_of[contexts[c].reshaped[i]] = contexts[c].node_boxes.data() + contexts[c].reshaped_boxes[i];
     return boxes_of;
   });
+}
+
+}  // namespace
+
+void applyGraded(MapStore& store, const GradedScan& scan, InsertStats& stats, int threads,
+                 std::vector<ApplyContext>& contexts) {
+  if (threads < 1) throw std::invalid_argument("applyGraded: threads must be >= 1");
+  LeafIndex& index = store.index;
+  const std::size_t bricks = scan.brickCount();
+  index.reserveBricks(bricks);
+  // Slots in brick order first (serial): the map does not depend on the threads.
+  std::vector<std::uint32_t> slots(bricks);
+  for (std::size_t b = 0; b < bricks; ++b) slots[b] = index.brickSlot(scan.brick(b));
+  const std::size_t n = std::min<std::size_t>(static_cast<std::size_t>(threads), 1 + bricks / 64);
+  if (contexts.size() < n) contexts.resize(n);
+  constexpr std::size_t kGrain = 16;
+  alignas(64) std::atomic<std::size_t> next{0};
+  parallel::run(n, [&](std::size_t t) {
+    ApplyContext& ctx = contexts[t];
+    ctx.reset();
+    for (std::size_t g; (g = next.fetch_add(kGrain, std::memory_order_relaxed)) < bricks;)
+      for (std::size_t b = g; b < std::min(bricks, g + kGrain); ++b)
+        applyGradedBrick(store, scan.cells(b), scan.cellCount(b), slots[b], ctx);
+  });
+  refreshFromContexts(index, contexts, n, stats);
 }
 
 }  // namespace rtog

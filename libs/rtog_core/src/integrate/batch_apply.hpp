@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "integrate/brick_update.hpp"
+#include "integrate/graded_scan.hpp"
 #include "integrate/update_batch.hpp"
 #include "rtog/core/stats.hpp"
 #include "storage/map_store.hpp"
@@ -15,5 +16,10 @@ namespace rtog {
 /// and brings the upper tree up to date. The map does not depend on the thread count.
 void applyBatches(MapStore& store, const std::vector<const UpdateBatch*>& batches, InsertStats& stats, int threads,
                   std::vector<ApplyContext>& contexts);
+
+/// Applies a finalized graded scan to the map, brick by brick on up to `threads` threads, and
+/// brings the upper tree up to date. The map does not depend on the thread count.
+void applyGraded(MapStore& store, const GradedScan& scan, InsertStats& stats, int threads,
+                 std::vector<ApplyContext>& contexts);
 
 }  // namespace rtog

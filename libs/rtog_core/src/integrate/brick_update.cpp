@@ -228,13 +228,12 @@ static void coverFreshBrick(MapStore& store, const UpdateBatch::BrickUpdates& up
   noteReshaped(store, slot, ctx);
 }
 
-static void rebuildBrick(MapStore& store, const UpdateBatch::BrickUpdates& upd, std::uint32_t slot, ApplyContext& ctx) {
-  const LogOddsModel& model = store.model;
-  std::vector<LeafEntry>& leaves = store.index.brick(slot).leaves;
-  std::vector<float>& value = ctx.values;
+namespace {
+
+// The brick's leaves painted into a dense table of values; `known` gets their cells.
+void loadDense(const std::vector<LeafEntry>& leaves, std::vector<float>& value, BrickMask& known) {
   value.resize(kBrickCells);
-  InsertStats& stats = ctx.stats;
-  BrickMask known{}, changed{};
+  known = BrickMask{};
   for (const LeafEntry& e : leaves) {
     const std::uint64_t run = xRun(e.lo[0], e.hi[0]);
     for (int z = e.lo[2]; z <= e.hi[2]; ++z)
@@ -244,28 +243,33 @@ static void rebuildBrick(MapStore& store, const UpdateBatch::BrickUpdates& upd, 
         known[static_cast<std::size_t>(base >> 6)] |= run << (base & 63);
       }
   }
-  for (int w = 0; w < kBrickWords; ++w) {
-    const auto wi = static_cast<std::size_t>(w);
-    for (std::uint64_t bits = upd.occupied[wi] | upd.free[wi]; bits; bits &= bits - 1) {
-      const int b = __builtin_ctzll(bits);
-      const auto idx = static_cast<std::size_t>(w * 64 + b);
-      const std::uint64_t bit = std::uint64_t{1} << b;
-      const float delta = (upd.occupied[wi] & bit) ? model.hitDelta() : model.missDelta();
-      if (known[wi] & bit) {
-        const float v = model.update(value[idx], delta);
-        if (v == value[idx]) {
-          ++stats.cells_unchanged;
-          continue;
-        }
-        value[idx] = v;
-      } else {
-        value[idx] = model.first(delta);
-        known[wi] |= bit;
-      }
-      changed[wi] |= bit;
+}
+
+// One cell's update in the dense table: counted unchanged, or marked changed (and known).
+void updateDense(const LogOddsModel& model, std::size_t idx, float delta, std::vector<float>& value, BrickMask& known,
+                 BrickMask& changed, InsertStats& stats) {
+  const std::size_t w = idx >> 6;
+  const std::uint64_t bit = std::uint64_t{1} << (idx & 63);
+  if (known[w] & bit) {
+    const float v = model.update(value[idx], delta);
+    if (v == value[idx]) {
+      ++stats.cells_unchanged;
+      return;
     }
+    value[idx] = v;
+  } else {
+    value[idx] = model.first(delta);
+    known[w] |= bit;
   }
-  // Old cuboids that now disagree inside are the splits of this pass.
+  changed[w] |= bit;
+}
+
+// The brick covered anew from the dense table: old cuboids that now disagree inside are the
+// splits; the known cells are covered with boxes of bit-identical (so lossless), mergeable values.
+void coverDense(MapStore& store, std::uint32_t slot, const std::vector<float>& value, const BrickMask& known,
+                const BrickMask& changed, ApplyContext& ctx) {
+  std::vector<LeafEntry>& leaves = store.index.brick(slot).leaves;
+  InsertStats& stats = ctx.stats;
   for (const LeafEntry& e : leaves) {
     if (e.lo[0] == e.hi[0] && e.lo[1] == e.hi[1] && e.lo[2] == e.hi[2]) continue;
     const std::uint64_t run = xRun(e.lo[0], e.hi[0]);
@@ -277,7 +281,6 @@ static void rebuildBrick(MapStore& store, const UpdateBatch::BrickUpdates& upd, 
       }
     stats.leaves_split += hit;
   }
-  // Cover the known cells again with boxes of bit-identical (so lossless), mergeable values.
   std::vector<LeafEntry>& out = ctx.rebuilt;
   out.clear();
   coverGreedily(
@@ -294,6 +297,36 @@ static void rebuildBrick(MapStore& store, const UpdateBatch::BrickUpdates& upd, 
   ctx.leaf_delta += static_cast<std::int64_t>(out.size()) - static_cast<std::int64_t>(leaves.size());
   assignByFirstCell(out, leaves);
   noteReshaped(store, slot, ctx);
+}
+
+}  // namespace
+
+static void rebuildBrick(MapStore& store, const UpdateBatch::BrickUpdates& upd, std::uint32_t slot, ApplyContext& ctx) {
+  const LogOddsModel& model = store.model;
+  std::vector<float>& value = ctx.values;
+  BrickMask known, changed{};
+  loadDense(store.index.brick(slot).leaves, value, known);
+  for (int w = 0; w < kBrickWords; ++w) {
+    const auto wi = static_cast<std::size_t>(w);
+    for (std::uint64_t bits = upd.occupied[wi] | upd.free[wi]; bits; bits &= bits - 1) {
+      const int b = __builtin_ctzll(bits);
+      const float delta = (upd.occupied[wi] >> b) & 1u ? model.hitDelta() : model.missDelta();
+      updateDense(model, static_cast<std::size_t>(w * 64 + b), delta, value, known, changed, ctx.stats);
+    }
+  }
+  coverDense(store, slot, value, known, changed, ctx);
+}
+
+void applyGradedBrick(MapStore& store, const GradedCell* cells, std::size_t n, std::uint32_t slot, ApplyContext& ctx) {
+  const LogOddsModel& model = store.model;
+  std::vector<float>& value = ctx.values;
+  BrickMask known, changed{};
+  loadDense(store.index.brick(slot).leaves, value, known);
+  for (std::size_t i = 0; i < n; ++i) {
+    (cells[i].delta > 0.0f ? ctx.stats.cells_occupied : ctx.stats.cells_free) += 1;
+    updateDense(model, cells[i].local, cells[i].delta, value, known, changed, ctx.stats);
+  }
+  coverDense(store, slot, value, known, changed, ctx);
 }
 
 static std::size_t mergeInBrick(const MapStore& store, std::vector<LeafEntry>& leaves, std::vector<std::int32_t>& local,

@@ -35,6 +35,18 @@ struct alignas(64) ApplyContext {
 /// upper tree is not touched: the brick is recorded in ctx.reshaped if its leaf nodes changed.
 void applyBrick(MapStore& store, const UpdateBatch::BrickUpdates& upd, std::uint32_t slot, ApplyContext& ctx);
 
+/// A cell of a graded update (a scan whose cells each have their own change): its brick-local
+/// index and log-odds change l_meas - l0.
+struct GradedCell {
+  std::uint16_t local;
+  float delta;
+};
+
+/// Applies graded changes (each cell once) to brick `slot`, counting a positive change occupied,
+/// others free. The brick is covered anew with boxes of equal mergeable value, as a brick with
+/// many updates is. The upper tree is not touched: the brick is recorded in ctx.reshaped.
+void applyGradedBrick(MapStore& store, const GradedCell* cells, std::size_t n, std::uint32_t slot, ApplyContext& ctx);
+
 /// Records brick `slot` as reshaped, with its leaf-node boxes.
 void noteReshaped(const MapStore& store, std::uint32_t slot, ApplyContext& ctx);
 

@@ -29,7 +29,7 @@ struct ScratchPool {
 }  // namespace
 
 std::size_t InsertScratch::memoryBytes() const {
-  std::size_t bytes = sizeof(*this) + planar_beams.capacity() * sizeof(PlanarBeam);
+  std::size_t bytes = sizeof(*this) + planar_beams.capacity() * sizeof(PlanarBeam) + graded.memoryBytes();
   for (const UpdateBatch& b : batches) bytes += sizeof(b) + b.memoryBytes();
   for (const ApplyContext& c : apply_ctx) bytes += c.memoryBytes();
   for (const PlanarBatch& b : planar_batches) bytes += sizeof(b) + b.memoryBytes();
@@ -41,6 +41,7 @@ void InsertScratch::shrink() {
   for (ApplyContext& c : apply_ctx) c = ApplyContext();
   for (PlanarBatch& b : planar_batches) b = PlanarBatch();
   std::vector<PlanarBeam>().swap(planar_beams);
+  graded = GradedScan();
 }
 
 ScratchScope::ScratchScope(std::unique_ptr<InsertScratch>& slot) : slot_(slot), owner_(slot == nullptr) {
@@ -85,8 +86,18 @@ void releaseInsertBuffers() {
 InsertStats ScanIntegrator::insert(const Eigen::Vector3d& origin, const Eigen::Vector3f* points, std::size_t count,
                                    const InsertParams& ip, const std::uint8_t* is_hit,
                                    const std::function<void()>& flush_pending) {
-  if (ip.threads < 1) throw std::invalid_argument("InsertParams: threads must be >= 1");
+  ip.validate();
   InsertScratch& scratch = scratch_;
+  if (ip.model == SensorModel::RangeNoise) {
+    // Graded changes per cell: not the planar cache's two steps. Traced on one thread.
+    flush_pending();
+    InsertStats stats;
+    scratch.graded.clear();
+    scratch.graded.traceRangeNoise(store_.lattice, store_.model, origin, points, count, ip, is_hit, stats);
+    scratch.graded.finalize();
+    applyGraded(store_, scratch.graded, stats, ip.threads, scratch.apply_ctx);
+    return stats;
+  }
   Key lo, hi;
   InsertStats stats;
   const bool planar = ip.planar_cache && preparePlanarBeams(origin, points, count, ip, is_hit, lo, hi, stats);

@@ -10,6 +10,7 @@
 #include <Eigen/Core>
 
 #include "integrate/brick_update.hpp"
+#include "integrate/graded_scan.hpp"
 #include "integrate/planar/planar_batch.hpp"
 #include "integrate/planar/planar_cache.hpp"
 #include "integrate/update_batch.hpp"
@@ -29,6 +30,7 @@ struct InsertScratch {
   std::vector<ApplyContext> apply_ctx;
   std::vector<PlanarBatch> planar_batches;  // per thread
   std::vector<PlanarBeam> planar_beams;
+  GradedScan graded;  // RangeNoise scans
 
   std::size_t memoryBytes() const;
   /// Frees the buffers that grow with a scan, keeping the per-thread objects.

@@ -15,7 +15,13 @@ int defaultThreadCount() {
   return n;
 }
 
-const char* toString(SensorModel m) { return m == SensorModel::BeamBased ? "beam" : "endpoint"; }
+const char* toString(SensorModel m) {
+  switch (m) {
+    case SensorModel::BeamBased: return "beam";
+    case SensorModel::BeamEndPoint: return "endpoint";
+    default: return "rangeNoise";
+  }
+}
 
 const char* toString(MergePolicy m) {
   switch (m) {
@@ -28,7 +34,8 @@ const char* toString(MergePolicy m) {
 SensorModel sensorModelFromString(const std::string& s) {
   if (s == "beam" || s == "beam_based" || s == "BeamBased") return SensorModel::BeamBased;
   if (s == "endpoint" || s == "beam_end_point" || s == "BeamEndPoint") return SensorModel::BeamEndPoint;
-  throw std::invalid_argument("unknown sensor model '" + s + "' (expected 'beam' or 'endpoint')");
+  if (s == "rangeNoise" || s == "range_noise" || s == "RangeNoise") return SensorModel::RangeNoise;
+  throw std::invalid_argument("unknown sensor model '" + s + "' (expected 'beam', 'endpoint' or 'rangeNoise')");
 }
 
 MergePolicy mergePolicyFromString(const std::string& s) {
@@ -43,6 +50,20 @@ void MapParams::validate() const {
     throw std::invalid_argument("MapParams: resolution must lie in [1e-4, 1e3] m, got " + std::to_string(resolution));
   log_odds.validate();
   rtree.validate();
+}
+
+void InsertParams::validate() const {
+  if (threads < 1) throw std::invalid_argument("InsertParams: threads must be >= 1");
+  const auto nonNegative = [](double v, const char* name) {
+    if (!(std::isfinite(v) && v >= 0.0))
+      throw std::invalid_argument(std::string("InsertParams: ") + name + " must be finite and >= 0, got " +
+                                  std::to_string(v));
+  };
+  nonNegative(range_noise_std, "range_noise_std");
+  nonNegative(range_noise_std_per_meter, "range_noise_std_per_meter");
+  if (!(range_noise_cutoff >= 0.5 && range_noise_cutoff <= 10.0))
+    throw std::invalid_argument("InsertParams: range_noise_cutoff must lie in [0.5, 10] sigma, got " +
+                                std::to_string(range_noise_cutoff));
 }
 
 InsertStats& InsertStats::operator+=(const InsertStats& o) {

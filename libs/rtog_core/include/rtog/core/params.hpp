@@ -13,6 +13,9 @@ namespace rtog {
 enum class SensorModel {
   BeamBased,     ///< ray traced: free along the beam, occupied at its end
   BeamEndPoint,  ///< end points only
+  /// ray traced with Gaussian range noise: each cell takes P(occ | r) by total probability over
+  /// where the surface lies given the reading (doc/range-noise.md); sigma -> 0 gives BeamBased
+  RangeNoise,
 };
 
 /// When adjacent leaves are merged into one cuboid.
@@ -60,6 +63,17 @@ struct InsertParams {
   /// of their bricks' layers in place and are covered with leaves when the map is next read,
   /// instead of reshaping leaves at every scan. The cells are the same either way. (Default: true)
   bool planar_cache = true;
+  /// RangeNoise: the range noise sigma = range_noise_std + range_noise_std_per_meter * r [m] of a
+  /// reading r. 0 and 0 give the beam model's cells and values. (Default: 0.05)
+  double range_noise_std = 0.05;
+  /// RangeNoise: growth of sigma with range [m per m]. (Default: 0)
+  double range_noise_std_per_meter = 0.0;
+  /// RangeNoise: the surface is taken to lie within this many sigma of the reading; cells beyond
+  /// r + cutoff * sigma are left untouched. (Default: 3)
+  double range_noise_cutoff = 3.0;
+
+  /// Throws std::invalid_argument naming the field unless the values are usable.
+  void validate() const;
 };
 
 }  // namespace rtog

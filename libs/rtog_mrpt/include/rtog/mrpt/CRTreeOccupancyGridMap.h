@@ -51,8 +51,18 @@ class CRTreeOccupancyGridMap : public mrpt::maps::CMetricMap {
     /// the grid's raster for 2D scans: the grid's cells exactly), or "octomap", OctoMap's (float
     /// log-odds, one update per cell and scan, clamping at clampingMin/Max). (Default: mrpt_grid)
     std::string sensorModelPreset{"mrpt_grid"};
-    /// "beam" (ray traced: free along the beam, occupied at its end) or "endpoint". (Default: beam)
+    /// "beam" (ray traced: free along the beam, occupied at its end), "endpoint", or
+    /// "rangeNoise" (ray traced with Gaussian range noise, doc/range-noise.md; octomap preset
+    /// only). (Default: beam)
     std::string sensorModel{"beam"};
+    /// rangeNoise: sigma of a reading at range r is rangeNoiseStd + rangeNoiseStdPerMeter * r [m].
+    /// (Default: 0.05)
+    float rangeNoiseStd{0.05f};
+    /// rangeNoise: growth of sigma with range [m per m]. (Default: 0)
+    float rangeNoiseStdPerMeter{0.0f};
+    /// rangeNoise: cells beyond r + rangeNoiseCutoff * sigma are left untouched [sigmas, 0.5 to
+    /// 10]. (Default: 3)
+    float rangeNoiseCutoff{3.0f};
     /// P(occupied) of a cell where a beam ends, as in COccupancyGridMap2D. (Default: 0.65)
     float maxOccupancyUpdateCertainty{0.65f};
     /// 1 - P(occupied) of a cell a beam crosses; 0 means "same as maxOccupancyUpdateCertainty",
@@ -110,6 +120,8 @@ class CRTreeOccupancyGridMap : public mrpt::maps::CMetricMap {
     float rotatingScan_maxElevation_deg{std::numeric_limits<float>::quiet_NaN()};
 
     MapParams toMapParams(double resolution) const;
+    /// The core's per-insertion settings these options give (sensor model, range cut, threads...).
+    InsertParams toInsertParams() const;
     bool mrptGrid() const { return sensorModelPreset == "mrpt_grid"; }
   };
 

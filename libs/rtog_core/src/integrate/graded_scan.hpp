@@ -1,0 +1,58 @@
+// The per-scan update set of a graded sensor model (RangeNoise): each cell a scan touched with
+// its own log-odds change, the largest of the beams' (the most occupied claim wins, as occupied
+// wins over free in UpdateBatch), grouped by brick in Morton order.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "integrate/brick_update.hpp"
+#include "rtog/core/key.hpp"
+#include "rtog/core/params.hpp"
+#include "rtog/core/stats.hpp"
+#include "util/flat_hash_map.hpp"
+
+namespace rtog {
+
+class GradedScan {
+ public:
+  void clear();
+  void mark(const Key& k, float delta) {
+    const auto i = static_cast<std::uint32_t>(keys_.size());
+    const std::uint32_t at = index_.findOrInsert(packKey(k), i);
+    if (at == i) {
+      keys_.push_back(k);
+      deltas_.push_back(delta);
+    } else if (delta > deltas_[at]) {
+      deltas_[at] = delta;
+    }
+  }
+  /// Groups the marked cells by brick, bricks in Morton order, cells by local index. Ends marking.
+  void finalize();
+
+  std::size_t brickCount() const { return bricks_.size(); }
+  const Key& brick(std::size_t b) const { return bricks_[b]; }
+  const GradedCell* cells(std::size_t b) const { return cells_.data() + first_[b]; }
+  std::size_t cellCount(std::size_t b) const { return first_[b + 1] - first_[b]; }
+  std::size_t memoryBytes() const;
+
+  /// Traces a scan's beams with the range-noise rule into this set (no change to the map): the
+  /// same beams as the beam model are skipped or cut; a no-return beam frees the cells before its
+  /// end, as in the beam model. Throws std::out_of_range if the origin has no key.
+  void traceRangeNoise(const Lattice& lattice, const LogOddsModel& model, const Eigen::Vector3d& origin,
+                       const Eigen::Vector3f* points, std::size_t count, const InsertParams& ip,
+                       const std::uint8_t* is_hit, InsertStats& stats);
+
+ private:
+  detail::FlatHashMap64 index_;  // packed key -> position in keys_ / deltas_
+  std::vector<Key> keys_;
+  std::vector<float> deltas_;
+  std::vector<std::pair<std::uint64_t, std::uint64_t>> order_;  // finalize(): brick's Morton code, local << 32 | position
+  std::vector<Key> bricks_;
+  std::vector<std::uint32_t> first_;
+  std::vector<GradedCell> cells_;
+};
+
+}  // namespace rtog

@@ -1,0 +1,112 @@
+// sensorModel = rangeNoise in _insertOpts: sigma 0 gives the beam model's map on SENA cell for
+// cell, a real sigma changes it; the options read, write and serialize back; bad values and the
+// mrpt_grid preset are refused naming the key.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include <mrpt/config/CConfigFileMemory.h>
+#include <mrpt/io/CMemoryStream.h>
+#include <mrpt/maps/CMultiMetricMap.h>
+#include <mrpt/serialization/CArchive.h>
+
+#include "rtog/mrpt/CRTreeOccupancyGridMap.h"
+#include "test_helpers.hpp"
+
+using rtog::CRTreeOccupancyGridMap;
+
+namespace {
+
+CRTreeOccupancyGridMap::Ptr mapFromIni(const std::string& insert_opts) {
+  const std::string ini = "[MappingApplication]\nrtreeOccupancyGrid_count=1\n"
+                          "[MappingApplication_rtreeOccupancyGrid_00_creationOpts]\nresolution=0.05\n"
+                          "[MappingApplication_rtreeOccupancyGrid_00_insertOpts]\n" + insert_opts;
+  mrpt::config::CConfigFileMemory cfg(ini);
+  mrpt::maps::TSetOfMetricMapInitializers inits;
+  inits.loadFromConfigFile(cfg, "MappingApplication");
+  mrpt::maps::CMultiMetricMap mm;
+  mm.setListOfMaps(inits);
+  return std::dynamic_pointer_cast<CRTreeOccupancyGridMap>(mm.maps.at(0));
+}
+
+std::vector<std::pair<std::uint64_t, float>> cellsOf(const rtog::OccupancyMap& m) {
+  std::vector<std::pair<std::uint64_t, float>> out;
+  m.forEachLeaf([&](const rtog::Box& b, float v) {
+    for (std::int32_t z = b.min.z; z <= b.max.z; ++z)
+      for (std::int32_t y = b.min.y; y <= b.max.y; ++y)
+        for (std::int32_t x = b.min.x; x <= b.max.x; ++x) out.emplace_back(rtog::packKey(rtog::Key{x, y, z}), v);
+  });
+  std::sort(out.begin(), out.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  return out;
+}
+
+TEST(RangeNoiseOptions, ZeroSigmaGivesTheBeamModelsMapOnSena) {
+  const auto frames = rtog_test::loadOdometryFrames(rtog_test::dataset(rtog_test::kSena), 80);
+  ASSERT_EQ(frames.size(), 80u);
+  const std::string common = "sensorModelPreset=octomap\n";
+  const auto beam = mapFromIni(common + "sensorModel=beam\n");
+  const auto zero = mapFromIni(common + "sensorModel=rangeNoise\nrangeNoiseStd=0\n");
+  const auto noisy = mapFromIni(common + "sensorModel=rangeNoise\nrangeNoiseStd=0.03\nrangeNoiseStdPerMeter=0.01\n");
+  for (const auto& f : frames)
+    for (const auto& m : {beam, zero, noisy}) m->insertObservation(*f.sf->getObservationByIndex(0), f.pose);
+  const auto a = cellsOf(beam->map()), b = cellsOf(zero->map()), c = cellsOf(noisy->map());
+  ASSERT_GT(a.size(), 100000u);
+  ASSERT_EQ(a.size(), b.size());
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    ASSERT_EQ(a[i].first, b[i].first);
+    ASSERT_EQ(std::memcmp(&a[i].second, &b[i].second, sizeof(float)), 0) << "cell " << i;
+  }
+  EXPECT_NE(a, c);
+  EXPECT_EQ(noisy->map().checkInvariants(), "");
+  EXPECT_GT(noisy->lastInsertStats.cells_occupied, beam->lastInsertStats.cells_occupied)
+      << "the band marks more cells than the end cells";
+}
+
+TEST(RangeNoiseOptions, OptionsReadWriteAndSerializeBack) {
+  const auto m = mapFromIni("sensorModelPreset=octomap\nsensorModel=rangeNoise\nrangeNoiseStd=0.02\n"
+                            "rangeNoiseStdPerMeter=0.005\nrangeNoiseCutoff=2.5\n");
+  const auto& io = m->insertionOptions;
+  EXPECT_EQ(io.sensorModel, "rangeNoise");
+  EXPECT_FLOAT_EQ(io.rangeNoiseStd, 0.02f);
+  EXPECT_FLOAT_EQ(io.rangeNoiseStdPerMeter, 0.005f);
+  EXPECT_FLOAT_EQ(io.rangeNoiseCutoff, 2.5f);
+  mrpt::config::CConfigFileMemory out;
+  io.saveToConfigFile(out, "s");
+  CRTreeOccupancyGridMap::TInsertionOptions again;
+  again.loadFromConfigFile(out, "s");
+  EXPECT_EQ(again.rangeNoiseStd, io.rangeNoiseStd);
+  EXPECT_EQ(again.rangeNoiseCutoff, io.rangeNoiseCutoff);
+  mrpt::io::CMemoryStream buf;
+  auto arch = mrpt::serialization::archiveFrom(buf);
+  arch << *m;
+  buf.Seek(0);
+  CRTreeOccupancyGridMap back;
+  arch >> back;
+  EXPECT_EQ(back.insertionOptions.sensorModel, "rangeNoise");
+  EXPECT_EQ(back.insertionOptions.rangeNoiseStdPerMeter, io.rangeNoiseStdPerMeter);
+  EXPECT_EQ(back.insertionOptions.rangeNoiseCutoff, io.rangeNoiseCutoff);
+}
+
+TEST(RangeNoiseOptions, BadValuesAndTheGridPresetAreRefusedByKey) {
+  const auto refused = [](const std::string& opts, const std::string& key) {
+    try {
+      mapFromIni(opts);
+      ADD_FAILURE() << "accepted: " << opts;
+    } catch (const std::exception& e) {
+      EXPECT_NE(std::string(e.what()).find(key), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("insertOpts"), std::string::npos) << e.what();
+    }
+  };
+  refused("sensorModel=rangeNoise\n", "sensorModel");  // mrpt_grid is the default preset
+  const std::string o = "sensorModelPreset=octomap\nsensorModel=rangeNoise\n";
+  refused(o + "rangeNoiseStd=-0.01\n", "rangeNoiseStd");
+  refused(o + "rangeNoiseStd=nan\n", "rangeNoiseStd");
+  refused(o + "rangeNoiseStdPerMeter=inf\n", "rangeNoiseStdPerMeter");
+  refused(o + "rangeNoiseCutoff=20\n", "rangeNoiseCutoff");
+  refused(o + "rangeNoiseCutoff=0\n", "rangeNoiseCutoff");
+}
+
+}  // namespace
