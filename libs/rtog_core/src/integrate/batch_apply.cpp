@@ -197,7 +197,7 @@ void applyGraded(MapStore& store, const GradedScan& scan, InsertStats& stats, in
     ctx.reset();
     for (std::size_t g; (g = next.fetch_add(kGrain, std::memory_order_relaxed)) < bricks;)
       for (std::size_t b = g; b < std::min(bricks, g + kGrain); ++b)
-        applyGradedBrick(store, scan.cells(b), scan.cellCount(b), slots[b], ctx);
+        applyGradedBrick(store, scan.cells(b), scan.cellCount(b), scan.missMask(b), slots[b], ctx);
   });
   refreshFromContexts(index, contexts, n, stats);
 }

@@ -317,14 +317,26 @@ static void rebuildBrick(MapStore& store, const UpdateBatch::BrickUpdates& upd, 
   coverDense(store, slot, value, known, changed, ctx);
 }
 
-void applyGradedBrick(MapStore& store, const GradedCell* cells, std::size_t n, std::uint32_t slot, ApplyContext& ctx) {
+void applyGradedBrick(MapStore& store, const GradedCell* cells, std::size_t n, const BrickMask* miss,
+                      std::uint32_t slot, ApplyContext& ctx) {
   const LogOddsModel& model = store.model;
   std::vector<float>& value = ctx.values;
-  BrickMask known, changed{};
+  BrickMask known, changed{}, graded{};
   loadDense(store.index.brick(slot).leaves, value, known);
+  for (std::size_t i = 0; i < n; ++i) graded[cells[i].local >> 6] |= std::uint64_t{1} << (cells[i].local & 63);
+  if (miss)
+    for (std::size_t w = 0; w < static_cast<std::size_t>(kBrickWords); ++w)
+      for (std::uint64_t bits = (*miss)[w] & ~graded[w]; bits; bits &= bits - 1) {
+        ++ctx.stats.cells_free;
+        updateDense(model, w * 64 + static_cast<std::size_t>(__builtin_ctzll(bits)), model.missDelta(), value, known,
+                    changed, ctx.stats);
+      }
   for (std::size_t i = 0; i < n; ++i) {
-    (cells[i].delta > 0.0f ? ctx.stats.cells_occupied : ctx.stats.cells_free) += 1;
-    updateDense(model, cells[i].local, cells[i].delta, value, known, changed, ctx.stats);
+    const std::size_t idx = cells[i].local;
+    float delta = cells[i].delta;
+    if (miss && ((*miss)[idx >> 6] >> (idx & 63) & 1u)) delta = std::max(delta, model.missDelta());
+    (delta > 0.0f ? ctx.stats.cells_occupied : ctx.stats.cells_free) += 1;
+    updateDense(model, idx, delta, value, known, changed, ctx.stats);
   }
   coverDense(store, slot, value, known, changed, ctx);
 }

@@ -42,10 +42,12 @@ struct GradedCell {
   float delta;
 };
 
-/// Applies graded changes (each cell once) to brick `slot`, counting a positive change occupied,
-/// others free. The brick is covered anew with boxes of equal mergeable value, as a brick with
-/// many updates is. The upper tree is not touched: the brick is recorded in ctx.reshaped.
-void applyGradedBrick(MapStore& store, const GradedCell* cells, std::size_t n, std::uint32_t slot, ApplyContext& ctx);
+/// Applies graded changes (each cell once) and, if `miss` is given, the miss change to the cells of
+/// that mask (a cell in both takes the larger change) to brick `slot`, counting a positive change
+/// occupied, others free. The brick is covered anew with boxes of equal mergeable value, as a
+/// brick with many updates is. The upper tree is not touched: the brick is recorded in ctx.reshaped.
+void applyGradedBrick(MapStore& store, const GradedCell* cells, std::size_t n, const BrickMask* miss,
+                      std::uint32_t slot, ApplyContext& ctx);
 
 /// Records brick `slot` as reshaped, with its leaf-node boxes.
 void noteReshaped(const MapStore& store, std::uint32_t slot, ApplyContext& ctx);

@@ -27,40 +27,56 @@ void cellInterval(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir, con
 }  // namespace
 
 void GradedScan::clear() {
+  miss_.clear();
   index_.clear();
   keys_.clear();
   deltas_.clear();
   bricks_.clear();
-  first_.clear();
+  codes_.clear();
   cells_.clear();
 }
 
 std::size_t GradedScan::memoryBytes() const {
-  return index_.memoryBytes() + keys_.capacity() * sizeof(Key) + deltas_.capacity() * sizeof(float) +
-         order_.capacity() * sizeof(order_[0]) + bricks_.capacity() * sizeof(Key) +
-         first_.capacity() * sizeof(std::uint32_t) + cells_.capacity() * sizeof(GradedCell);
+  return miss_.memoryBytes() + index_.memoryBytes() + keys_.capacity() * sizeof(Key) +
+         deltas_.capacity() * sizeof(float) + order_.capacity() * sizeof(order_[0]) +
+         bricks_.capacity() * sizeof(BrickEntry) + codes_.capacity() * sizeof(std::uint64_t) +
+         cells_.capacity() * sizeof(GradedCell);
 }
 
 void GradedScan::finalize() {
+  miss_.finalize();
   order_.clear();
   order_.reserve(keys_.size());
   for (std::uint32_t i = 0; i < keys_.size(); ++i)
     order_.emplace_back(mortonCode(brickOf(keys_[i])), static_cast<std::uint64_t>(localIndex(keys_[i])) << 32 | i);
   std::sort(order_.begin(), order_.end());
-  bricks_.clear();
-  first_.clear();
+  // The graded bricks (first), with their codes...
+  std::vector<BrickEntry> graded;
+  codes_.clear();
   cells_.clear();
   cells_.reserve(order_.size());
   for (std::size_t j = 0; j < order_.size(); ++j) {
     const auto pos = static_cast<std::uint32_t>(order_[j].second);
     const Key& k = keys_[pos];
     if (j == 0 || order_[j].first != order_[j - 1].first) {
-      bricks_.push_back(brickOf(k));
-      first_.push_back(static_cast<std::uint32_t>(cells_.size()));
+      graded.push_back(BrickEntry{brickOf(k), nullptr, static_cast<std::uint32_t>(cells_.size()), 0});
+      codes_.push_back(order_[j].first);
     }
     cells_.push_back(GradedCell{static_cast<std::uint16_t>(localIndex(k)), deltas_[pos]});
+    ++graded.back().count;
   }
-  first_.push_back(static_cast<std::uint32_t>(cells_.size()));
+  // ...merged with the miss batch's bricks, both in Morton order.
+  bricks_.clear();
+  const auto& miss_codes = miss_.brickCodes();
+  for (std::size_t g = 0, m = 0; g < graded.size() || m < miss_codes.size();) {
+    const bool take_g = m == miss_codes.size() || (g < graded.size() && codes_[g] <= miss_codes[m]);
+    const bool take_m = g == graded.size() || (m < miss_codes.size() && miss_codes[m] <= codes_[g]);
+    BrickEntry e = take_g ? graded[g] : BrickEntry{miss_.brickKeys()[m], nullptr, 0, 0};
+    if (take_m) e.miss = &miss_.bricks()[m]->free;
+    bricks_.push_back(e);
+    g += take_g;
+    m += take_m;
+  }
 }
 
 void GradedScan::traceRangeNoise(const Lattice& lattice, const LogOddsModel& model, const Eigen::Vector3d& origin,
@@ -77,12 +93,11 @@ void GradedScan::traceRangeNoise(const Lattice& lattice, const LogOddsModel& mod
     const BeamEnd kind = rules.classify(origin, points[i].cast<double>(), is_hit == nullptr || is_hit[i] != 0, end, end_key);
     if (!BeamRules::count(kind, stats)) continue;
     const Eigen::Vector3d end_l = rules.walkEnd(end, end_key);
-    const auto freeUpToEnd = [&](const Key& k) { mark(k, model.missDelta()); };
     const double r = (end - origin).norm();
     const double sigma = noise.sigma(r);
     if (kind != BeamEnd::Hit || sigma == 0.0) {  // the beam model's marks (its sigma -> 0 limit)
       if (kind == BeamEnd::Hit) mark(end_key, model.hitDelta());
-      traverseRay(origin_l, end_l, origin_key, end_key, freeUpToEnd);
+      miss_.queueRayFree(origin_l, end_l, origin_key, end_key);
       continue;
     }
     // The walk goes on to the far edge of the band, unless that has no key or is too long.
@@ -98,6 +113,20 @@ void GradedScan::traceRangeNoise(const Lattice& lattice, const LogOddsModel& mod
     }
     if (far_key == end_key) far_l = end_l;  // the beam model's walk, exactly
     const Eigen::Vector3d dir_l = (far_l - origin_l).normalized();
+    // Cells before the band's start take exactly the miss change: the fast walk up to the start's
+    // cell, the graded walk from there.
+    Eigen::Vector3d from_l = origin_l;
+    Key from_key = origin_key;
+    const double band_start = r - noise.reach(sigma);
+    if (band_start > res) {
+      const Eigen::Vector3d start = origin + dir * band_start;
+      Key start_key;
+      if (lattice.tryKey(start, start_key) && start_key != end_key) {
+        from_l = lattice.toLattice(start);
+        miss_.queueRayFree(origin_l, from_l, origin_key, start_key);
+        from_key = start_key;
+      }
+    }
     // Cells before the end cell end before the reading, the end cell holds it, later cells
     // start after it, whatever the rounding of their intervals.
     bool past_end = false;
@@ -120,7 +149,7 @@ void GradedScan::traceRangeNoise(const Lattice& lattice, const LogOddsModel& mod
       float delta;
       if (noise.cellDelta(t_in, t_out, r, sigma, delta)) mark(k, delta);
     };
-    traverseRay(origin_l, far_l, origin_key, far_key, visit);
+    traverseRay(from_l, far_l, from_key, far_key, visit);
     visit(far_key);
     // A walk that stepped around the end cell (rounding on a cell corner) still marks it.
     if (!past_end) visit(end_key);

@@ -1,6 +1,8 @@
 // The per-scan update set of a graded sensor model (RangeNoise): each cell a scan touched with
 // its own log-odds change, the largest of the beams' (the most occupied claim wins, as occupied
-// wins over free in UpdateBatch), grouped by brick in Morton order.
+// wins over free in UpdateBatch), grouped by brick in Morton order. Cells whose change is exactly
+// the miss change (most of a beam: those before its band) are marked in an UpdateBatch's free
+// masks, with its fast walk, and only the others one by one.
 #pragma once
 
 #include <cstdint>
@@ -9,6 +11,7 @@
 #include <Eigen/Core>
 
 #include "integrate/brick_update.hpp"
+#include "integrate/update_batch.hpp"
 #include "rtog/core/key.hpp"
 #include "rtog/core/params.hpp"
 #include "rtog/core/stats.hpp"
@@ -33,9 +36,13 @@ class GradedScan {
   void finalize();
 
   std::size_t brickCount() const { return bricks_.size(); }
-  const Key& brick(std::size_t b) const { return bricks_[b]; }
-  const GradedCell* cells(std::size_t b) const { return cells_.data() + first_[b]; }
-  std::size_t cellCount(std::size_t b) const { return first_[b + 1] - first_[b]; }
+  const Key& brick(std::size_t b) const { return bricks_[b].key; }
+  /// The brick's cells of their own change, by local index.
+  const GradedCell* cells(std::size_t b) const { return cells_.data() + bricks_[b].first; }
+  std::size_t cellCount(std::size_t b) const { return bricks_[b].count; }
+  /// The brick's cells of the miss change (a cell may be in cells() too: the larger change
+  /// counts), or nullptr.
+  const BrickMask* missMask(std::size_t b) const { return bricks_[b].miss; }
   std::size_t memoryBytes() const;
 
   /// Traces a scan's beams with the range-noise rule into this set (no change to the map): the
@@ -46,12 +53,18 @@ class GradedScan {
                        const std::uint8_t* is_hit, InsertStats& stats);
 
  private:
+  struct BrickEntry {
+    Key key;
+    const BrickMask* miss;
+    std::uint32_t first, count;
+  };
+  UpdateBatch miss_;             // cells of exactly the miss change
   detail::FlatHashMap64 index_;  // packed key -> position in keys_ / deltas_
   std::vector<Key> keys_;
   std::vector<float> deltas_;
   std::vector<std::pair<std::uint64_t, std::uint64_t>> order_;  // finalize(): brick's Morton code, local << 32 | position
-  std::vector<Key> bricks_;
-  std::vector<std::uint32_t> first_;
+  std::vector<BrickEntry> bricks_;
+  std::vector<std::uint64_t> codes_;  // finalize(): the graded bricks' Morton codes
   std::vector<GradedCell> cells_;
 };
 
