@@ -1,0 +1,355 @@
+// rtog::CRTreeOccupancyGridMap: the .ini side — TInsertionOptions, TLikelihoodOptions,
+// TGridViewOptions, TMatchingOptions and TMapDefinition (read, written, validated by key).
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+#include <mrpt/config/CConfigFileBase.h>
+#include <mrpt/core/bits_math.h>
+
+#include "CRTreeOccupancyGridMap_grid2d.hpp"
+#include "mrpt_grid.hpp"
+#include "options_check.hpp"
+#include "rtog/mrpt/CRTreeOccupancyGridMap.h"
+
+namespace rtog {
+
+namespace {
+[[noreturn]] void badOption(const std::string& section, const std::string& key, const std::string& why) {
+  throw std::invalid_argument("rtog::CRTreeOccupancyGridMap: invalid option [" + section + "] " + key + ": " + why);
+}
+bool isProbability(float p) { return std::isfinite(p) && p > 0.0f && p < 1.0f; }
+}  // namespace
+
+// ---- TInsertionOptions -------------------------------------------------------------------
+
+void CRTreeOccupancyGridMap::TInsertionOptions::loadFromConfigFile(const mrpt::config::CConfigFileBase& s,
+                                                                  const std::string& sec) {
+  sensorModelPreset = s.read_string(sec, "sensorModelPreset", sensorModelPreset);
+  sensorModel = s.read_string(sec, "sensorModel", sensorModel);
+  rangeNoiseStd = s.read_float(sec, "rangeNoiseStd", rangeNoiseStd);
+  rangeNoiseStdPerMeter = s.read_float(sec, "rangeNoiseStdPerMeter", rangeNoiseStdPerMeter);
+  rangeNoiseCutoff = s.read_float(sec, "rangeNoiseCutoff", rangeNoiseCutoff);
+  maxOccupancyUpdateCertainty = s.read_float(sec, "maxOccupancyUpdateCertainty", maxOccupancyUpdateCertainty);
+  maxFreenessUpdateCertainty = s.read_float(sec, "maxFreenessUpdateCertainty", maxFreenessUpdateCertainty);
+  // Read as 0 where absent: a section without them states the sensor by the certainties.
+  missRate = s.read_float(sec, "missRate", 0.0f);
+  falseAlarmRate = s.read_float(sec, "falseAlarmRate", 0.0f);
+  if (missRate != 0.0f || falseAlarmRate != 0.0f) {
+    // The sensor stated as a channel: the certainties follow from it, so they may not be given too.
+    for (const char* k : {"maxOccupancyUpdateCertainty", "maxFreenessUpdateCertainty"})
+      if (s.keyExists(sec, k))
+        badOption(sec, "missRate/falseAlarmRate",
+                  std::string("state the sensor by the rates or by the certainties, not both (") + k + " is set)");
+    applySensorChannel(sec);
+  }
+  maxFreenessInvalidRanges = s.read_float(sec, "maxFreenessInvalidRanges", maxFreenessInvalidRanges);
+  considerInvalidRangesAsFreeSpace =
+      s.read_bool(sec, "considerInvalidRangesAsFreeSpace", considerInvalidRangesAsFreeSpace);
+  horizontalTolerance = mrpt::DEG2RAD(s.read_float(sec, "horizontalTolerance", mrpt::RAD2DEG(horizontalTolerance)));
+  useMapAltitude = s.read_bool(sec, "useMapAltitude", useMapAltitude);
+  mapAltitude = s.read_float(sec, "mapAltitude", mapAltitude);
+  wideningBeamsWithDistance = s.read_bool(sec, "wideningBeamsWithDistance", wideningBeamsWithDistance);
+  clampingMin = s.read_float(sec, "clampingMin", clampingMin);
+  clampingMax = s.read_float(sec, "clampingMax", clampingMax);
+  occupiedThreshold = s.read_float(sec, "occupiedThreshold", occupiedThreshold);
+  maxDistanceInsertion = s.read_float(sec, "maxDistanceInsertion", maxDistanceInsertion);
+  const int dec = s.read_int(sec, "decimation", decimation);
+  const int dec3 = s.read_int(sec, "decimation_3d_range", decimation_3d_range);
+  if (dec < 1 || dec > 65535) badOption(sec, "decimation", "must be an integer in [1, 65535], got " + std::to_string(dec));
+  if (dec3 < 1 || dec3 > 255)
+    badOption(sec, "decimation_3d_range", "must be an integer in [1, 255], got " + std::to_string(dec3));
+  decimation = static_cast<uint16_t>(dec);
+  decimation_3d_range = static_cast<uint16_t>(dec3);
+  mergePolicy = s.read_string(sec, "mergePolicy", mergePolicy);
+  discretize = s.read_bool(sec, "discretize", discretize);
+  threads = s.read_int(sec, "threads", threads);
+  planarCache = s.read_bool(sec, "planarCache", planarCache);
+  rotatingScan_minElevation_deg = s.read_float(sec, "rotatingScan_minElevation_deg", rotatingScan_minElevation_deg);
+  rotatingScan_maxElevation_deg = s.read_float(sec, "rotatingScan_maxElevation_deg", rotatingScan_maxElevation_deg);
+  // COccupancyGridMap2D's keys that concern what rtog does not build (its CFD features).
+  reportUnknownKeys(s, sec,
+                    {"sensorModelPreset", "sensorModel", "rangeNoiseStd", "rangeNoiseStdPerMeter", "rangeNoiseCutoff",
+                     "maxOccupancyUpdateCertainty", "maxFreenessUpdateCertainty", "missRate", "falseAlarmRate",
+                     "maxFreenessInvalidRanges", "considerInvalidRangesAsFreeSpace", "horizontalTolerance",
+                     "useMapAltitude", "mapAltitude", "wideningBeamsWithDistance", "clampingMin", "clampingMax",
+                     "occupiedThreshold", "maxDistanceInsertion", "decimation", "decimation_3d_range", "mergePolicy",
+                     "discretize", "threads", "planarCache", "rotatingScan_minElevation_deg",
+                     "rotatingScan_maxElevation_deg", "CFD_features_gaussian_size", "CFD_features_median_size"});
+  try {
+    validate();
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(std::string(e.what()) + " (section [" + sec + "])");
+  }
+}
+
+void CRTreeOccupancyGridMap::TInsertionOptions::saveToConfigFile(mrpt::config::CConfigFileBase& c,
+                                                                const std::string& sec) const {
+  c.write(sec, "sensorModelPreset", sensorModelPreset);
+  c.write(sec, "sensorModel", sensorModel);
+  c.write(sec, "rangeNoiseStd", rangeNoiseStd);
+  c.write(sec, "rangeNoiseStdPerMeter", rangeNoiseStdPerMeter);
+  c.write(sec, "rangeNoiseCutoff", rangeNoiseCutoff);
+  c.write(sec, "maxFreenessInvalidRanges", maxFreenessInvalidRanges);
+  c.write(sec, "considerInvalidRangesAsFreeSpace", considerInvalidRangesAsFreeSpace);
+  c.write(sec, "horizontalTolerance", mrpt::RAD2DEG(horizontalTolerance));
+  c.write(sec, "useMapAltitude", useMapAltitude);
+  c.write(sec, "mapAltitude", mapAltitude);
+  c.write(sec, "wideningBeamsWithDistance", wideningBeamsWithDistance);
+  if (missRate != 0.0f || falseAlarmRate != 0.0f) {  // read back, the rates give these certainties
+    c.write(sec, "missRate", missRate);
+    c.write(sec, "falseAlarmRate", falseAlarmRate);
+  } else {
+    c.write(sec, "maxOccupancyUpdateCertainty", maxOccupancyUpdateCertainty);
+    c.write(sec, "maxFreenessUpdateCertainty", maxFreenessUpdateCertainty);
+  }
+  c.write(sec, "clampingMin", clampingMin);
+  c.write(sec, "clampingMax", clampingMax);
+  c.write(sec, "occupiedThreshold", occupiedThreshold);
+  c.write(sec, "maxDistanceInsertion", maxDistanceInsertion);
+  c.write(sec, "decimation", static_cast<int>(decimation));
+  c.write(sec, "decimation_3d_range", static_cast<int>(decimation_3d_range));
+  c.write(sec, "mergePolicy", mergePolicy);
+  c.write(sec, "discretize", discretize);
+  c.write(sec, "threads", threads);
+  c.write(sec, "planarCache", planarCache);
+  if (!std::isnan(rotatingScan_minElevation_deg)) {  // unset is no key: a written "nan" may not read back
+    c.write(sec, "rotatingScan_minElevation_deg", rotatingScan_minElevation_deg);
+    c.write(sec, "rotatingScan_maxElevation_deg", rotatingScan_maxElevation_deg);
+  }
+}
+
+void CRTreeOccupancyGridMap::TInsertionOptions::applySensorChannel(const std::string& sec) {
+  if (!(std::isfinite(missRate) && std::isfinite(falseAlarmRate) && missRate > 0.0f && falseAlarmRate > 0.0f))
+    badOption(sec, "missRate/falseAlarmRate", "set both, each in (0, 1), or neither; got " + std::to_string(missRate) +
+                                                  " and " + std::to_string(falseAlarmRate));
+  LogOddsParams p;
+  try {
+    p = withChannel(p, SensorChannel{missRate, falseAlarmRate});
+  } catch (const std::invalid_argument& e) {
+    badOption(sec, "missRate/falseAlarmRate", e.what());
+  }
+  maxOccupancyUpdateCertainty = static_cast<float>(p.prob_hit);
+  maxFreenessUpdateCertainty = static_cast<float>(1.0 - p.prob_miss);
+}
+
+InsertParams CRTreeOccupancyGridMap::TInsertionOptions::toInsertParams() const {
+  InsertParams ip;
+  ip.model = sensorModelFromString(sensorModel);
+  ip.max_range = maxDistanceInsertion;
+  ip.discretize = discretize;
+  ip.threads = threads;
+  ip.planar_cache = planarCache;
+  ip.range_noise_std = rangeNoiseStd;
+  ip.range_noise_std_per_meter = rangeNoiseStdPerMeter;
+  ip.range_noise_cutoff = rangeNoiseCutoff;
+  return ip;
+}
+
+void CRTreeOccupancyGridMap::TInsertionOptions::validate() const {
+  const std::string sec = "insertOpts";
+  if (sensorModelPreset != "mrpt_grid" && sensorModelPreset != "octomap")
+    badOption(sec, "sensorModelPreset", "must be mrpt_grid or octomap, got '" + sensorModelPreset + "'");
+  const SensorModel model = sensorModelFromString(sensorModel);  // throws with the accepted names
+  if (model == SensorModel::RangeNoise && mrptGrid())
+    badOption(sec, "sensorModel",
+              "rangeNoise needs sensorModelPreset = octomap (COccupancyGridMap2D's int8 steps have no graded update)");
+  if (!(std::isfinite(rangeNoiseStd) && rangeNoiseStd >= 0.0f))
+    badOption(sec, "rangeNoiseStd", "must be a finite sigma >= 0 [m], got " + std::to_string(rangeNoiseStd));
+  if (!(std::isfinite(rangeNoiseStdPerMeter) && rangeNoiseStdPerMeter >= 0.0f))
+    badOption(sec, "rangeNoiseStdPerMeter", "must be finite and >= 0 [m per m], got " + std::to_string(rangeNoiseStdPerMeter));
+  if (!(rangeNoiseCutoff >= 0.5f && rangeNoiseCutoff <= 10.0f))
+    badOption(sec, "rangeNoiseCutoff", "must lie in [0.5, 10] sigma, got " + std::to_string(rangeNoiseCutoff));
+  if (!(maxFreenessInvalidRanges == 0.0f ||
+        (isProbability(maxFreenessInvalidRanges) && maxFreenessInvalidRanges > 0.5f)))
+    badOption(sec, "maxFreenessInvalidRanges", "must be 0 or lie in (0.5, 1), got " +
+                                                   std::to_string(maxFreenessInvalidRanges));
+  if (!(std::isfinite(horizontalTolerance) && horizontalTolerance >= 0.0f))
+    badOption(sec, "horizontalTolerance", "must be a non-negative angle");
+  if (!std::isfinite(mapAltitude)) badOption(sec, "mapAltitude", "must be finite");
+  if (mrptGrid() && wideningBeamsWithDistance)
+    badOption(sec, "wideningBeamsWithDistance",
+              "COccupancyGridMap2D's widening beams are not reproduced by the mrpt_grid preset: set it to false");
+  mergePolicyFromString(mergePolicy);
+  if (!isProbability(maxOccupancyUpdateCertainty) || maxOccupancyUpdateCertainty <= 0.5f)
+    badOption(sec, "maxOccupancyUpdateCertainty", "must lie in (0.5, 1), got " + std::to_string(maxOccupancyUpdateCertainty));
+  if (!(maxFreenessUpdateCertainty == 0.0f ||
+        (isProbability(maxFreenessUpdateCertainty) && maxFreenessUpdateCertainty > 0.5f)))
+    badOption(sec, "maxFreenessUpdateCertainty", "must be 0 or lie in (0.5, 1), got " +
+                                                     std::to_string(maxFreenessUpdateCertainty));
+  // Checked in both presets (mrpt_grid does not use them): a bad value is an error wherever it stands.
+  if (!isProbability(clampingMin) || !isProbability(clampingMax) || !(clampingMin < 0.5f && 0.5f < clampingMax))
+    badOption(sec, "clampingMin/clampingMax", "need 0 < clampingMin < 0.5 < clampingMax < 1");
+  if (!isProbability(occupiedThreshold)) badOption(sec, "occupiedThreshold", "must lie in (0, 1)");
+  if (!std::isfinite(maxDistanceInsertion)) badOption(sec, "maxDistanceInsertion", "must be finite");
+  if (mrptGrid() && !(maxDistanceInsertion > 0.0f))
+    badOption(sec, "maxDistanceInsertion", "must be > 0 in the mrpt_grid preset (the grid cuts every beam there)");
+  if (decimation < 1) badOption(sec, "decimation", "must be >= 1");
+  if (decimation_3d_range < 1 || decimation_3d_range > 255) badOption(sec, "decimation_3d_range", "must be in [1, 255]");
+  if (threads < 1 || threads > 256) badOption(sec, "threads", "must be in [1, 256]");
+  const bool minSet = !std::isnan(rotatingScan_minElevation_deg), maxSet = !std::isnan(rotatingScan_maxElevation_deg);
+  if (minSet != maxSet)
+    badOption(sec, "rotatingScan_min/maxElevation_deg", "set both (explicit ring elevations) or neither");
+  if (minSet && (!(rotatingScan_minElevation_deg <= rotatingScan_maxElevation_deg) ||
+                 !(std::abs(rotatingScan_minElevation_deg) <= 90) || !(std::abs(rotatingScan_maxElevation_deg) <= 90)))
+    badOption(sec, "rotatingScan_min/maxElevation_deg", "need -90 <= min <= max <= 90");
+  toMapParams(0.1).validate();
+}
+
+MapParams CRTreeOccupancyGridMap::TInsertionOptions::toMapParams(double resolution) const {
+  MapParams p;
+  p.resolution = resolution;
+  p.merge = mergePolicyFromString(mergePolicy);
+  if (mrptGrid()) {
+    p.log_odds = mrpt_grid::logOddsParams(mrpt_grid::stepsOf(*this), occupiedThreshold);
+    return p;
+  }
+  p.log_odds.prob_hit = maxOccupancyUpdateCertainty;
+  p.log_odds.prob_miss =
+      1.0 - (maxFreenessUpdateCertainty == 0.0f ? maxOccupancyUpdateCertainty : maxFreenessUpdateCertainty);
+  p.log_odds.clamp_min = clampingMin;
+  p.log_odds.clamp_max = clampingMax;
+  p.log_odds.occupied_threshold = occupiedThreshold;
+  return p;
+}
+
+// ---- TLikelihoodOptions ------------------------------------------------------------------
+
+void CRTreeOccupancyGridMap::TLikelihoodOptions::loadFromConfigFile(const mrpt::config::CConfigFileBase& s,
+                                                                   const std::string& sec) {
+  const std::string m = s.read_string(sec, "likelihoodMethod", "");
+  // COccupancyGridMap2D's names and numbers (0 meant the likelihood field before: doc/mrpt_map.md).
+  if (!m.empty() && !likelihoodMethodFromString(m, likelihoodMethod))
+    badOption(sec, "likelihoodMethod", "unknown method '" + m + "' (expected one of COccupancyGridMap2D's: " +
+                                           kLikelihoodMethodNames + ")");
+  LF_stdHit = s.read_float(sec, "LF_stdHit", LF_stdHit);
+  LF_zHit = s.read_float(sec, "LF_zHit", LF_zHit);
+  LF_zRandom = s.read_float(sec, "LF_zRandom", LF_zRandom);
+  LF_maxRange = s.read_float(sec, "LF_maxRange", LF_maxRange);
+  const int lfd = s.read_int(sec, "LF_decimation", static_cast<int>(LF_decimation));
+  if (lfd < 1) badOption(sec, "LF_decimation", "must be >= 1, got " + std::to_string(lfd));
+  LF_decimation = static_cast<uint32_t>(lfd);
+  LF_maxCorrsDistance = s.read_float(sec, "LF_maxCorrsDistance", LF_maxCorrsDistance);
+  LF_useSquareDist = s.read_bool(sec, "LF_useSquareDist", LF_useSquareDist);
+  enableLikelihoodCache = s.read_bool(sec, "enableLikelihoodCache", enableLikelihoodCache);
+  rayTracing_decimation = s.read_int(sec, "rayTracing_decimation", rayTracing_decimation);
+  rayTracing_stdHit = s.read_float(sec, "rayTracing_stdHit", rayTracing_stdHit);
+  loadGridLikelihoodKeys(*this, s, sec);
+  reportUnknownKeys(s, sec,
+                    {"likelihoodMethod", "LF_stdHit", "LF_zHit", "LF_zRandom", "LF_maxRange", "LF_decimation",
+                     "LF_maxCorrsDistance", "LF_useSquareDist", "LF_alternateAverageMethod", "enableLikelihoodCache",
+                     "rayTracing_decimation", "rayTracing_stdHit", "rayTracing_useDistanceFilter", "MI_exponent",
+                     "MI_skip_rays", "MI_ratio_max_distance", "consensus_takeEachRange", "consensus_pow",
+                     "OWA_weights", "scanLikelihoodOnGridView"});
+  try {
+    validate();
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(std::string(e.what()) + " (section [" + sec + "])");
+  }
+}
+
+void CRTreeOccupancyGridMap::TLikelihoodOptions::saveToConfigFile(mrpt::config::CConfigFileBase& c,
+                                                                 const std::string& sec) const {
+  c.write(sec, "likelihoodMethod", std::string(likelihoodMethodName(likelihoodMethod)));
+  c.write(sec, "LF_stdHit", LF_stdHit);
+  c.write(sec, "LF_zHit", LF_zHit);
+  c.write(sec, "LF_zRandom", LF_zRandom);
+  c.write(sec, "LF_maxRange", LF_maxRange);
+  c.write(sec, "LF_decimation", static_cast<int>(LF_decimation));
+  c.write(sec, "LF_maxCorrsDistance", LF_maxCorrsDistance);
+  c.write(sec, "LF_useSquareDist", LF_useSquareDist);
+  c.write(sec, "enableLikelihoodCache", enableLikelihoodCache);
+  c.write(sec, "rayTracing_decimation", rayTracing_decimation);
+  c.write(sec, "rayTracing_stdHit", rayTracing_stdHit);
+  saveGridLikelihoodKeys(*this, c, sec);
+}
+
+void CRTreeOccupancyGridMap::TLikelihoodOptions::validate() const {
+  const std::string sec = "likelihoodOpts";
+  auto positive = [&](float v, const char* k) {
+    if (!(std::isfinite(v) && v > 0.0f)) badOption(sec, k, "must be a positive number, got " + std::to_string(v));
+  };
+  positive(LF_stdHit, "LF_stdHit");
+  positive(LF_maxRange, "LF_maxRange");
+  positive(LF_maxCorrsDistance, "LF_maxCorrsDistance");
+  positive(rayTracing_stdHit, "rayTracing_stdHit");
+  if (!(LF_zHit >= 0.0f && LF_zRandom >= 0.0f && LF_zHit + LF_zRandom > 0.0f))
+    badOption(sec, "LF_zHit/LF_zRandom", "must be non-negative and not both zero");
+  if (LF_decimation < 1) badOption(sec, "LF_decimation", "must be >= 1");
+  if (rayTracing_decimation < 1) badOption(sec, "rayTracing_decimation", "must be >= 1");
+  if (!likelihoodMethodName(likelihoodMethod)) badOption(sec, "likelihoodMethod", "not a known method");
+  if (MI_skip_rays < 1) badOption(sec, "MI_skip_rays", "must be >= 1");
+  if (consensus_takeEachRange < 1) badOption(sec, "consensus_takeEachRange", "must be >= 1");
+}
+
+// ---- TMatchingOptions --------------------------------------------------------------------
+
+void CRTreeOccupancyGridMap::TMatchingOptions::loadFromConfigFile(const mrpt::config::CConfigFileBase& s,
+                                                                 const std::string& sec) {
+  matching2D_minZ = s.read_float(sec, "matching2D_minZ", matching2D_minZ);
+  matching2D_maxZ = s.read_float(sec, "matching2D_maxZ", matching2D_maxZ);
+  try {
+    validate();
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(std::string(e.what()) + " (section [" + sec + "])");
+  }
+}
+
+void CRTreeOccupancyGridMap::TMatchingOptions::saveToConfigFile(mrpt::config::CConfigFileBase& c,
+                                                               const std::string& sec) const {
+  c.write(sec, "matching2D_minZ", matching2D_minZ);
+  c.write(sec, "matching2D_maxZ", matching2D_maxZ);
+}
+
+void CRTreeOccupancyGridMap::TMatchingOptions::validate() const {
+  if (!(std::isfinite(matching2D_minZ) && std::isfinite(matching2D_maxZ) && matching2D_minZ <= matching2D_maxZ))
+    badOption("matchingOpts", "matching2D_minZ/matching2D_maxZ", "need finite minZ <= maxZ");
+}
+
+// ---- TMapDefinition ----------------------------------------------------------------------
+
+CRTreeOccupancyGridMap::TMapDefinition::TMapDefinition() = default;
+
+void CRTreeOccupancyGridMap::TMapDefinition::loadFromConfigFile_map_specific(
+    const mrpt::config::CConfigFileBase& source, const std::string& sectionNamePrefix) {
+  loadError.clear();
+  try {
+    const std::string sec = sectionNamePrefix + "_creationOpts";
+    resolution = source.read_double(sec, "resolution", resolution);
+    if (!(std::isfinite(resolution) && resolution >= 1e-4 && resolution <= 1e3))
+      badOption(sec, "resolution", "must lie in [1e-4, 1e3] m, got " + std::to_string(resolution));
+    readGridExtent(source, sec, min_x, max_x, min_y, max_y);
+    reportUnknownKeys(source, sec,
+                      {"resolution", "min_x", "max_x", "min_y", "max_y", "gridView_minZ", "gridView_maxZ",
+                       "disableSaveAs3DObject"});
+    insertionOpts.loadFromConfigFile(source, sectionNamePrefix + "_insertOpts");
+    likelihoodOpts.loadFromConfigFile(source, sectionNamePrefix + "_likelihoodOpts");
+    gridViewOpts.loadFromConfigFile(source, sec);
+    matchingOpts.loadFromConfigFile(source, sectionNamePrefix + "_matchingOpts");
+  } catch (const std::exception& e) {
+    loadError = e.what();
+  }
+}
+
+void CRTreeOccupancyGridMap::TMapDefinition::dumpToTextStream_map_specific(std::ostream& out) const {
+  out << "resolution = " << resolution << "\n";
+  insertionOpts.dumpToTextStream(out);
+  likelihoodOpts.dumpToTextStream(out);
+  gridViewOpts.dumpToTextStream(out);
+  matchingOpts.dumpToTextStream(out);
+}
+
+mrpt::maps::CMetricMap* CRTreeOccupancyGridMap::internal_CreateFromMapDefinition(
+    const mrpt::maps::TMetricMapInitializer& def) {
+  const auto& d = dynamic_cast<const CRTreeOccupancyGridMap::TMapDefinition&>(def);
+  if (!d.loadError.empty()) throw std::invalid_argument(d.loadError);
+  auto* m = new CRTreeOccupancyGridMap(d.resolution, d.insertionOpts);
+  m->setGridFrame(d.min_x, d.max_x, d.min_y, d.max_y);
+  m->likelihoodOptions = d.likelihoodOpts;
+  m->gridViewOptions = d.gridViewOpts;
+  m->matchingOptions = d.matchingOpts;
+  m->genericMapParams = d.genericMapParams;
+  return m;
+}
+
+}  // namespace rtog
