@@ -179,15 +179,37 @@ void refreshFromContexts(LeafIndex& index, std::vector<ApplyContext>& contexts, 
 
 }  // namespace
 
-void applyGraded(MapStore& store, const GradedScan& scan, InsertStats& stats, int threads,
+void applyGraded(MapStore& store, const std::vector<const GradedScan*>& scans, InsertStats& stats, int threads,
                  std::vector<ApplyContext>& contexts) {
   if (threads < 1) throw std::invalid_argument("applyGraded: threads must be >= 1");
   LeafIndex& index = store.index;
-  const std::size_t bricks = scan.brickCount();
+  // The scans' brick lists merged in Morton order: group g is the pairs (scan, brick)
+  // parts[first[g] .. first[g + 1]); slots given in brick order (serial): the map does not depend
+  // on the threads.
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> parts;
+  std::vector<std::uint32_t> first{0};
+  std::vector<Key> keys;
+  {
+    std::vector<std::size_t> pos(scans.size(), 0);
+    for (;;) {
+      std::size_t from = scans.size();
+      for (std::size_t s = 0; s < scans.size(); ++s)
+        if (pos[s] < scans[s]->brickCount() &&
+            (from == scans.size() || scans[s]->brickCode(pos[s]) < scans[from]->brickCode(pos[from])))
+          from = s;
+      if (from == scans.size()) break;
+      const std::uint64_t code = scans[from]->brickCode(pos[from]);
+      keys.push_back(scans[from]->brick(pos[from]));
+      for (std::size_t s = 0; s < scans.size(); ++s)
+        if (pos[s] < scans[s]->brickCount() && scans[s]->brickCode(pos[s]) == code)
+          parts.emplace_back(static_cast<std::uint32_t>(s), static_cast<std::uint32_t>(pos[s]++));
+      first.push_back(static_cast<std::uint32_t>(parts.size()));
+    }
+  }
+  const std::size_t bricks = keys.size();
   index.reserveBricks(bricks);
-  // Slots in brick order first (serial): the map does not depend on the threads.
   std::vector<std::uint32_t> slots(bricks);
-  for (std::size_t b = 0; b < bricks; ++b) slots[b] = index.brickSlot(scan.brick(b));
+  for (std::size_t b = 0; b < bricks; ++b) slots[b] = index.brickSlot(keys[b]);
   const std::size_t n = std::min<std::size_t>(static_cast<std::size_t>(threads), 1 + bricks / 64);
   if (contexts.size() < n) contexts.resize(n);
   constexpr std::size_t kGrain = 16;
@@ -196,8 +218,33 @@ void applyGraded(MapStore& store, const GradedScan& scan, InsertStats& stats, in
     ApplyContext& ctx = contexts[t];
     ctx.reset();
     for (std::size_t g; (g = next.fetch_add(kGrain, std::memory_order_relaxed)) < bricks;)
-      for (std::size_t b = g; b < std::min(bricks, g + kGrain); ++b)
-        applyGradedBrick(store, scan.cells(b), scan.cellCount(b), scan.missMask(b), slots[b], ctx);
+      for (std::size_t b = g; b < std::min(bricks, g + kGrain); ++b) {
+        if (first[b + 1] - first[b] == 1) {
+          const auto [s, i] = parts[first[b]];
+          applyGradedBrick(store, scans[s]->cells(i), scans[s]->cellCount(i), scans[s]->missMask(i), slots[b], ctx);
+          continue;
+        }
+        // Several scans hold the brick: or their miss masks, merge their cells (by local index)
+        // keeping the larger change.
+        bool any_miss = false;
+        ctx.graded_miss.fill(0);
+        ctx.graded_cells.clear();
+        for (std::uint32_t p = first[b]; p < first[b + 1]; ++p) {
+          const auto [s, i] = parts[p];
+          if (const BrickMask* m = scans[s]->missMask(i)) {
+            any_miss = true;
+            for (std::size_t w = 0; w < ctx.graded_miss.size(); ++w) ctx.graded_miss[w] |= (*m)[w];
+          }
+          ctx.graded_cells.insert(ctx.graded_cells.end(), scans[s]->cells(i), scans[s]->cells(i) + scans[s]->cellCount(i));
+        }
+        std::vector<GradedCell>& c = ctx.graded_cells;
+        std::sort(c.begin(), c.end(), [](const GradedCell& x, const GradedCell& y) {
+          return x.local != y.local ? x.local < y.local : x.delta > y.delta;
+        });
+        c.erase(std::unique(c.begin(), c.end(), [](const GradedCell& x, const GradedCell& y) { return x.local == y.local; }),
+                c.end());
+        applyGradedBrick(store, c.data(), c.size(), any_miss ? &ctx.graded_miss : nullptr, slots[b], ctx);
+      }
   });
   refreshFromContexts(index, contexts, n, stats);
 }

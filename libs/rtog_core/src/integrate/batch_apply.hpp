@@ -17,9 +17,10 @@ namespace rtog {
 void applyBatches(MapStore& store, const std::vector<const UpdateBatch*>& batches, InsertStats& stats, int threads,
                   std::vector<ApplyContext>& contexts);
 
-/// Applies a finalized graded scan to the map, brick by brick on up to `threads` threads, and
-/// brings the upper tree up to date. The map does not depend on the thread count.
-void applyGraded(MapStore& store, const GradedScan& scan, InsertStats& stats, int threads,
+/// Applies the union of finalized graded scans (per cell the largest change; miss masks or-ed)
+/// to the map, brick by brick on up to `threads` threads, and brings the upper tree up to date.
+/// The map does not depend on the thread count, nor on how the beams were split among the scans.
+void applyGraded(MapStore& store, const std::vector<const GradedScan*>& scans, InsertStats& stats, int threads,
                  std::vector<ApplyContext>& contexts);
 
 }  // namespace rtog

@@ -27,7 +27,7 @@ std::size_t ApplyContext::memoryBytes() const {
   return sizeof(*this) + local.capacity() * sizeof(std::int32_t) + candidates.capacity() * sizeof(std::uint32_t) +
          reshaped.capacity() * sizeof(std::uint32_t) + values.capacity() * sizeof(float) +
          rebuilt.capacity() * sizeof(LeafEntry) + node_boxes.capacity() * sizeof(LocalBox) +
-         reshaped_boxes.capacity() * sizeof(std::uint32_t);
+         reshaped_boxes.capacity() * sizeof(std::uint32_t) + graded_cells.capacity() * sizeof(GradedCell);
 }
 
 void ApplyContext::reset() {

@@ -11,12 +11,21 @@
 
 namespace rtog {
 
+/// A cell of a graded update (a scan whose cells each have their own change): its brick-local
+/// index and log-odds change l_meas - l0.
+struct GradedCell {
+  std::uint16_t local;
+  float delta;
+};
+
 /// Per-thread state of applying bricks.
 struct alignas(64) ApplyContext {
   std::vector<std::int32_t> local;  // brick-local cell -> leaf index, -1 when none
   std::vector<std::uint32_t> candidates;
   std::vector<std::uint32_t> reshaped;  // bricks whose leaf nodes changed
   UpdateBatch::BrickUpdates merged;     // union of one brick's updates from several batches
+  BrickMask graded_miss;                // the same for graded scans: miss masks or-ed...
+  std::vector<GradedCell> graded_cells;  // ...and cells merged, the larger change kept
   std::vector<float> values;            // brick-local cell -> log-odds, for a rebuild
   std::vector<LeafEntry> rebuilt;
   // The reshaped bricks' leaf-node boxes, taken while their leaves are in the cache: a rebuild
@@ -34,13 +43,6 @@ struct alignas(64) ApplyContext {
 /// Applies a brick's updates (occupied winning over free) to the leaves of brick `slot`. The
 /// upper tree is not touched: the brick is recorded in ctx.reshaped if its leaf nodes changed.
 void applyBrick(MapStore& store, const UpdateBatch::BrickUpdates& upd, std::uint32_t slot, ApplyContext& ctx);
-
-/// A cell of a graded update (a scan whose cells each have their own change): its brick-local
-/// index and log-odds change l_meas - l0.
-struct GradedCell {
-  std::uint16_t local;
-  float delta;
-};
 
 /// Applies graded changes (each cell once) and, if `miss` is given, the miss change to the cells of
 /// that mask (a cell in both takes the larger change) to brick `slot`, counting a positive change

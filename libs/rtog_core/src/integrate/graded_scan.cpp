@@ -59,7 +59,7 @@ void GradedScan::finalize() {
     const auto pos = static_cast<std::uint32_t>(order_[j].second);
     const Key& k = keys_[pos];
     if (j == 0 || order_[j].first != order_[j - 1].first) {
-      graded.push_back(BrickEntry{brickOf(k), nullptr, static_cast<std::uint32_t>(cells_.size()), 0});
+      graded.push_back(BrickEntry{brickOf(k), order_[j].first, nullptr, static_cast<std::uint32_t>(cells_.size()), 0});
       codes_.push_back(order_[j].first);
     }
     cells_.push_back(GradedCell{static_cast<std::uint16_t>(localIndex(k)), deltas_[pos]});
@@ -71,7 +71,7 @@ void GradedScan::finalize() {
   for (std::size_t g = 0, m = 0; g < graded.size() || m < miss_codes.size();) {
     const bool take_g = m == miss_codes.size() || (g < graded.size() && codes_[g] <= miss_codes[m]);
     const bool take_m = g == graded.size() || (m < miss_codes.size() && miss_codes[m] <= codes_[g]);
-    BrickEntry e = take_g ? graded[g] : BrickEntry{miss_.brickKeys()[m], nullptr, 0, 0};
+    BrickEntry e = take_g ? graded[g] : BrickEntry{miss_.brickKeys()[m], miss_codes[m], nullptr, 0, 0};
     if (take_m) e.miss = &miss_.bricks()[m]->free;
     bricks_.push_back(e);
     g += take_g;

@@ -43,6 +43,8 @@ class GradedScan {
   /// The brick's cells of the miss change (a cell may be in cells() too: the larger change
   /// counts), or nullptr.
   const BrickMask* missMask(std::size_t b) const { return bricks_[b].miss; }
+  /// The brick's Morton code (ascending with b).
+  std::uint64_t brickCode(std::size_t b) const { return bricks_[b].code; }
   std::size_t memoryBytes() const;
 
   /// Traces a scan's beams with the range-noise rule into this set (no change to the map): the
@@ -55,6 +57,7 @@ class GradedScan {
  private:
   struct BrickEntry {
     Key key;
+    std::uint64_t code;
     const BrickMask* miss;
     std::uint32_t first, count;
   };

@@ -29,7 +29,8 @@ struct ScratchPool {
 }  // namespace
 
 std::size_t InsertScratch::memoryBytes() const {
-  std::size_t bytes = sizeof(*this) + planar_beams.capacity() * sizeof(PlanarBeam) + graded.memoryBytes();
+  std::size_t bytes = sizeof(*this) + planar_beams.capacity() * sizeof(PlanarBeam);
+  for (const GradedScan& g : graded) bytes += sizeof(g) + g.memoryBytes();
   for (const UpdateBatch& b : batches) bytes += sizeof(b) + b.memoryBytes();
   for (const ApplyContext& c : apply_ctx) bytes += c.memoryBytes();
   for (const PlanarBatch& b : planar_batches) bytes += sizeof(b) + b.memoryBytes();
@@ -41,7 +42,7 @@ void InsertScratch::shrink() {
   for (ApplyContext& c : apply_ctx) c = ApplyContext();
   for (PlanarBatch& b : planar_batches) b = PlanarBatch();
   std::vector<PlanarBeam>().swap(planar_beams);
-  graded = GradedScan();
+  for (GradedScan& g : graded) g = GradedScan();
 }
 
 ScratchScope::ScratchScope(std::unique_ptr<InsertScratch>& slot) : slot_(slot), owner_(slot == nullptr) {
@@ -89,14 +90,9 @@ InsertStats ScanIntegrator::insert(const Eigen::Vector3d& origin, const Eigen::V
   ip.validate();
   InsertScratch& scratch = scratch_;
   if (ip.model == SensorModel::RangeNoise) {
-    // Graded changes per cell: not the planar cache's two steps. Traced on one thread.
+    // Graded changes per cell: not the planar cache's two steps.
     flush_pending();
-    InsertStats stats;
-    scratch.graded.clear();
-    scratch.graded.traceRangeNoise(store_.lattice, store_.model, origin, points, count, ip, is_hit, stats);
-    scratch.graded.finalize();
-    applyGraded(store_, scratch.graded, stats, ip.threads, scratch.apply_ctx);
-    return stats;
+    return insertGraded(origin, points, count, ip, is_hit);
   }
   Key lo, hi;
   InsertStats stats;
@@ -153,6 +149,37 @@ InsertStats ScanIntegrator::insert(const Eigen::Vector3d& origin, const Eigen::V
     for (std::size_t t = 0; t < threads; ++t) batches.push_back(&scratch.batches[t]);
     applyBatches(store_, batches, stats, static_cast<int>(threads), scratch.apply_ctx);
   }
+  return stats;
+}
+
+InsertStats ScanIntegrator::insertGraded(const Eigen::Vector3d& origin, const Eigen::Vector3f* points,
+                                         std::size_t count, const InsertParams& ip, const std::uint8_t* is_hit) {
+  (void)store_.lattice.key(origin);  // throws for a bad origin, before any thread starts
+  InsertScratch& scratch = scratch_;
+  const std::size_t threads = std::min<std::size_t>(static_cast<std::size_t>(ip.threads), 1 + count / 4096);
+  if (scratch.graded.size() < threads) scratch.graded.resize(threads);
+  std::vector<InsertStats> part(threads);
+  // Chunks taken as threads become free; the union of the threads' scans does not depend on the
+  // split (per cell the largest change, miss masks or-ed).
+  const std::size_t chunk = std::clamp<std::size_t>(count / (16 * threads), 256, 2048);
+  parallel::ChunkClaims claims((count + chunk - 1) / chunk, threads);
+  parallel::run(threads, [&](std::size_t t) {
+    InsertStats own;
+    GradedScan& scan = scratch.graded[t];
+    scan.clear();
+    for (std::size_t c; (c = claims.next(t)) != parallel::ChunkClaims::kNone;) {
+      const std::size_t first = c * chunk, n = std::min(chunk, count - first);
+      scan.traceRangeNoise(store_.lattice, store_.model, origin, points + first, n, ip, is_hit ? is_hit + first : nullptr,
+                           own);
+    }
+    scan.finalize();
+    part[t] = own;
+  });
+  InsertStats stats;
+  for (std::size_t t = 0; t < threads; ++t) stats += part[t];
+  std::vector<const GradedScan*> scans;
+  for (std::size_t t = 0; t < threads; ++t) scans.push_back(&scratch.graded[t]);
+  applyGraded(store_, scans, stats, static_cast<int>(threads), scratch.apply_ctx);
   return stats;
 }
 

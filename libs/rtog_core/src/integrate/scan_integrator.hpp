@@ -30,7 +30,7 @@ struct InsertScratch {
   std::vector<ApplyContext> apply_ctx;
   std::vector<PlanarBatch> planar_batches;  // per thread
   std::vector<PlanarBeam> planar_beams;
-  GradedScan graded;  // RangeNoise scans
+  std::vector<GradedScan> graded;  // RangeNoise scans, per thread
 
   std::size_t memoryBytes() const;
   /// Frees the buffers that grow with a scan, keeping the per-thread objects.
@@ -83,6 +83,9 @@ class ScanIntegrator {
   /// wide for a planar batch: then the beams in exact planar form, with the runs each can skip
   /// (fanSkipRuns), are in scratch_.planar_beams, [lo, hi] bounds their cells in x and y, and
   /// `stats` counts them.
+  /// A RangeNoise scan: traced into per-thread graded scans, then applied.
+  InsertStats insertGraded(const Eigen::Vector3d& origin, const Eigen::Vector3f* points, std::size_t count,
+                           const InsertParams& ip, const std::uint8_t* is_hit);
   bool preparePlanarBeams(const Eigen::Vector3d& origin, const Eigen::Vector3f* points, std::size_t count,
                           const InsertParams& ip, const std::uint8_t* is_hit, Key& lo, Key& hi, InsertStats& stats);
 
