@@ -283,7 +283,7 @@ std::optional<double> CRTreeOccupancyGridMap::gridViewLikelihood(const mrpt::obs
   // size arithmetic and resizeGrid aborts or writes out of bounds. Such ranges (not finite,
   // negative, or beyond the scan's maxRange or 100 km, beyond any range sensor) are no returns
   // for these two methods; the copy is made only for a scan that has one.
-  mrpt::obs::CObservation2DRangeScan trimmed;
+  std::optional<mrpt::obs::CObservation2DRangeScan> trimmed;  // made only when needed: a scan is a heavy object
   const mrpt::obs::CObservation* scored = &obs;
   if (method == lmMeanInformation || method == lmCellsDifference) {
     // Not the insertion range: the stock grid scores beams beyond it, and so must the view.
@@ -308,10 +308,10 @@ std::optional<double> CRTreeOccupancyGridMap::gridViewLikelihood(const mrpt::obs
     std::size_t i = 0;
     while (i < scan->getScanSize() && !farOrBad(i)) ++i;
     if (i < scan->getScanSize()) {
-      trimmed = *scan;
-      for (; i < trimmed.getScanSize(); ++i)
-        if (farOrBad(i)) trimmed.setScanRangeValidity(i, false);
-      scored = &trimmed;
+      trimmed.emplace(*scan);
+      for (; i < trimmed->getScanSize(); ++i)
+        if (farOrBad(i)) trimmed->setScanRangeValidity(i, false);
+      scored = &*trimmed;
     }
   }
   const auto v = gridViewShared(need ? need->data() : nullptr);

@@ -23,6 +23,18 @@ inline std::uint32_t equalMask16(const float* row, float v) {
   return mask;
 }
 
+/// Bit x set where row[x] == v, for the 16 int8 codes of a brick row.
+inline std::uint32_t equalMask16(const std::int8_t* row, std::int8_t v) {
+#if defined(__SSE2__)
+  const __m128i r = _mm_loadu_si128(reinterpret_cast<const __m128i*>(row));
+  return static_cast<std::uint32_t>(_mm_movemask_epi8(_mm_cmpeq_epi8(r, _mm_set1_epi8(v))));
+#else
+  std::uint32_t mask = 0;
+  for (int x = 0; x < 16; ++x) mask |= static_cast<std::uint32_t>(row[x] == v) << x;
+  return mask;
+#endif
+}
+
 /// A hint to the CPU inside a spin-wait loop.
 inline void cpuRelax() {
 #if defined(__SSE2__)

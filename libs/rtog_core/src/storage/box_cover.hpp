@@ -60,20 +60,20 @@ void coverGreedily(BrickMask m, Joins&& joins, Emit&& emit) {
 }
 
 // coverGreedily's boxes for a brick whose only cells to cover are one z-layer of values (a
-// planar cache layer): runs and rows are grown by masks of the cells equal to the start value,
-// four compared at a time, instead of cell by cell.
-template <class Mergeable, class Emit>
-void coverLayer(const LayerMask& known, const float* values, int z, Mergeable&& mergeable,
-                Emit&& emit) {
+// planar cache layer, in floats or in the int8 codes of a step rule): runs and rows are grown
+// by masks of the cells equal to the start value, a row's worth compared at once, instead of
+// cell by cell.
+template <class T, class Mergeable, class Emit>
+void coverLayer(const LayerMask& known, const T* values, int z, Mergeable&& mergeable, Emit&& emit) {
   std::uint32_t rows[kBrickSize];
   for (int y = 0; y < kBrickSize; ++y)
     rows[y] = static_cast<std::uint32_t>(known[static_cast<std::size_t>(y >> 2)] >> ((y & 3) * kBrickSize)) & 0xFFFFu;
-  const auto equalTo = [values](int y, float v) { return equalMask16(values + y * kBrickSize, v); };
+  const auto equalTo = [values](int y, T v) { return equalMask16(values + y * kBrickSize, v); };
   const auto u8 = [](int c) { return static_cast<std::uint8_t>(c); };
   for (int y = 0; y < kBrickSize; ++y)
     while (rows[y] != 0) {
       const int x0 = __builtin_ctz(rows[y]);
-      const float v = values[y * kBrickSize + x0];
+      const T v = values[y * kBrickSize + x0];
       int x1 = x0, y1 = y;
       if (mergeable(v)) {
         const std::uint32_t same = (rows[y] & equalTo(y, v)) | (1u << x0);

@@ -1,8 +1,10 @@
 #include "integrate/planar/planar_cache.hpp"
 
 #include <algorithm>
+#include <cstring>
 
 #include "kernels/layer_update.hpp"
+#include "kernels/row_compare.hpp"
 #include "storage/box_cover.hpp"
 #include "storage/morton_order.hpp"
 
@@ -13,31 +15,104 @@ using detail::coverLayer;
 
 void PlanarCache::clear() {
   layers_.clear();
+  floats_.clear();
   index_.clear();
   recent_.clear();
 }
 
-PlanarLayer& PlanarCache::layerAt(MapStore& store, const Key& brick, std::int32_t z) {
-  return layers_[recent_.get(packKey(Key{brick.x, brick.y, z}),
-                             [&] { return layerIndex(store, store.index.brickSlot(brick), z & (kBrickSize - 1)); })];
+float* PlanarCache::values(PlanarLayer& layer) {
+  if (layer.floats == kNoFloats) {
+    layer.floats = static_cast<std::uint32_t>(floats_.size());
+    floats_.emplaceBack();
+  }
+  return floats_[layer.floats].data();
 }
 
-std::uint32_t PlanarCache::layerIndex(const MapStore& store, std::uint32_t slot, int z) {
+PlanarLayer& PlanarCache::layerAt(MapStore& store, const Key& brick, std::int32_t z, bool codes) {
+  PlanarLayer& layer =
+      layers_[recent_.get(packKey(Key{brick.x, brick.y, z}),
+                          [&] { return layerIndex(store, store.index.brickSlot(brick), z & (kBrickSize - 1), codes); })];
+  if (codes && layer.form == LayerForm::Floats) {
+    // Into codes, or marked off the lattice (a cell of another rule) and stepped in floats.
+    std::array<std::int8_t, kLayerCells> code;
+    const float* value = values(layer);
+    bool on = true;
+    for (int i = 0; i < kLayerCells && on; ++i) {
+      const bool known = (layer.known[static_cast<std::size_t>(i >> 6)] >> (i & 63)) & 1u;
+      if (known)
+        on = codec_.encode(value[i], code[static_cast<std::size_t>(i)]);
+      else
+        code[static_cast<std::size_t>(i)] = StepCodec::kUnknown;
+    }
+    if (on) layer.code = code;
+    layer.form = on ? LayerForm::Codes : LayerForm::OffLattice;
+  } else if (!codes && layer.form == LayerForm::Codes) {
+    decode(layer);
+  }
+  return layer;
+}
+
+void PlanarCache::decode(PlanarLayer& layer) {
+  layer.known.fill(0);
+  float* const value = values(layer);
+  for (int i = 0; i < kLayerCells; ++i) {
+    const std::int8_t c = layer.code[static_cast<std::size_t>(i)];
+    value[i] = codec_.value(c);
+    if (c != StepCodec::kUnknown) layer.known[static_cast<std::size_t>(i >> 6)] |= std::uint64_t{1} << (i & 63);
+  }
+  layer.form = LayerForm::Floats;
+}
+
+void PlanarCache::useRule(const StepRule& rule, float prior) {
+  if (have_rule_ && std::memcmp(&rule, &rule_, sizeof rule) == 0 && prior == rule_prior_) return;
+  StepCodec fresh = StepCodec::make(rule, prior);
+  if (codec_.usable() && !(fresh.usable() && fresh.sameCodes(codec_)))
+    for (std::size_t i = 0; i < layers_.size(); ++i)
+      if (layers_[i].form == LayerForm::Codes) decode(layers_[i]);
+  have_rule_ = true;
+  rule_ = rule;
+  rule_prior_ = prior;
+  codec_ = fresh;
+}
+
+std::uint32_t PlanarCache::layerIndex(const MapStore& store, std::uint32_t slot, int z, bool codes) {
   const auto next = static_cast<std::uint32_t>(layers_.size());
   const std::uint32_t index = index_.findOrInsert(std::uint64_t{slot} * kBrickSize + static_cast<std::uint64_t>(z), next);
   if (index != next) return index;
   PlanarLayer& layer = layers_.emplaceBack();
   layer.slot = slot;
   layer.z = z;
+  layer.floats = kNoFloats;
+  const std::vector<LeafEntry>& leaves = store.index.brick(slot).leaves;
+  const auto crosses = [z](const LeafEntry& e) { return z >= e.lo[2] && z <= e.hi[2]; };
+  if (codes) {
+    // In codes straight from the leaves (a code a leaf), unless a leaf is off the lattice.
+    layer.code.fill(StepCodec::kUnknown);
+    bool on = true;
+    for (std::size_t i = 0; i < leaves.size() && on; ++i) {
+      const LeafEntry& e = leaves[i];
+      std::int8_t c = 0;
+      if (!crosses(e)) continue;
+      if (!(on = codec_.encode(e.value, c))) break;
+      for (int y = e.lo[1]; y <= e.hi[1]; ++y)
+        std::fill_n(layer.code.begin() + y * kBrickSize + e.lo[0], e.hi[0] - e.lo[0] + 1, c);
+    }
+    if (on) {
+      layer.form = LayerForm::Codes;
+      return next;
+    }
+  }
+  layer.form = codes ? LayerForm::OffLattice : LayerForm::Floats;
   layer.known.fill(0);
-  layer.value.fill(store.model.prior());
+  float* const value = values(layer);
+  std::fill_n(value, kLayerCells, store.model.prior());
   // The layer's cells as the leaves crossing it hold them.
-  for (const LeafEntry& e : store.index.brick(slot).leaves) {
-    if (z < e.lo[2] || z > e.hi[2]) continue;
+  for (const LeafEntry& e : leaves) {
+    if (!crosses(e)) continue;
     const std::uint64_t run = xRun(e.lo[0], e.hi[0]);
     for (int y = e.lo[1]; y <= e.hi[1]; ++y) {
       const int base = y * kBrickSize;
-      for (int x = e.lo[0]; x <= e.hi[0]; ++x) layer.value[static_cast<std::size_t>(base + x)] = e.value;
+      for (int x = e.lo[0]; x <= e.hi[0]; ++x) value[base + x] = e.value;
       layer.known[static_cast<std::size_t>(base >> 6)] |= run << (base & 63);
     }
   }
@@ -72,7 +147,7 @@ void PlanarCache::apply(MapStore& store, const std::vector<PlanarBatch>& planar_
     // layer hash lookups.
     PlanarLayer& layer = layerAt(store, brick, z);
     // Unknown cells hold the prior, so a first update is an update like any other.
-    update_layer(layer.value.data(), layer.known.data(), tile.occupied.data(), tile.free.data(), deltas, counts);
+    update_layer(values(layer), layer.known.data(), tile.occupied.data(), tile.free.data(), deltas, counts);
   }
   stats.cells_unchanged += counts.unchanged;
   stats.cells_free += counts.free;
@@ -96,8 +171,23 @@ InsertStats PlanarCache::cover(MapStore& store) {
     const std::uint32_t slot = layers_[order[i]].slot;
     const PlanarLayer* layer_at[kBrickSize] = {};
     BrickMask known{};
+    std::size_t end = i;
+    while (end < order.size() && layers_[order[end]].slot == slot) ++end;
+    // A lone coded layer is covered in its codes; layers covered together, in floats.
+    const bool lone_codes = end == i + 1 && layers_[order[i]].form == LayerForm::Codes;
+    if (lone_codes) {
+      PlanarLayer& layer = layers_[order[i]];
+      for (int y = 0; y < kBrickSize; ++y) {
+        const std::uint64_t row = ~detail::equalMask16(layer.code.data() + y * kBrickSize, StepCodec::kUnknown) & 0xFFFFu;
+        if (y % 4 == 0) layer.known[static_cast<std::size_t>(y / 4)] = 0;
+        layer.known[static_cast<std::size_t>(y / 4)] |= row << ((y % 4) * kBrickSize);
+      }
+    } else {
+      for (std::size_t k = i; k < end; ++k)
+        if (layers_[order[k]].form == LayerForm::Codes) decode(layers_[order[k]]);
+    }
     int layers = 0;
-    for (; i < order.size() && layers_[order[i]].slot == slot; ++i, ++layers) {
+    for (; i < end; ++i, ++layers) {
       const PlanarLayer& layer = layers_[order[i]];
       layer_at[layer.z] = &layer;
       std::copy(layer.known.begin(), layer.known.end(), known.begin() + layer.z * kLayerWords);
@@ -125,12 +215,19 @@ InsertStats PlanarCache::cover(MapStore& store) {
       }
       ++stats.leaves_merged;
     }
-    const auto valueAt = [&](int cell) { return layer_at[cell / kLayerCells]->value[static_cast<std::size_t>(cell % kLayerCells)]; };
+    const auto valueAt = [&](int cell) { return values(*layer_at[cell / kLayerCells])[cell % kLayerCells]; };
     const std::size_t kept = out.size();
-    if (layers == 1) {
+    if (lone_codes) {
       const PlanarLayer& layer = layers_[order[i - 1]];
       coverLayer(
-          layer.known, layer.value.data(), layer.z, [&](float v) { return store.mergeable(v); },
+          layer.known, layer.code.data(), layer.z, [&](std::int8_t c) { return store.mergeable(codec_.value(c)); },
+          [&](const std::uint8_t lo[3], const std::uint8_t hi[3], std::int8_t c) {
+            out.push_back(makeLeaf(lo, hi, codec_.value(c)));
+          });
+    } else if (layers == 1) {
+      const PlanarLayer& layer = layers_[order[i - 1]];
+      coverLayer(
+          layer.known, values(layer), layer.z, [&](float v) { return store.mergeable(v); },
           [&](const std::uint8_t lo[3], const std::uint8_t hi[3], float v) {
             out.push_back(makeLeaf(lo, hi, v));
           });
@@ -162,6 +259,10 @@ InsertStats PlanarCache::cover(MapStore& store) {
     layers_.clear();
     index_.clear();
   }
+  if (floats_.capacity() > kKeptLayers)
+    floats_.release();
+  else
+    floats_.clear();
   return stats;
 }
 

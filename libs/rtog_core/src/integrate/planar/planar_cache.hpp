@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "integrate/planar/planar_batch.hpp"
+#include "integrate/planar/step_codec.hpp"
 #include "rtog/core/log_odds.hpp"
 #include "rtog/core/stats.hpp"
 #include "storage/map_store.hpp"
@@ -16,11 +17,20 @@
 
 namespace rtog {
 
+/// How a cached layer holds its cells.
+enum class LayerForm : std::uint8_t {
+  Floats,      ///< in `known` and `value`
+  Codes,       ///< in `code`, of the cache's StepCodec (`known` and `value` stale)
+  OffLattice,  ///< in `known` and `value`, some of them off the StepCodec's lattice
+};
+
 struct PlanarLayer {
   std::uint32_t slot;  // brick
   int z;               // brick-local z of the layer
+  LayerForm form;
+  std::uint32_t floats;  // its values in the cache's float tables (the prior where unknown), if any
   LayerMask known;
-  std::array<float, kLayerCells> value;  // the prior where unknown
+  std::array<std::int8_t, kLayerCells> code;
 };
 
 class PlanarCache {
@@ -28,7 +38,9 @@ class PlanarCache {
   bool empty() const { return layers_.empty(); }
   /// Forgets every cached layer (the map's leaves were cleared).
   void clear();
-  std::size_t memoryBytes() const { return layers_.capacity() * sizeof(PlanarLayer) + index_.memoryBytes(); }
+  std::size_t memoryBytes() const {
+    return layers_.capacity() * sizeof(PlanarLayer) + floats_.capacity() * sizeof(LayerValues) + index_.memoryBytes();
+  }
 
   /// Applies the union of batches[0 .. count) of a scan in z-layer `z` (occupied winning).
   void apply(MapStore& store, const std::vector<PlanarBatch>& batches, std::size_t count, int z, InsertStats& stats);
@@ -41,14 +53,30 @@ class PlanarCache {
 
  private:
   /// The layer of brick `brick` (brick coordinates) at global z, made from its leaves if new;
-  /// recent ones skip the brick and layer hash lookups.
-  PlanarLayer& layerAt(MapStore& store, const Key& brick, std::int32_t z);
-  /// The index in layers_ of brick `slot`'s layer z (brick-local), made from its leaves if new.
-  std::uint32_t layerIndex(const MapStore& store, std::uint32_t slot, int z);
+  /// recent ones skip the brick and layer hash lookups. In floats unless `codes` (then in codes
+  /// if its cells are on the codec's lattice).
+  PlanarLayer& layerAt(MapStore& store, const Key& brick, std::int32_t z, bool codes = false);
+  /// Makes `rule` the rule of the coded layers (decoding them first if its codes read otherwise).
+  void useRule(const StepRule& rule, float prior);
+  /// A coded layer's cells back in floats and known bits.
+  void decode(PlanarLayer& layer);
+  /// The float values of a layer in floats (a table made on first use: a coded layer has none).
+  float* values(PlanarLayer& layer);
+  const float* values(const PlanarLayer& layer) const { return floats_[layer.floats].data(); }
+  /// The index in layers_ of brick `slot`'s layer z (brick-local), made from its leaves if new
+  /// (in codes if `codes` and they are on the codec's lattice).
+  std::uint32_t layerIndex(const MapStore& store, std::uint32_t slot, int z, bool codes);
 
+  using LayerValues = std::array<float, kLayerCells>;
+  static constexpr std::uint32_t kNoFloats = ~std::uint32_t{0};
   detail::ChunkedVector<PlanarLayer, 64> layers_;
+  detail::ChunkedVector<LayerValues, 64> floats_;
   detail::FlatHashMap64 index_;            // brick slot * kBrickSize + z -> index in layers_
   detail::RecentLookups<10> recent_;       // packKey(brick x, y, cell z) -> layers_ index
+  bool have_rule_ = false;
+  StepRule rule_;                          // the last rule of applyStepRuns, with its prior
+  float rule_prior_ = 0.0f;
+  StepCodec codec_;                        // its codec: the codes of the coded layers
 };
 
 }  // namespace rtog

@@ -16,20 +16,39 @@ std::uint32_t bitsOf(float v) {
   return u;
 }
 
-/// The steps of one stretch of a run: `n` cells in one brick z-layer (`value`, `known`), from
-/// fixed-point (fx, fy) by (dx, dy). Returns the cells left unchanged (saturated).
+constexpr int F = kStepRunFracBits;
+constexpr std::int32_t kCell = 1 << F;
+constexpr int kBrickFrac = F + kBrickBits;
+constexpr std::int64_t kSpan = std::int64_t{1} << kBrickFrac;  // a brick's width in fixed point
+
+/// Steps that fixed-point coordinate `f`, moving by `d`, takes before it leaves its brick (all
+/// of them if it never does): without a division where it can, as a raster's major axis moves
+/// a whole cell a step.
+std::uint32_t stepsToEdge(std::int32_t f, std::int32_t d) {
+  if (d == 0) return std::numeric_limits<std::uint32_t>::max();
+  const std::int64_t lo = (std::int64_t{f} >> kBrickFrac) * kSpan, hi = lo + kSpan;  // [lo, hi)
+  if (d == kCell) return static_cast<std::uint32_t>((hi - f + kCell - 1) >> F);
+  if (d == -kCell) return static_cast<std::uint32_t>(((f - lo) >> F) + 1);
+  const auto in = static_cast<std::uint64_t>(d > 0 ? hi - f : f - lo + 1);  // in (0, kSpan]
+  const auto step = static_cast<std::uint64_t>(d > 0 ? std::int64_t{d} : -std::int64_t{d});
+  if (step < static_cast<std::uint64_t>(kSpan))  // in 32 bits: a 64-bit division takes longer
+    return (static_cast<std::uint32_t>(in) + static_cast<std::uint32_t>(step) - 1) / static_cast<std::uint32_t>(step);
+  return static_cast<std::uint32_t>((in + step - 1) / step);
+}
+
+/// The steps of one stretch of a run in a layer of floats: `n` cells in one brick z-layer
+/// (`value`, `known`), from fixed-point (fx, fy) by (dx, dy). Returns the cells left unchanged
+/// (saturated).
 /// Compiled per kind and per whether the layer is already all known, as the rule's branch would
 /// otherwise sit in the loop. The rule is a bit select, not a branch: whether a cell has
 /// saturated follows no pattern along a beam. Equal is compared on the bits, as the value is
 /// never NaN and the float compare of a NaN-aware `==` costs a parity test.
 template <bool Occupied, bool AllKnown>
-std::size_t stepStretch(float* value, std::uint64_t* known, std::int32_t& fx_io, std::int32_t& fy_io,
+std::size_t stepStretch(float* value, std::uint64_t* known, std::int32_t fx, std::int32_t fy,
                         std::int32_t dx, std::int32_t dy, std::uint32_t n, float delta, float limit, float bound,
                         std::vector<float>* after) {
-  constexpr int F = kStepRunFracBits;
   constexpr int M = kBrickSize - 1;
   const std::uint32_t bound_bits = bitsOf(bound);
-  std::int32_t fx = fx_io, fy = fy_io;
   int word = -1;
   std::uint64_t mask = 0;
   std::size_t same = 0;
@@ -53,8 +72,97 @@ std::size_t stepStretch(float* value, std::uint64_t* known, std::int32_t& fx_io,
     }
   }
   if (!AllKnown && word >= 0) known[word] |= mask;
-  fx_io = fx, fy_io = fy;
   return same;
+}
+
+/// How a stretch's cells are addressed: generically, or along a major axis that moves a whole
+/// cell a step (a raster's, as MRPT's), whose part of the index then just counts.
+enum class Axis { Any, X, Y };
+
+/// The steps of one stretch in a coded layer: the code after a step is a table lookup (see
+/// StepCodec), the unchanged count a bit of the same entry.
+template <Axis A, bool After>
+std::size_t stepCoded(std::int8_t* code, std::int32_t fx, std::int32_t fy, std::int32_t dx, std::int32_t dy,
+                      std::uint32_t n, const std::uint16_t* table, const float* values, std::vector<float>* after) {
+  constexpr int M = kBrickSize - 1;
+  std::uint32_t same = 0;  // a stretch has at most kBrickSize * kBrickSize steps
+  // Along X the column is the major coordinate and moves by `major` a step; along Y the row.
+  const int major = A == Axis::X ? (dx > 0 ? 1 : -1) : (dy > 0 ? kBrickSize : -kBrickSize);
+  std::int8_t* p = code;
+  if (A == Axis::X) p += (fx >> F) & M;
+  if (A == Axis::Y) p += ((fy >> F) & M) << kBrickBits;
+  for (; n > 0; --n, fx += dx, fy += dy) {
+    std::int8_t* q;
+    if (A == Axis::X) {
+      q = p + ((fy >> (F - kBrickBits)) & (M << kBrickBits));
+      p += major;
+    } else if (A == Axis::Y) {
+      q = p + ((fx >> F) & M);
+      p += major;
+    } else {
+      q = code + ((((fy >> F) & M) << kBrickBits) | ((fx >> F) & M));
+    }
+    const std::uint32_t t = table[static_cast<std::uint8_t>(*q)];
+    *q = static_cast<std::int8_t>(t & 0xFFu);
+    same += t >> 8;
+    if (After) after->push_back(values[t & 0xFFu]);
+  }
+  return same;
+}
+
+/// The layers under a scan's runs, by brick (made on first use).
+struct LayerGrid {
+  PlanarLayer** layers;  // row-major, `width` bricks a row, brick (x0, y0) first
+  std::size_t width;
+  std::int32_t x0, y0;
+};
+
+/// One run's walk, cut into the stretches it spends in one brick: the whole cost of a 2D scan.
+/// A function of its own, taking the grid by value, so that what a stretch needs stays in
+/// registers.
+template <Axis A, bool After, class Make, class Floats>
+[[gnu::noinline]] std::size_t walkRun(const StepRun& r, const LayerGrid grid, Make& make, Floats& floats,
+                                      const std::uint16_t* table, const float* values, std::vector<float>* after) {
+  std::int32_t fx = r.x * kCell, fy = r.y * kCell;
+  const std::int32_t dx = r.dx, dy = r.dy;
+  std::size_t same = 0;
+  std::uint32_t left = r.count, sx = stepsToEdge(fx, dx), sy = stepsToEdge(fy, dy);
+  const auto slotOf = [&] {
+    return static_cast<std::ptrdiff_t>((fy >> kBrickFrac) - grid.y0) * static_cast<std::ptrdiff_t>(grid.width) +
+           static_cast<std::ptrdiff_t>((fx >> kBrickFrac) - grid.x0);
+  };
+  // A step of less than a brick leaves a brick for its neighbour: the slot moves by one.
+  const bool adjacent = dx > -kSpan && dx < kSpan && dy > -kSpan && dy < kSpan;
+  const std::ptrdiff_t next_x = dx > 0 ? 1 : -1;
+  const std::ptrdiff_t next_y = dy > 0 ? static_cast<std::ptrdiff_t>(grid.width) : -static_cast<std::ptrdiff_t>(grid.width);
+  std::ptrdiff_t slot = slotOf();
+  while (left > 0) {
+    const std::uint32_t m = std::min(left, std::min(sx, sy));
+    PlanarLayer* layer = grid.layers[slot];
+    if (!layer) layer = grid.layers[slot] = &make(fx >> F, fy >> F);
+    if (layer->form == LayerForm::Codes)
+      same += stepCoded<A, After>(layer->code.data(), fx, fy, dx, dy, m, table, values, after);
+    else
+      same += floats(*layer, fx, fy, dx, dy, m, r.kind);
+    left -= m;
+    if (left == 0) break;
+    fx += static_cast<std::int32_t>(m) * dx, fy += static_cast<std::int32_t>(m) * dy;
+    sx -= m, sy -= m;
+    if (sx == 0) sx = stepsToEdge(fx, dx), slot += next_x;
+    if (sy == 0) sy = stepsToEdge(fy, dy), slot += next_y;
+    if (!adjacent) slot = slotOf();
+  }
+  return same;
+}
+
+template <bool After, class Make, class Floats>
+std::size_t walkRun(const StepRun& r, const LayerGrid& grid, Make& make, Floats& floats, const StepCodec& codec,
+                    std::vector<float>* after) {
+  const std::uint16_t* table = codec.table(r.kind);
+  const float* values = codec.values();
+  if (r.dx == kCell || r.dx == -kCell) return walkRun<Axis::X, After>(r, grid, make, floats, table, values, after);
+  if (r.dy == kCell || r.dy == -kCell) return walkRun<Axis::Y, After>(r, grid, make, floats, table, values, after);
+  return walkRun<Axis::Any, After>(r, grid, make, floats, table, values, after);
 }
 
 }  // namespace
@@ -89,6 +197,8 @@ InsertStats PlanarCache::applyStepRuns(MapStore& store, std::int32_t z, const St
   if (!keyInRange(Key{x0, y0, z}) || !keyInRange(Key{x1, y1, z}))
     throw std::out_of_range("OccupancyMap::applyStepRuns: z-layer outside the key range");
   if (after) after->reserve(steps);
+  useRule(rule, store.model.prior());
+  const bool codes = codec_.usable();
   // The layers under the runs' bounding box by arithmetic, found or made on first use: the hash
   // lookups a step would cost otherwise (a beam changes brick every 16 cells).
   const std::int32_t bx0 = x0 >> kBrickBits, by0 = y0 >> kBrickBits;
@@ -96,63 +206,45 @@ InsertStats PlanarCache::applyStepRuns(MapStore& store, std::int32_t z, const St
   const auto bh = static_cast<std::size_t>((y1 >> kBrickBits) - by0 + 1);
   std::vector<PlanarLayer*> table(bw * bh, nullptr);
   const std::int32_t bz = z >> kBrickBits;
-  const auto layerOf = [&](std::int32_t x, std::int32_t y) {
-    PlanarLayer*& l = table[static_cast<std::size_t>((y >> kBrickBits) - by0) * bw +
-                            static_cast<std::size_t>((x >> kBrickBits) - bx0)];
-    if (!l) l = &layerAt(store, Key{x >> kBrickBits, y >> kBrickBits, bz}, z);
-    return l;
+  const LayerGrid grid{table.data(), bw, bx0, by0};
+  // Both called seldom: out of line, so that the walk keeps its values in registers.
+  const auto make = [&](std::int32_t x, std::int32_t y) __attribute__((noinline)) -> PlanarLayer& {
+    return layerAt(store, Key{x >> kBrickBits, y >> kBrickBits, bz}, z, codes);
   };
-  // The walk of forEachRunCell, cut into the stretches a run spends in one brick: this loop is
-  // the whole cost of a 2D scan. Within a stretch the layer is fixed, and the known bits and the
-  // count of unchanged cells stay in registers: as memory read-modify-writes, one per step, they
-  // would chain every step to the store of the step before.
-  std::size_t unchanged = 0, free_steps = 0, occupied_steps = 0;
-  constexpr std::int32_t kBrickFrac = kStepRunFracBits + kBrickBits;
-  // Steps that fixed-point coordinate `f`, moving by `d`, takes before it leaves its brick, if
-  // fewer than `m`: without a division where it can (a division costs tens of cycles, and a
-  // raster's major axis moves a whole cell a step; its minor one mostly stays in the brick).
-  constexpr std::int64_t kSpan = std::int64_t{1} << kBrickFrac;
-  const auto stepsInBrick = [](std::int32_t f, std::int32_t d, std::int64_t m) -> std::int64_t {
-    if (d == 0) return m;
-    const std::int64_t b = f >> kBrickFrac, lo = b * kSpan, hi = lo + kSpan;  // [lo, hi)
-    constexpr std::int32_t kCell = 1 << kStepRunFracBits;
-    if (d == kCell) return std::min<std::int64_t>(m, (hi - f + kCell - 1) >> kStepRunFracBits);
-    if (d == -kCell) return std::min<std::int64_t>(m, ((f - lo) >> kStepRunFracBits) + 1);
-    const std::int64_t last = f + (m - 1) * std::int64_t{d};
-    if (last >= lo && last < hi) return m;
-    return d > 0 ? (hi - f + d - 1) / d : (f - lo) / -d + 1;
-  };
-  const auto stretch = [&](std::int32_t& fx, std::int32_t& fy, std::int32_t dx, std::int32_t dy, std::uint32_t m,
-                           bool occupied, float delta, float limit, float bound) {
-    PlanarLayer& layer = *layerOf(fx >> kStepRunFracBits, fy >> kStepRunFracBits);
+  // The steps in forEachRunCell's order, run by run (a beam's end cell as a run of one).
+  const auto floats = [&](PlanarLayer& layer, std::int32_t fx, std::int32_t fy, std::int32_t dx, std::int32_t dy,
+                          std::uint32_t m, StepKind kind) __attribute__((noinline)) -> std::size_t {
+    const auto k = static_cast<std::size_t>(kind);
+    const float delta = rule.delta[k], limit = rule.limit[k], bound = rule.bound[k];
     std::uint64_t all = ~std::uint64_t{0};
     for (const std::uint64_t w : layer.known) all &= w;
-    float* const v = layer.value.data();
-    std::uint64_t* const k = layer.known.data();
+    float* const v = values(layer);
+    std::uint64_t* const kn = layer.known.data();
     const bool full = all == ~std::uint64_t{0};
-    if (occupied)
-      unchanged += full ? stepStretch<true, true>(v, k, fx, fy, dx, dy, m, delta, limit, bound, after)
-                        : stepStretch<true, false>(v, k, fx, fy, dx, dy, m, delta, limit, bound, after);
-    else
-      unchanged += full ? stepStretch<false, true>(v, k, fx, fy, dx, dy, m, delta, limit, bound, after)
-                        : stepStretch<false, false>(v, k, fx, fy, dx, dy, m, delta, limit, bound, after);
+    if (kind == StepKind::Occupied)
+      return full ? stepStretch<true, true>(v, kn, fx, fy, dx, dy, m, delta, limit, bound, after)
+                  : stepStretch<true, false>(v, kn, fx, fy, dx, dy, m, delta, limit, bound, after);
+    return full ? stepStretch<false, true>(v, kn, fx, fy, dx, dy, m, delta, limit, bound, after)
+                : stepStretch<false, false>(v, kn, fx, fy, dx, dy, m, delta, limit, bound, after);
   };
+  std::size_t unchanged = 0, free_steps = 0, occupied_steps = 0;
   for (std::size_t i = 0; i < n; ++i) {
     const StepRun& r = runs[i];
-    const auto k = static_cast<std::size_t>(r.kind);
-    const float delta = rule.delta[k], limit = rule.limit[k], bound = rule.bound[k];
-    const bool occ = r.kind == StepKind::Occupied;
-    std::int32_t fx = r.x * (1 << kStepRunFracBits), fy = r.y * (1 << kStepRunFracBits);
-    for (std::uint32_t left = r.count; left > 0;) {
-      const auto m = static_cast<std::uint32_t>(stepsInBrick(fy, r.dy, stepsInBrick(fx, r.dx, left)));
-      stretch(fx, fy, r.dx, r.dy, m, occ, delta, limit, bound);
-      left -= m;
-    }
-    (occ ? occupied_steps : free_steps) += r.count;
-    if (r.end) {
-      const auto o = static_cast<std::size_t>(StepKind::Occupied);
-      std::int32_t ex = r.end_x * (1 << kStepRunFracBits), ey = r.end_y * (1 << kStepRunFracBits);
-      stretch(ex, ey, 0, 0, 1, true, rule.delta[o], rule.limit[o], rule.bound[o]);
+    unchanged += after ? walkRun<true>(r, grid, make, floats, codec_, after)
+                       : walkRun<false>(r, grid, make, floats, codec_, after);
+    (r.kind == StepKind::Occupied ? occupied_steps : free_steps) += r.count;
+    if (r.end) {  // a run of one cell, without a run's walk
+      const std::int32_t ex = r.end_x * kCell, ey = r.end_y * kCell;
+      PlanarLayer*& slot = table[static_cast<std::size_t>((r.end_y >> kBrickBits) - by0) * bw +
+                                 static_cast<std::size_t>((r.end_x >> kBrickBits) - bx0)];
+      if (!slot) slot = &make(r.end_x, r.end_y);
+      const std::uint16_t* t = codec_.table(StepKind::Occupied);
+      if (slot->form != LayerForm::Codes)
+        unchanged += floats(*slot, ex, ey, 0, 0, 1, StepKind::Occupied);
+      else if (after)
+        unchanged += stepCoded<Axis::Any, true>(slot->code.data(), ex, ey, 0, 0, 1, t, codec_.values(), after);
+      else
+        unchanged += stepCoded<Axis::Any, false>(slot->code.data(), ex, ey, 0, 0, 1, t, codec_.values(), after);
       ++occupied_steps;
     }
   }
