@@ -209,7 +209,10 @@ void CRTreeOccupancyGridMap::GridView::setOptions(const TLikelihoodOptions& o, c
   g.enableLikelihoodCache = o.enableLikelihoodCache;
   // MI and ray tracing read the grid's insertion range.
   grid.insertionOptions.maxDistanceInsertion = io.maxDistanceInsertion;
-  if (lfChanged) grid.invalidateLikelihoodCache();
+  if (lfChanged) {
+    grid.invalidateLikelihoodCache();
+    field.clear();
+  }
 }
 
 std::shared_ptr<CRTreeOccupancyGridMap::GridView> CRTreeOccupancyGridMap::gridViewShared(const double* need) const {
@@ -323,6 +326,9 @@ std::optional<double> CRTreeOccupancyGridMap::gridViewLikelihood(const mrpt::obs
     GridView::Grid scratch = v->grid;
     return scratch.computeObservationLikelihood(*scored, pose);
   }
+  // The stock grid's likelihood field, its terms and their logarithms kept per cell.
+  if (method == lmLikelihoodField_Thrun && v->grid.genericMapParams.enableObservationLikelihood)
+    return v->field.scanLogLikelihood(v->grid, *scan, pose);
   return v->grid.computeObservationLikelihood(*scored, pose);
 }
 

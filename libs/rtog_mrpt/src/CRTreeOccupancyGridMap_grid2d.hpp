@@ -9,6 +9,7 @@
 
 #include <mrpt/maps/COccupancyGridMap2D.h>
 
+#include "likelihood_field_2d.hpp"
 #include "rtog/mrpt/CRTreeOccupancyGridMap.h"
 
 namespace rtog {
@@ -67,6 +68,8 @@ struct CRTreeOccupancyGridMap::GridView {
   /// Serializes the calls into `grid`: MRPT's likelihood methods fill mutable caches.
   std::mutex mutex;
   Grid grid;
+  /// lmLikelihoodField_Thrun on `grid`, its terms kept (the stock grid's value, faster).
+  LikelihoodField2D field;
   float minZ, maxZ;
   std::optional<Rect> extra;
 };

@@ -18,7 +18,9 @@ bool CRTreeOccupancyGridMap::insertGridScan(const mrpt::obs::CObservation2DRange
                                             const mrpt::poses::CPose3D& robotPose, GridScanUpdate* update) {
   syncParams();
   const TInsertionOptions& io = insertionOptions;
-  thread_local mrpt_grid::ScanPlan plan;
+  // Per call, not kept: a scan's buffers are small beside its work, and kept per thread they
+  // would be heap the map holds after its last scan.
+  mrpt_grid::ScanPlan plan;
   if (!mrpt_grid::planScan(scan, robotPose, io, frame_, plan)) return false;
   // Everything on copies until the map took the steps: a throw leaves map and geometry as they were.
   TGridFrame2D grown = frame_;
@@ -32,7 +34,7 @@ bool CRTreeOccupancyGridMap::insertGridScan(const mrpt::obs::CObservation2DRange
     grown.layer = k.z;
   }
   InsertStats stats;
-  thread_local std::vector<OccupancyMap::StepRun> own_runs;
+  std::vector<OccupancyMap::StepRun> own_runs;
   std::vector<OccupancyMap::StepRun>& runs = update ? update->runs : own_runs;
   mrpt_grid::traceScan(scan, plan, io, grown, runs, stats);
   if (update) std::copy(std::begin(plan.grow), std::end(plan.grow), update->grow);

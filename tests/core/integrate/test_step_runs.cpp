@@ -201,3 +201,23 @@ TEST(StepRuns, ACellOutsideTheKeyRangeChangesNothing) {
   EXPECT_EQ(map.leafCount(), leaves);
   EXPECT_EQ(*map.logOdds(Key{0, 0, 0}), rule.apply(map.logOddsModel().prior(), StepKind::Free));
 }
+
+// A run that never leaves its cell steps it count times: the unchanged steps of a stretch longer
+// than the codes' counting chunk are counted whole.
+TEST(StepRuns, ARunThatStaysOnOneCellCountsEveryStep) {
+  const StepRule rule = testRule();
+  OccupancyMap map(paramsFor(rule));
+  const OccupancyMap::StepRun r{3, -5, 0, 0, 200000, StepKind::Free, false, 0, 0};
+  float v = map.logOddsModel().prior();
+  std::size_t unchanged = 0;
+  for (std::uint32_t k = 0; k < r.count; ++k) {
+    const float next = rule.apply(v, StepKind::Free);
+    unchanged += next == v;
+    v = next;
+  }
+  const InsertStats st = map.applyStepRuns(0, &r, 1, rule);
+  EXPECT_EQ(st.cells_free, r.count);
+  EXPECT_EQ(st.cells_unchanged, unchanged);
+  EXPECT_GT(unchanged, 150000u);
+  EXPECT_EQ(*map.logOdds(Key{3, -5, 0}), v);
+}

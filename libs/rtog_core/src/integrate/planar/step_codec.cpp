@@ -48,9 +48,8 @@ StepCodec StepCodec::make(const StepRule& rule, float prior) {
       const float after = rule.apply(before, static_cast<StepKind>(kind));
       std::int8_t next = 0;
       if (!codec.encode(after, next)) return StepCodec{};
-      const auto same = static_cast<std::uint16_t>(sameBits(after, before) ? 0x100 : 0);
-      codec.tables_[kind][index(static_cast<std::int8_t>(c))] =
-          static_cast<std::uint16_t>(same | static_cast<std::uint8_t>(next));
+      const std::uint32_t same = sameBits(after, before) ? std::uint32_t{1} << kSameBit : 0u;
+      codec.tables_[kind][index(static_cast<std::int8_t>(c))] = same | static_cast<std::uint8_t>(next);
     }
   return codec;
 }

@@ -31,9 +31,11 @@ class StepCodec {
   float value(std::int8_t c) const { return values_[index(c)]; }
   /// The code of `v`, or false if `v` is off the lattice (kept as a float, then).
   bool encode(float v, std::int8_t& c) const;
-  /// Per kind, indexed by a code's byte: the code after one step in the low byte, and in bit 8
-  /// whether the value stayed (the step's cells_unchanged).
-  const std::uint16_t* table(StepKind k) const { return tables_[static_cast<std::size_t>(k)].data(); }
+  /// The bit of a table entry that tells whether the value stayed.
+  static constexpr int kSameBit = 24;
+  /// Per kind, indexed by a code's byte: the code after one step in the low byte, and in bit
+  /// kSameBit whether the value stayed (the step's cells_unchanged).
+  const std::uint32_t* table(StepKind k) const { return tables_[static_cast<std::size_t>(k)].data(); }
   /// The values of the codes, indexed by a code's byte.
   const float* values() const { return values_.data(); }
 
@@ -42,7 +44,7 @@ class StepCodec {
  private:
   float unit_ = 0.0f;
   std::array<float, 256> values_{};
-  std::array<std::array<std::uint16_t, 256>, 3> tables_{};
+  std::array<std::array<std::uint32_t, 256>, 3> tables_{};
 };
 
 }  // namespace rtog

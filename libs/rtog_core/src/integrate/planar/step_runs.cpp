@@ -80,17 +80,22 @@ std::size_t stepStretch(float* value, std::uint64_t* known, std::int32_t fx, std
 enum class Axis { Any, X, Y };
 
 /// The steps of one stretch in a coded layer: the code after a step is a table lookup (see
-/// StepCodec), the unchanged count a bit of the same entry.
+/// StepCodec), the unchanged count a bit of the same entry. Returns the entries' sum, whose
+/// bits from kSameBit up count the unchanged steps (the codes below them add up to less than
+/// one unit of that bit, for n <= kCodedChunk).
+constexpr std::uint32_t kCodedChunk = 1u << (StepCodec::kSameBit - 8);
+
 template <Axis A, bool After>
-std::size_t stepCoded(std::int8_t* code, std::int32_t fx, std::int32_t fy, std::int32_t dx, std::int32_t dy,
-                      std::uint32_t n, const std::uint16_t* table, const float* values, std::vector<float>* after) {
+std::uint64_t stepCodedChunk(std::int8_t* code, std::int32_t fx, std::int32_t fy, std::int32_t dx, std::int32_t dy,
+                             std::uint32_t n, const std::uint32_t* table, const float* values,
+                             std::vector<float>* after) {
   constexpr int M = kBrickSize - 1;
-  std::uint32_t same = 0;  // a stretch has at most kBrickSize * kBrickSize steps
   // Along X the column is the major coordinate and moves by `major` a step; along Y the row.
   const int major = A == Axis::X ? (dx > 0 ? 1 : -1) : (dy > 0 ? kBrickSize : -kBrickSize);
   std::int8_t* p = code;
   if (A == Axis::X) p += (fx >> F) & M;
   if (A == Axis::Y) p += ((fy >> F) & M) << kBrickBits;
+  std::uint64_t sum = 0;
   for (; n > 0; --n, fx += dx, fy += dy) {
     std::int8_t* q;
     if (A == Axis::X) {
@@ -104,10 +109,23 @@ std::size_t stepCoded(std::int8_t* code, std::int32_t fx, std::int32_t fy, std::
     }
     const std::uint32_t t = table[static_cast<std::uint8_t>(*q)];
     *q = static_cast<std::int8_t>(t & 0xFFu);
-    same += t >> 8;
+    sum += t;
     if (After) after->push_back(values[t & 0xFFu]);
   }
-  return same;
+  return sum;
+}
+
+/// The unchanged steps of a stretch of any length (a run that stays in one cell may take more
+/// steps than a chunk holds).
+template <Axis A, bool After>
+std::size_t stepCoded(std::int8_t* code, std::int32_t fx, std::int32_t fy, std::int32_t dx, std::int32_t dy,
+                      std::uint32_t n, const std::uint32_t* table, const float* values, std::vector<float>* after) {
+  std::size_t same = 0;
+  for (; n > kCodedChunk; n -= kCodedChunk) {
+    same += stepCodedChunk<A, After>(code, fx, fy, dx, dy, kCodedChunk, table, values, after) >> StepCodec::kSameBit;
+    fx += static_cast<std::int32_t>(kCodedChunk) * dx, fy += static_cast<std::int32_t>(kCodedChunk) * dy;
+  }
+  return same + (stepCodedChunk<A, After>(code, fx, fy, dx, dy, n, table, values, after) >> StepCodec::kSameBit);
 }
 
 /// The layers under a scan's runs, by brick (made on first use).
@@ -122,7 +140,7 @@ struct LayerGrid {
 /// registers.
 template <Axis A, bool After, class Make, class Floats>
 [[gnu::noinline]] std::size_t walkRun(const StepRun& r, const LayerGrid grid, Make& make, Floats& floats,
-                                      const std::uint16_t* table, const float* values, std::vector<float>* after) {
+                                      const std::uint32_t* table, const float* values, std::vector<float>* after) {
   std::int32_t fx = r.x * kCell, fy = r.y * kCell;
   const std::int32_t dx = r.dx, dy = r.dy;
   std::size_t same = 0;
@@ -158,7 +176,7 @@ template <Axis A, bool After, class Make, class Floats>
 template <bool After, class Make, class Floats>
 std::size_t walkRun(const StepRun& r, const LayerGrid& grid, Make& make, Floats& floats, const StepCodec& codec,
                     std::vector<float>* after) {
-  const std::uint16_t* table = codec.table(r.kind);
+  const std::uint32_t* table = codec.table(r.kind);
   const float* values = codec.values();
   if (r.dx == kCell || r.dx == -kCell) return walkRun<Axis::X, After>(r, grid, make, floats, table, values, after);
   if (r.dy == kCell || r.dy == -kCell) return walkRun<Axis::Y, After>(r, grid, make, floats, table, values, after);
@@ -238,7 +256,7 @@ InsertStats PlanarCache::applyStepRuns(MapStore& store, std::int32_t z, const St
       PlanarLayer*& slot = table[static_cast<std::size_t>((r.end_y >> kBrickBits) - by0) * bw +
                                  static_cast<std::size_t>((r.end_x >> kBrickBits) - bx0)];
       if (!slot) slot = &make(r.end_x, r.end_y);
-      const std::uint16_t* t = codec_.table(StepKind::Occupied);
+      const std::uint32_t* t = codec_.table(StepKind::Occupied);
       if (slot->form != LayerForm::Codes)
         unchanged += floats(*slot, ex, ey, 0, 0, 1, StepKind::Occupied);
       else if (after)
