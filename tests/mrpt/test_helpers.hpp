@@ -4,6 +4,8 @@
 #include <string>
 #include <vector>
 
+#include <mrpt/config/CConfigFileMemory.h>
+#include <mrpt/maps/CMultiMetricMap.h>
 #include <mrpt/obs/CActionCollection.h>
 #include <mrpt/obs/CActionRobotMovement2D.h>
 #include <mrpt/obs/CRawlog.h>
@@ -11,9 +13,25 @@
 #include <mrpt/poses/CPose2D.h>
 #include <mrpt/poses/CPose3D.h>
 
+#include "rtog/mrpt/CRTreeOccupancyGridMap.h"
+
 namespace rtog_test {
 
 inline std::string dataset(const std::string& name) { return std::string(RTOG_MRPT_DATASETS) + "/" + name; }
+/// A CRTreeOccupancyGridMap at 5 cm made by MRPT's map loader from an `.ini` whose
+/// `_insertOpts` section holds `insert_opts`.
+inline rtog::CRTreeOccupancyGridMap::Ptr mapFromIni(const std::string& insert_opts) {
+  const std::string ini = "[MappingApplication]\nrtreeOccupancyGrid_count=1\n"
+                          "[MappingApplication_rtreeOccupancyGrid_00_creationOpts]\nresolution=0.05\n"
+                          "[MappingApplication_rtreeOccupancyGrid_00_insertOpts]\n" + insert_opts;
+  mrpt::config::CConfigFileMemory cfg(ini);
+  mrpt::maps::TSetOfMetricMapInitializers inits;
+  inits.loadFromConfigFile(cfg, "MappingApplication");
+  mrpt::maps::CMultiMetricMap mm;
+  mm.setListOfMaps(inits);
+  return std::dynamic_pointer_cast<rtog::CRTreeOccupancyGridMap>(mm.maps.at(0));
+}
+
 inline const std::string kSena = "2006-01ENE-21-SENA_Telecom Faculty_one_loop_only.rawlog";
 
 struct PosedFrame {

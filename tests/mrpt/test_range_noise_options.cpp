@@ -14,34 +14,14 @@
 #include <mrpt/serialization/CArchive.h>
 
 #include "rtog/mrpt/CRTreeOccupancyGridMap.h"
+#include "map_cells.hpp"
 #include "test_helpers.hpp"
 
 using rtog::CRTreeOccupancyGridMap;
+using rtog_test::mapFromIni;
+using rtog::test::cellsOf;
 
 namespace {
-
-CRTreeOccupancyGridMap::Ptr mapFromIni(const std::string& insert_opts) {
-  const std::string ini = "[MappingApplication]\nrtreeOccupancyGrid_count=1\n"
-                          "[MappingApplication_rtreeOccupancyGrid_00_creationOpts]\nresolution=0.05\n"
-                          "[MappingApplication_rtreeOccupancyGrid_00_insertOpts]\n" + insert_opts;
-  mrpt::config::CConfigFileMemory cfg(ini);
-  mrpt::maps::TSetOfMetricMapInitializers inits;
-  inits.loadFromConfigFile(cfg, "MappingApplication");
-  mrpt::maps::CMultiMetricMap mm;
-  mm.setListOfMaps(inits);
-  return std::dynamic_pointer_cast<CRTreeOccupancyGridMap>(mm.maps.at(0));
-}
-
-std::vector<std::pair<std::uint64_t, float>> cellsOf(const rtog::OccupancyMap& m) {
-  std::vector<std::pair<std::uint64_t, float>> out;
-  m.forEachLeaf([&](const rtog::Box& b, float v) {
-    for (std::int32_t z = b.min.z; z <= b.max.z; ++z)
-      for (std::int32_t y = b.min.y; y <= b.max.y; ++y)
-        for (std::int32_t x = b.min.x; x <= b.max.x; ++x) out.emplace_back(rtog::packKey(rtog::Key{x, y, z}), v);
-  });
-  std::sort(out.begin(), out.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
-  return out;
-}
 
 TEST(RangeNoiseOptions, ZeroSigmaGivesTheBeamModelsMapOnSena) {
   const auto frames = rtog_test::loadOdometryFrames(rtog_test::dataset(rtog_test::kSena), 80);

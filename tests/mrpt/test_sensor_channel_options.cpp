@@ -15,20 +15,9 @@
 #include "test_helpers.hpp"
 
 using rtog::CRTreeOccupancyGridMap;
+using rtog_test::mapFromIni;
 
 namespace {
-
-CRTreeOccupancyGridMap::Ptr mapFromIni(const std::string& insert_opts) {
-  const std::string ini = "[MappingApplication]\nrtreeOccupancyGrid_count=1\n"
-                          "[MappingApplication_rtreeOccupancyGrid_00_creationOpts]\nresolution=0.05\n"
-                          "[MappingApplication_rtreeOccupancyGrid_00_insertOpts]\n" + insert_opts;
-  mrpt::config::CConfigFileMemory cfg(ini);
-  mrpt::maps::TSetOfMetricMapInitializers inits;
-  inits.loadFromConfigFile(cfg, "MappingApplication");
-  mrpt::maps::CMultiMetricMap mm;
-  mm.setListOfMaps(inits);
-  return std::dynamic_pointer_cast<CRTreeOccupancyGridMap>(mm.maps.at(0));
-}
 
 std::string rates(const rtog::SensorChannel& c) {
   std::ostringstream s;

@@ -10,24 +10,15 @@
 #include <vector>
 
 #include "rtog/core/occupancy_map.hpp"
+#include "map_cells.hpp"
 #include "test_support.hpp"
 
 using namespace rtog;
 
 namespace {
 
-using CellValues = std::vector<std::pair<std::uint64_t, float>>;
-
-CellValues cellsOf(const OccupancyMap& m) {
-  CellValues out;
-  m.forEachLeaf([&](const Box& b, float v) {
-    for (std::int32_t z = b.min.z; z <= b.max.z; ++z)
-      for (std::int32_t y = b.min.y; y <= b.max.y; ++y)
-        for (std::int32_t x = b.min.x; x <= b.max.x; ++x) out.emplace_back(packKey(Key{x, y, z}), v);
-  });
-  std::sort(out.begin(), out.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
-  return out;
-}
+using test::CellValues;
+using test::cellsOf;
 
 // Cells whose presence or value differ between two maps.
 std::size_t differingCells(const CellValues& a, const CellValues& b) {
