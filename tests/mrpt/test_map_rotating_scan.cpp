@@ -49,6 +49,20 @@ double nearShare(const std::unordered_set<std::uint64_t>& a, const std::unordere
   return a.empty() ? 0.0 : double(near) / double(a.size());
 }
 
+/// The occupied cells of the rotating scan's map and of the Velodyne scan's, both taken from
+/// one robot pose at 0.1 m.
+struct SweepMaps {
+  std::unordered_set<std::uint64_t> rotating, velodyne;
+};
+
+SweepMaps sweepMaps(const mrpt::obs::CObservationRotatingScan& rot, const mrpt::obs::CObservationVelodyneScan& velo) {
+  const mrpt::poses::CPose3D robot(1.0, -2.0, 0.5, 0.3, 0.0, 0.0);
+  CRTreeOccupancyGridMap a(0.1), b(0.1);
+  EXPECT_TRUE(a.insertObservation(rot, robot));
+  EXPECT_TRUE(b.insertObservation(velo, robot));
+  return {occupiedKeys(a), occupiedKeys(b)};
+}
+
 }  // namespace
 
 // rot_scan_velodyne.rawlog is MRPT's fromVelodyne() of the sweep in test_velodyne_VLP16.rawlog.
@@ -58,11 +72,8 @@ TEST(MapRotatingScan, SameSweepAsTheVelodyneScan) {
   auto velo = std::dynamic_pointer_cast<mrpt::obs::CObservationVelodyneScan>(
       firstObservation(dataset("test_velodyne_VLP16.rawlog")));
   ASSERT_TRUE(rot && velo);
-  const mrpt::poses::CPose3D robot(1.0, -2.0, 0.5, 0.3, 0.0, 0.0);
-  CRTreeOccupancyGridMap a(0.1), b(0.1);
-  ASSERT_TRUE(a.insertObservation(*rot, robot));
-  ASSERT_TRUE(b.insertObservation(*velo, robot));
-  const auto ka = occupiedKeys(a), kb = occupiedKeys(b);
+  const SweepMaps maps = sweepMaps(*rot, *velo);
+  const auto &ka = maps.rotating, &kb = maps.velodyne;
   ASSERT_GT(kb.size(), 5000u);
   const double j = jaccard(ka, kb);
   std::cout << "occupied cells: rotating " << ka.size() << ", velodyne " << kb.size() << ", Jaccard " << j
@@ -108,11 +119,8 @@ TEST(MapRotatingScan, WithTheImagesEvenAzimuthsTheRawScanGivesTheSameCells) {
       ASSERT_EQ(block.rotation(), even);
     }
   velo->point_cloud.clear();  // decoded from the moved packets
-  const mrpt::poses::CPose3D robot(1.0, -2.0, 0.5, 0.3, 0.0, 0.0);
-  CRTreeOccupancyGridMap a(0.1), b(0.1);
-  ASSERT_TRUE(a.insertObservation(*rot, robot));
-  ASSERT_TRUE(b.insertObservation(*velo, robot));
-  const auto ka = occupiedKeys(a), kb = occupiedKeys(b);
+  const SweepMaps maps = sweepMaps(*rot, *velo);
+  const auto &ka = maps.rotating, &kb = maps.velodyne;
   ASSERT_GT(kb.size(), 5000u);
   const double j = jaccard(ka, kb);
   std::cout << "azimuths moved by up to " << moved << " deg; occupied cells: rotating " << ka.size()
