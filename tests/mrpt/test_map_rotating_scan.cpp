@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstring>
 #include <unordered_set>
+#include <utility>
 
 #include <mrpt/obs/CObservationRotatingScan.h>
 #include <mrpt/obs/CObservationVelodyneScan.h>
@@ -49,6 +50,14 @@ double nearShare(const std::unordered_set<std::uint64_t>& a, const std::unordere
   return a.empty() ? 0.0 : double(near) / double(a.size());
 }
 
+/// rot_scan_velodyne.rawlog's rotating scan and test_velodyne_VLP16.rawlog's raw scan: one sweep.
+std::pair<mrpt::obs::CObservationRotatingScan::Ptr, mrpt::obs::CObservationVelodyneScan::Ptr> theSweep() {
+  return {std::dynamic_pointer_cast<mrpt::obs::CObservationRotatingScan>(
+              firstObservation(dataset("rot_scan_velodyne.rawlog"))),
+          std::dynamic_pointer_cast<mrpt::obs::CObservationVelodyneScan>(
+              firstObservation(dataset("test_velodyne_VLP16.rawlog")))};
+}
+
 /// The occupied cells of the rotating scan's map and of the Velodyne scan's, both taken from
 /// one robot pose at 0.1 m.
 struct SweepMaps {
@@ -67,10 +76,7 @@ SweepMaps sweepMaps(const mrpt::obs::CObservationRotatingScan& rot, const mrpt::
 
 // rot_scan_velodyne.rawlog is MRPT's fromVelodyne() of the sweep in test_velodyne_VLP16.rawlog.
 TEST(MapRotatingScan, SameSweepAsTheVelodyneScan) {
-  auto rot = std::dynamic_pointer_cast<mrpt::obs::CObservationRotatingScan>(
-      firstObservation(dataset("rot_scan_velodyne.rawlog")));
-  auto velo = std::dynamic_pointer_cast<mrpt::obs::CObservationVelodyneScan>(
-      firstObservation(dataset("test_velodyne_VLP16.rawlog")));
+  auto [rot, velo] = theSweep();
   ASSERT_TRUE(rot && velo);
   const SweepMaps maps = sweepMaps(*rot, *velo);
   const auto &ka = maps.rotating, &kb = maps.velodyne;
@@ -91,10 +97,7 @@ TEST(MapRotatingScan, SameSweepAsTheVelodyneScan) {
 // moved onto the even spread the image's columns assume (startAzimuth + azimuthSpan * c / columns
 // for the first firing sequence of each block), the raw scan and the image give the same cells.
 TEST(MapRotatingScan, WithTheImagesEvenAzimuthsTheRawScanGivesTheSameCells) {
-  auto rot = std::dynamic_pointer_cast<mrpt::obs::CObservationRotatingScan>(
-      firstObservation(dataset("rot_scan_velodyne.rawlog")));
-  auto velo = std::dynamic_pointer_cast<mrpt::obs::CObservationVelodyneScan>(
-      firstObservation(dataset("test_velodyne_VLP16.rawlog")));
+  auto [rot, velo] = theSweep();
   ASSERT_TRUE(rot && velo);
   ASSERT_EQ(rot->lidarModel, "VLP-16");
   ASSERT_TRUE(rot->rangeOtherLayers.empty());  // single return: two firing sequences a block

@@ -76,11 +76,7 @@ void CRTreeOccupancyGridMap::TInsertionOptions::loadFromConfigFile(const mrpt::c
                      "occupiedThreshold", "maxDistanceInsertion", "decimation", "decimation_3d_range", "mergePolicy",
                      "discretize", "threads", "planarCache", "rotatingScan_minElevation_deg",
                      "rotatingScan_maxElevation_deg", "CFD_features_gaussian_size", "CFD_features_median_size"});
-  try {
-    validate();
-  } catch (const std::invalid_argument& e) {
-    throw std::invalid_argument(std::string(e.what()) + " (section [" + sec + "])");
-  }
+  validateInSection(sec, [this] { validate(); });
 }
 
 void CRTreeOccupancyGridMap::TInsertionOptions::saveToConfigFile(mrpt::config::CConfigFileBase& c,
@@ -241,11 +237,7 @@ void CRTreeOccupancyGridMap::TLikelihoodOptions::loadFromConfigFile(const mrpt::
                      "rayTracing_decimation", "rayTracing_stdHit", "rayTracing_useDistanceFilter", "MI_exponent",
                      "MI_skip_rays", "MI_ratio_max_distance", "consensus_takeEachRange", "consensus_pow",
                      "OWA_weights", "scanLikelihoodOnGridView"});
-  try {
-    validate();
-  } catch (const std::invalid_argument& e) {
-    throw std::invalid_argument(std::string(e.what()) + " (section [" + sec + "])");
-  }
+  validateInSection(sec, [this] { validate(); });
 }
 
 void CRTreeOccupancyGridMap::TLikelihoodOptions::saveToConfigFile(mrpt::config::CConfigFileBase& c,
@@ -288,11 +280,7 @@ void CRTreeOccupancyGridMap::TMatchingOptions::loadFromConfigFile(const mrpt::co
                                                                  const std::string& sec) {
   matching2D_minZ = s.read_float(sec, "matching2D_minZ", matching2D_minZ);
   matching2D_maxZ = s.read_float(sec, "matching2D_maxZ", matching2D_maxZ);
-  try {
-    validate();
-  } catch (const std::invalid_argument& e) {
-    throw std::invalid_argument(std::string(e.what()) + " (section [" + sec + "])");
-  }
+  validateInSection(sec, [this] { validate(); });
 }
 
 void CRTreeOccupancyGridMap::TMatchingOptions::saveToConfigFile(mrpt::config::CConfigFileBase& c,

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <initializer_list>
+#include <stdexcept>
 #include <string>
 
 #include <mrpt/config/CConfigFileBase.h>
@@ -21,5 +22,16 @@ void checkGridExtent(const std::string& section, float min_x, float max_x, float
 /// throws std::invalid_argument naming the key when it is not a finite, ordered extent.
 void readGridExtent(const mrpt::config::CConfigFileBase& source, const std::string& section, float& min_x,
                     float& max_x, float& min_y, float& max_y);
+
+/// Runs `validate` (an options struct's validate()), adding `section` to the message of the
+/// std::invalid_argument it throws: the error names where in the .ini the value came from.
+template <class Validate>
+void validateInSection(const std::string& section, Validate&& validate) {
+  try {
+    validate();
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(std::string(e.what()) + " (section [" + section + "])");
+  }
+}
 
 }  // namespace rtog
