@@ -15,6 +15,7 @@
 #include "integrate/planar/planar_cache.hpp"
 #include "integrate/update_batch.hpp"
 #include "rtog/core/params.hpp"
+#include "rtog/core/pose_blur.hpp"
 #include "rtog/core/stats.hpp"
 #include "storage/map_store.hpp"
 
@@ -71,6 +72,10 @@ class ScanIntegrator {
   /// if the scan does not go through the planar cache.
   InsertStats insert(const Eigen::Vector3d& origin, const Eigen::Vector3f* points, std::size_t count,
                      const InsertParams& ip, const std::uint8_t* is_hit, const std::function<void()>& flush_pending);
+
+  /// Integrates one scan from a weighted set of poses (OccupancyMap::insertBlurred; pose_blur.cpp).
+  InsertStats insertBlurred(const WeightedScan* scans, std::size_t n, const InsertParams& ip,
+                            const std::function<void()>& flush_pending);
 
   /// Traces beams into `batch` (no change to the map). Throws std::out_of_range if the origin
   /// has no key.

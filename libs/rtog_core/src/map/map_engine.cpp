@@ -30,6 +30,16 @@ InsertStats MapEngine::insertPointCloud(const Eigen::Vector3d& origin, const Eig
   return stats;
 }
 
+InsertStats MapEngine::insertBlurred(const WeightedScan* scans, std::size_t n, const InsertParams& ip) {
+  ScratchScope scope(scratch);
+  const InsertStats stats = ScanIntegrator(store, planar, *scope).insertBlurred(scans, n, ip, [this] {
+    if (cover_pending.load(std::memory_order_acquire)) flush();
+  });
+  if (!planar.empty()) cover_pending.store(true, std::memory_order_release);
+  scope.keepAtMost(store.index.memoryBytesAtLeast() / 2 + planar.memoryBytes());
+  return stats;
+}
+
 InsertStats MapEngine::applyStepRuns(std::int32_t z, const StepRun* runs, std::size_t n, const StepRule& rule,
                                      std::vector<float>* after) {
   if (after) after->clear();

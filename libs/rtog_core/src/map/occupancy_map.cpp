@@ -52,6 +52,10 @@ InsertStats OccupancyMap::insertPointCloud(const Eigen::Vector3d& origin, const 
   return engine_->insertPointCloud(origin, points, count, ip, is_hit);
 }
 
+InsertStats OccupancyMap::insertBlurred(const WeightedScan* scans, std::size_t n, const InsertParams& ip) {
+  return engine_->insertBlurred(scans, n, ip);
+}
+
 InsertStats OccupancyMap::applyStepRuns(std::int32_t z, const StepRun* runs, std::size_t n, const StepRule& rule,
                                         std::vector<float>* after) {
   return engine_->applyStepRuns(z, runs, n, rule, after);

@@ -18,6 +18,7 @@
 #include "rtog/core/key.hpp"
 #include "rtog/core/log_odds.hpp"
 #include "rtog/core/params.hpp"
+#include "rtog/core/pose_blur.hpp"
 #include "rtog/core/stats.hpp"
 
 namespace rtog {
@@ -59,6 +60,18 @@ class OccupancyMap {
   InsertStats insertPointCloud(const Eigen::Vector3d& origin, const std::vector<Eigen::Vector3f>& points,
                                const InsertParams& ip = {}) {
     return insertPointCloud(origin, points.data(), points.size(), ip);
+  }
+
+  /// Integrates one scan taken from an uncertain pose, given as the scan seen from each pose of
+  /// a weighted sample set (e.g. sigmaPoints() of the pose covariance): every cell takes, once,
+  /// the change logit(P) - l0 of P = sum_i w_i P_i, where P_i is the probability the sensor model
+  /// (ip.model) gives the cell from pose i and the prior for a cell the scan from pose i did not
+  /// touch (weights are normalized). One scan gives insertPointCloud()'s update bit for bit. Throws
+  /// std::invalid_argument for a weight that is not positive and finite, std::out_of_range for an
+  /// origin without a key, changing nothing.
+  InsertStats insertBlurred(const WeightedScan* scans, std::size_t n, const InsertParams& ip = {});
+  InsertStats insertBlurred(const std::vector<WeightedScan>& scans, const InsertParams& ip = {}) {
+    return insertBlurred(scans.data(), scans.size(), ip);
   }
 
   using StepRun = rtog::StepRun;
