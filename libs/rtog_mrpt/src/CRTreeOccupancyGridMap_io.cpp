@@ -31,8 +31,9 @@ namespace rtog {
 // lidar's calibration decides), numbers the likelihood method as COccupancyGridMap2D (0 was the
 // likelihood field before) and adds the options of its methods, the 2D view's band and
 // matchingOptions after the likelihood options. Version 3 adds the range-noise options
-// (rangeNoiseStd, rangeNoiseStdPerMeter, rangeNoiseCutoff) after matchingOptions.
-uint8_t CRTreeOccupancyGridMap::serializeGetVersion() const { return 3; }
+// (rangeNoiseStd, rangeNoiseStdPerMeter, rangeNoiseCutoff) after matchingOptions. Version 4 adds
+// insertionOptions.poseUncertainty after them.
+uint8_t CRTreeOccupancyGridMap::serializeGetVersion() const { return 4; }
 
 void CRTreeOccupancyGridMap::serializeTo(mrpt::serialization::CArchive& out) const {
   out << genericMapParams;
@@ -54,6 +55,7 @@ void CRTreeOccupancyGridMap::serializeTo(mrpt::serialization::CArchive& out) con
       << lo.scanLikelihoodOnGridView << gridViewOptions.gridView_minZ << gridViewOptions.gridView_maxZ;
   out << matchingOptions.matching2D_minZ << matchingOptions.matching2D_maxZ;
   out << io.rangeNoiseStd << io.rangeNoiseStdPerMeter << io.rangeNoiseCutoff;
+  out << io.poseUncertainty;
   std::ostringstream os(std::ios::binary);
   map_.write(os);
   const std::string bytes = os.str();
@@ -66,7 +68,7 @@ void CRTreeOccupancyGridMap::serializeTo(mrpt::serialization::CArchive& out) con
 // anything is allocated (archive_read.hpp).
 void CRTreeOccupancyGridMap::serializeFrom(mrpt::serialization::CArchive& in, uint8_t version) {
   constexpr const char* kWho = "rtog::CRTreeOccupancyGridMap";
-  if (version > 3) MRPT_THROW_UNKNOWN_SERIALIZATION_VERSION(version);
+  if (version > 4) MRPT_THROW_UNKNOWN_SERIALIZATION_VERSION(version);
   mrpt::maps::TMapGenericParams generic;
   in >> generic;
   TInsertionOptions io;
@@ -114,6 +116,7 @@ void CRTreeOccupancyGridMap::serializeFrom(mrpt::serialization::CArchive& in, ui
   TMatchingOptions mo;
   if (version >= 2) in >> mo.matching2D_minZ >> mo.matching2D_maxZ;
   if (version >= 3) in >> io.rangeNoiseStd >> io.rangeNoiseStdPerMeter >> io.rangeNoiseCutoff;
+  if (version >= 4) in >> archive::Flag{io.poseUncertainty, "poseUncertainty"};
   try {
     io.validate();
     lo.validate();

@@ -1,5 +1,6 @@
 // rtog::CRTreeOccupancyGridMap: the .ini side — TInsertionOptions, TLikelihoodOptions,
 // TGridViewOptions, TMatchingOptions and TMapDefinition (read, written, validated by key).
+#include <cctype>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
@@ -19,6 +20,14 @@ namespace {
   throw std::invalid_argument("rtog::CRTreeOccupancyGridMap: invalid option [" + section + "] " + key + ": " + why);
 }
 bool isProbability(float p) { return std::isfinite(p) && p > 0.0f && p < 1.0f; }
+/// off | on (false | true, 0 | 1 too, as MRPT's read_bool takes them), case-insensitive.
+bool readOnOff(const mrpt::config::CConfigFileBase& s, const std::string& sec, const std::string& key, bool def) {
+  std::string v = s.read_string(sec, key, def ? "on" : "off");
+  for (char& c : v) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  if (v == "on" || v == "true" || v == "1") return true;
+  if (v == "off" || v == "false" || v == "0") return false;
+  badOption(sec, key, "must be off or on, got '" + v + "'");
+}
 }  // namespace
 
 // ---- TInsertionOptions -------------------------------------------------------------------
@@ -67,6 +76,7 @@ void CRTreeOccupancyGridMap::TInsertionOptions::loadFromConfigFile(const mrpt::c
   planarCache = s.read_bool(sec, "planarCache", planarCache);
   rotatingScan_minElevation_deg = s.read_float(sec, "rotatingScan_minElevation_deg", rotatingScan_minElevation_deg);
   rotatingScan_maxElevation_deg = s.read_float(sec, "rotatingScan_maxElevation_deg", rotatingScan_maxElevation_deg);
+  poseUncertainty = readOnOff(s, sec, "poseUncertainty", poseUncertainty);
   // COccupancyGridMap2D's keys that concern what rtog does not build (its CFD features).
   reportUnknownKeys(s, sec,
                     {"sensorModelPreset", "sensorModel", "rangeNoiseStd", "rangeNoiseStdPerMeter", "rangeNoiseCutoff",
@@ -75,7 +85,7 @@ void CRTreeOccupancyGridMap::TInsertionOptions::loadFromConfigFile(const mrpt::c
                      "useMapAltitude", "mapAltitude", "wideningBeamsWithDistance", "clampingMin", "clampingMax",
                      "occupiedThreshold", "maxDistanceInsertion", "decimation", "decimation_3d_range", "mergePolicy",
                      "discretize", "threads", "planarCache", "rotatingScan_minElevation_deg",
-                     "rotatingScan_maxElevation_deg", "CFD_features_gaussian_size", "CFD_features_median_size"});
+                     "rotatingScan_maxElevation_deg", "poseUncertainty", "CFD_features_gaussian_size", "CFD_features_median_size"});
   validateInSection(sec, [this] { validate(); });
 }
 
@@ -113,6 +123,7 @@ void CRTreeOccupancyGridMap::TInsertionOptions::saveToConfigFile(mrpt::config::C
     c.write(sec, "rotatingScan_minElevation_deg", rotatingScan_minElevation_deg);
     c.write(sec, "rotatingScan_maxElevation_deg", rotatingScan_maxElevation_deg);
   }
+  c.write(sec, "poseUncertainty", poseUncertainty ? "on" : "off");
 }
 
 void CRTreeOccupancyGridMap::TInsertionOptions::applySensorChannel(const std::string& sec) {
@@ -163,6 +174,9 @@ void CRTreeOccupancyGridMap::TInsertionOptions::validate() const {
   if (!(std::isfinite(horizontalTolerance) && horizontalTolerance >= 0.0f))
     badOption(sec, "horizontalTolerance", "must be a non-negative angle");
   if (!std::isfinite(mapAltitude)) badOption(sec, "mapAltitude", "must be finite");
+  if (mrptGrid() && poseUncertainty)
+    badOption(sec, "poseUncertainty",
+              "on needs sensorModelPreset = octomap (COccupancyGridMap2D's int8 steps have no graded update)");
   if (mrptGrid() && wideningBeamsWithDistance)
     badOption(sec, "wideningBeamsWithDistance",
               "COccupancyGridMap2D's widening beams are not reproduced by the mrpt_grid preset: set it to false");

@@ -21,6 +21,8 @@
 #include <mrpt/maps/COccupancyGridMap2D.h>
 #include <mrpt/maps/CSimplePointsMap.h>
 #include <mrpt/poses/CPose3D.h>
+#include <mrpt/poses/CPose3DPDFGaussian.h>
+#include <mrpt/poses/CPosePDFGaussian.h>
 
 #include "rtog/core/occupancy_map.hpp"
 #include "rtog/mrpt/map_types.h"
@@ -118,6 +120,11 @@ class CRTreeOccupancyGridMap : public mrpt::maps::CMetricMap {
     /// multi-row scan of an unknown lidar is refused. (Default: NaN / NaN, unset)
     float rotatingScan_minElevation_deg{std::numeric_limits<float>::quiet_NaN()};
     float rotatingScan_maxElevation_deg{std::numeric_limits<float>::quiet_NaN()};
+    /// "on": an observation inserted with a pose PDF (insertObservation with a
+    /// CPose3DPDFGaussian / CPosePDFGaussian, loadFromSimpleMap, `rtog build --simplemap`) is
+    /// blurred by the pose covariance (doc/pose-uncertainty.md); "off": inserted at the mean.
+    /// octomap preset only. .ini: off | on. (Default: off)
+    bool poseUncertainty{false};
 
     MapParams toMapParams(double resolution) const;
     /// The core's per-insertion settings these options give (sensor model, range cut, threads...).
@@ -226,6 +233,23 @@ class CRTreeOccupancyGridMap : public mrpt::maps::CMetricMap {
   const OccupancyMap& map() const { return map_; }
   void notifyMapChanged();
   double resolution() const { return map_.resolution(); }
+
+  using mrpt::maps::CMetricMap::insertObservation;
+  /// Inserts `obs` taken from the uncertain robot pose `pose`. With insertionOptions.poseUncertainty
+  /// the update is the mixture of the sensor model's probabilities over the sigma points of the
+  /// pose covariance (rtog::sigmaPoints: its mean and covariance exactly; doc/pose-uncertainty.md);
+  /// a zero covariance, or poseUncertainty off, inserts at the mean exactly as
+  /// insertObservation(obs, pose.mean) does. Throws std::invalid_argument for a covariance that is
+  /// not one, changing nothing.
+  bool insertObservation(const mrpt::obs::CObservation& obs, const mrpt::poses::CPose3DPDFGaussian& pose);
+  /// The same for a planar pose (x, y, phi): z, pitch and roll are certain.
+  bool insertObservation(const mrpt::obs::CObservation& obs, const mrpt::poses::CPosePDFGaussian& pose);
+  /// CMetricMap::loadFromSimpleMap, but each frame's pose PDF (as a Gaussian: its mean and
+  /// covariance) goes to insertObservation above, so that poseUncertainty = on uses the
+  /// simplemap's covariances. MRPT's own method is not virtual: called through a CMetricMap (as
+  /// MRPT's apps do), the frames are inserted at their mean poses.
+  void loadFromSimpleMap(const mrpt::maps::CSimpleMap& sm) { loadFromProbabilisticPosesAndObservations(sm); }
+  void loadFromProbabilisticPosesAndObservations(const mrpt::maps::CSimpleMap& sm);
 
   /// Beams of an observation in the map frame; false for an unsupported type.
   bool extractBeams(const mrpt::obs::CObservation& obs, const mrpt::poses::CPose3D& robotPose,
