@@ -92,6 +92,7 @@ std::shared_ptr<CRTreeOccupancyGridMap> makeMap(const BuildOptions& o) {
     io.clampingMin = float(lp.clamp_min);
     io.clampingMax = float(lp.clamp_max);
     io.occupiedThreshold = float(lp.occupied_threshold);
+    io.poseUncertainty = o.pose_uncertainty;
     io.validate();
     return std::make_shared<CRTreeOccupancyGridMap>(o.map.resolution, io);
   }
@@ -115,6 +116,10 @@ std::shared_ptr<CRTreeOccupancyGridMap> makeMap(const BuildOptions& o) {
 int build(const BuildOptions& o, std::ostream& out) {
   const int sources = !o.tum_dir.empty() + !o.rawlog_path.empty() + !o.simplemap_path.empty();
   if (sources != 1) throw std::invalid_argument("give exactly one of --tum, --rawlog, --simplemap");
+  if (o.pose_uncertainty && o.simplemap_path.empty())
+    throw std::invalid_argument("--pose-uncertainty needs --simplemap (the only source with pose covariances)");
+  if (o.pose_uncertainty && !o.ini_path.empty())
+    throw std::invalid_argument("--pose-uncertainty is for the command-line options; with --ini set poseUncertainty = on in its _insertOpts");
   auto map = makeMap(o);
   // The output is checked and opened before the work: an unwritable path, or one that names an
   // input (which the save would destroy), fails now and not after the last scan.
@@ -130,7 +135,7 @@ int build(const BuildOptions& o, std::ostream& out) {
   if (!o.ini_path.empty()) inputs.push_back({"--ini", o.ini_path});
   app::OutputSet files(std::move(inputs));
   std::ostream* saved = o.out_path.empty() ? nullptr : &files.add("--out", o.out_path);
-  std::size_t scans = 0, points = 0;
+  std::size_t scans = 0, points = 0, uncertain_frames = 0;
   double seconds = 0.0;
   const auto timed = [&](auto&& insert) {
     const auto t0 = std::chrono::steady_clock::now();
@@ -159,7 +164,11 @@ int build(const BuildOptions& o, std::ostream& out) {
     Progress progress(out, sm.size(), o.progress_bar);
     for (std::size_t i = 0; i < sm.size(); ++i) {
       const auto [pose, sf] = sm.get(i);
-      const mrpt::poses::CPose3D robot = pose->getMeanVal();
+      // The frame's pose PDF as a Gaussian: with poseUncertainty on, its covariance blurs the
+      // frame; else it is inserted at the mean.
+      mrpt::poses::CPose3DPDFGaussian robot;
+      robot.copyFrom(*pose);
+      uncertain_frames += robot.cov.trace() > 0.0;
       for (const auto& obs : *sf) {
         const std::size_t before = map->totalInsertStats.raysTotal();
         timed([&] { map->insertObservation(*obs, robot); });
@@ -184,6 +193,10 @@ int build(const BuildOptions& o, std::ostream& out) {
     progress.update(log.size(), map->map().leafCount());
   }
 
+  if (!o.simplemap_path.empty())
+    out << "pose covariance:  " << uncertain_frames << " of " << scans << " frames have one ("
+        << (map->insertionOptions.poseUncertainty ? "blurred in: poseUncertainty on" : "not used: poseUncertainty off")
+        << ")\n";
   const InsertStats& st = map->totalInsertStats;
   out << "inserted " << points << " beams from " << scans << " scans in " << std::fixed << std::setprecision(3)
       << seconds << " s (" << std::setprecision(2) << (seconds > 0 ? points / seconds / 1e6 : 0.0)

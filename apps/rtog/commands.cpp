@@ -36,6 +36,22 @@ void saveMap(const OccupancyMap& map, const std::string& path) {
   files.commit();
 }
 
+namespace {
+/// Mean binary entropy of the known cells' occupancy [bits]: how certain the map is (a blurred
+/// insertion raises it).
+double meanEntropyBits(const OccupancyMap& map) {
+  double sum = 0.0;
+  std::int64_t cells = 0;
+  map.forEachLeaf([&](const Box& b, float l) {
+    const double p = 1.0 / (1.0 + std::exp(-double(l)));
+    const double h = p <= 0.0 || p >= 1.0 ? 0.0 : -(p * std::log2(p) + (1.0 - p) * std::log2(1.0 - p));
+    sum += h * double(b.volume());
+    cells += b.volume();
+  });
+  return cells > 0 ? sum / double(cells) : 0.0;
+}
+}  // namespace
+
 void printStatistics(const OccupancyMap& map, std::ostream& out) {
   const MapStatistics s = map.statistics();
   const ClassCover cover = map.classCover();
@@ -51,7 +67,8 @@ void printStatistics(const OccupancyMap& map, std::ostream& out) {
       << "\n"
       << "R-tree            height " << s.tree_height << ", " << s.tree_nodes << " nodes, " << s.bricks
       << " bricks\n"
-      << "memory            " << std::setprecision(2) << s.memory_bytes / 1048576.0 << " MiB\n";
+      << "memory            " << std::setprecision(2) << s.memory_bytes / 1048576.0 << " MiB\n"
+      << "entropy           " << std::setprecision(4) << meanEntropyBits(map) << " bits per known cell (mean)\n";
   const LogOddsParams& lp = map.params().log_odds;
   out.unsetf(std::ios::floatfield);
   out << std::setprecision(4) << "sensor model      hit " << lp.prob_hit << ", miss " << lp.prob_miss << ", clamp ["
@@ -87,6 +104,7 @@ int info(const std::string& map_path, bool json, std::ostream& out) {
                       {"bricks", s.bricks},
                       {"tree_height", s.tree_height},
                       {"tree_nodes", s.tree_nodes},
+                      {"mean_entropy_bits", meanEntropyBits(map)},
                       {"log_odds",
                        {{"prob_hit", lp.prob_hit},
                         {"prob_miss", lp.prob_miss},
@@ -141,12 +159,14 @@ int exportMap(const ExportOptions& opts, std::ostream& out) {
     if (!(z >= zlo && z < zhi))
       throw std::invalid_argument("export: --slice-z " + metres(z) + " m is outside the map's height range [" +
                                   metres(zlo) + ", " + metres(zhi) + ") m");
-    const cv::Mat img = image::rasterizeSliceZ(map, z);
+    const cv::Mat img = opts.png_probability ? image::rasterizeSliceProbabilityZ(map, z) : image::rasterizeSliceZ(map, z);
     std::vector<unsigned char> png;
     if (!cv::imencode(".png", img, png)) throw std::runtime_error("'" + opts.png_path + "': PNG encoding failed");
     png_out->write(reinterpret_cast<const char*>(png.data()), static_cast<std::streamsize>(png.size()));
     messages.push_back("wrote " + opts.png_path + ": slice at z = " + metres(z) + " m, " + std::to_string(img.cols) +
-                       " x " + std::to_string(img.rows) + " pixels (one per cell; occupied black, free white, unknown grey)");
+                       " x " + std::to_string(img.rows) + " pixels (one per cell; " +
+                       (opts.png_probability ? "grey 255 * (1 - P(occupied)), unknown light blue)"
+                                             : "occupied black, free white, unknown grey)"));
   }
   if (!opts.scene_path.empty()) {
     // The MRPT map type draws itself; the scene is a gzip-compressed CArchive, as

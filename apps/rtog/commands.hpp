@@ -24,6 +24,9 @@ struct BuildOptions {
   MapParams map;              ///< resolution, log-odds, merging (without --ini)
   InsertParams insert;        ///< sensor model, max range, threads (without --ini)
   int stride = 1;             ///< TUM: use every stride-th pixel in each direction (Default: 1)
+  /// --simplemap: blur each frame by its pose covariance (poseUncertainty = on; without --ini).
+  /// (Default: false)
+  bool pose_uncertainty = false;
   bool progress_bar = false;  ///< redraw one progress line (terminal) instead of printing lines
 };
 
@@ -44,6 +47,9 @@ struct ExportOptions {
   std::string bt_path;           ///< OctoMap binary tree (.bt); empty: none
   std::string png_path;          ///< horizontal slice image; empty: none (needs slice_z)
   std::optional<double> slice_z; ///< height of the slice [m]
+  /// The PNG shows each cell's probability (grey, unknown light blue) instead of its class.
+  /// (Default: false)
+  bool png_probability = false;
   std::string scene_path;        ///< MRPT .3Dscene (SceneViewer3D) of the occupied cuboids; empty: none
 };
 

@@ -55,6 +55,8 @@ int main(int argc, char** argv) {
                           ->check(number(Sign::Positive));
   miss_rate->needs(false_alarm);
   false_alarm->needs(miss_rate);
+  b->add_flag("--pose-uncertainty", build.pose_uncertainty,
+             "--simplemap: blur each frame by its pose covariance (poseUncertainty = on)");
   b->add_option("--threads", build.insert.threads, "Threads tracing beams")->capture_default_str()->check(rtog::app::checks::integer(1, 256));
   b->add_flag("--discretize", build.insert.discretize, "Trace beams to end-cell centres, once per cell (OctoMap's discretize)");
   b->add_option("--stride", build.stride, "Use every n-th pixel")->capture_default_str()->check(rtog::app::checks::integer(1, 1 << 16));
@@ -75,6 +77,9 @@ int main(int argc, char** argv) {
   e->add_option("--scene", ex.scene_path, "MRPT 3D scene of the occupied cuboids (.3Dscene; SceneViewer3D)")->check(path);
   auto* png = e->add_option("--png", ex.png_path, "Horizontal slice as an image (.png), with --slice-z")->check(path);
   auto* sz = e->add_option("--slice-z", slice_z, "Height of the slice [m]")->check(number(Sign::Any));
+  auto* prob = e->add_flag("--png-probability", ex.png_probability,
+                           "The slice shows each cell's P(occupied) as grey (unknown light blue), not its class");
+  prob->needs(png);
   png->needs(sz);
   sz->needs(png);
 

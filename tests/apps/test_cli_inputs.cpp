@@ -156,3 +156,37 @@ TEST(CliInputs, MissAndFalseAlarmRatesStateTheSensor) {
 }
 
 }  // namespace
+
+namespace {
+
+double entropyOf(const std::string& map) {
+  std::string out;
+  EXPECT_EQ(run("info --json " + map, &out), 0) << out;
+  const auto at = out.find("\"mean_entropy_bits\": ");
+  return at == std::string::npos ? -1.0 : std::stod(out.substr(at + 21));
+}
+
+}  // namespace
+
+// --pose-uncertainty: only with --simplemap and without --ini; on Debian's Malaga simplemap (all
+// covariances zero) it builds the map of the mean poses, and says so; the probability slice.
+TEST(CliInputs, PoseUncertaintyNeedsASimplemapAndUsesItsCovariances) {
+  const std::string sm = std::string(RTOG_MRPT_DATASETS) + "/malaga-cs-fac-building.simplemap.gz";
+  std::string out;
+  EXPECT_EQ(run(std::string("build --tum ") + RTOG_TEST_TUM_DIR + " --stride 16 --pose-uncertainty", &out), 1) << out;
+  EXPECT_NE(out.find("--pose-uncertainty needs --simplemap"), std::string::npos) << out;
+  const std::string dir = scratch("pose_uncertainty"), plain = dir + "/plain.rtog", blurred = dir + "/blurred.rtog";
+  ASSERT_EQ(run("build --simplemap " + sm + " --resolution 0.1 --max-range 15 --out " + plain, &out), 0) << out;
+  EXPECT_NE(out.find("pose covariance:  0 of 99 frames have one (not used: poseUncertainty off)"), std::string::npos) << out;
+  ASSERT_EQ(run("build --simplemap " + sm + " --resolution 0.1 --max-range 15 --pose-uncertainty --out " + blurred, &out), 0)
+      << out;
+  EXPECT_NE(out.find("(blurred in: poseUncertainty on)"), std::string::npos) << out;
+  EXPECT_EQ(plyOf(blurred), plyOf(plain));  // zero covariances: the mean poses exactly
+  const double h = entropyOf(plain);
+  EXPECT_GT(h, 0.1);
+  EXPECT_LT(h, 1.0);
+  const std::string png = dir + "/p.png";
+  EXPECT_EQ(run("export " + plain + " --png-probability", &out), 2) << out;  // needs --png
+  ASSERT_EQ(run("export " + plain + " --png " + png + " --slice-z 0.35 --png-probability", &out), 0) << out;
+  EXPECT_NE(out.find("unknown light blue"), std::string::npos) << out;
+}

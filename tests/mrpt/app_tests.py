@@ -6,6 +6,7 @@ Usage: app_tests.py --plugin LIB --mapcheck EXE --config-dir DIR --datasets DIR 
 """
 import argparse
 import glob
+import json
 import math
 import os
 import re
@@ -280,6 +281,28 @@ def case_rbpf_slam(r):
     d, _ = r.run_config("rbpf_slam", "rbpf-slam_rtog.ini", "rbpf-slam", [os.path.join(r.a.datasets, SENA)])
     m = r.one_file(os.path.join(d, "LOG_RBPF_RTOG", "finalMap_rtog__CRTreeOccupancyGridMap_*.rtog"))
     r.mapcheck(m, 1000)
+    # The simplemap rbpf-slam wrote holds each frame's pose as its particles: real covariances.
+    # Built from it with --pose-uncertainty, the map is softer (mean cell entropy higher) than at
+    # the mean poses; both load back sound.
+    sm = os.path.join(d, "LOG_RBPF_RTOG", "_finalmap_.simplemap")
+    info = {}
+    for name, flags in (("mean", []), ("blurred", ["--pose-uncertainty"])):
+        out_map = os.path.join(d, "simplemap_%s.rtog" % name)
+        p = subprocess.run([r.a.rtog, "build", "--simplemap", sm, "--resolution", "0.05", "--max-range", "15",
+                            "--out", out_map] + flags, stdout=subprocess.PIPE, stderr=subprocess.STDOUT)
+        out = p.stdout.decode()
+        print("rtog build (%s):\n%s" % (name, "\n".join(l for l in out.splitlines() if not l.startswith("progress"))))
+        if p.returncode != 0:
+            fail("rtog build --simplemap (%s) exited %d" % (name, p.returncode))
+        frames = re.search(r"pose covariance:\s+(\d+) of (\d+) frames", out)
+        if not frames or int(frames.group(1)) < int(frames.group(2)) // 2:
+            fail("rbpf-slam's simplemap should carry pose covariances: %s" % (frames and frames.group(0)))
+        j = subprocess.run([r.a.rtog, "info", "--json", out_map], stdout=subprocess.PIPE, check=True)
+        info[name] = json.loads(j.stdout.decode())
+    h0, h1 = info["mean"]["mean_entropy_bits"], info["blurred"]["mean_entropy_bits"]
+    print("mean cell entropy: %.4f bits at the mean poses, %.4f blurred" % (h0, h1))
+    if not h1 > h0:
+        fail("the blurred map is not softer: %.4f <= %.4f bits" % (h1, h0))
 
 
 class Xvfb:
@@ -383,6 +406,7 @@ def main():
     p.add_argument("--plugin", required=True)
     p.add_argument("--seed-shim", required=True)
     p.add_argument("--mapcheck", required=True)
+    p.add_argument("--rtog", required=True)
     p.add_argument("--config-dir", required=True)
     p.add_argument("--datasets", required=True)
     p.add_argument("--work-dir", required=True)

@@ -1,29 +1,59 @@
 #include "rtog/image/slice.hpp"
 
+#include <cmath>
 #include <stdexcept>
 #include <string>
 
 namespace rtog::image {
+namespace {
 
-cv::Mat rasterizeSliceZ(const OccupancyMap& map, double z) {
+/// The slice's bounds and z key, checked; the image's size.
+Box sliceGeometry(const OccupancyMap& map, double z, Key& zk) {
   const Box bounds = map.keyBounds();
   if (bounds.isEmpty()) throw std::invalid_argument("the map is empty: there is no slice to draw");
-  Key zk;
   if (!map.lattice().tryKey(Eigen::Vector3d(0.0, 0.0, z), zk))
     throw std::invalid_argument("slice height " + std::to_string(z) + " m has no cell key");
   const std::int64_t w = bounds.extent(0), h = bounds.extent(1);
   if (w * h > (std::int64_t{1} << 28))
     throw std::length_error("a slice of " + std::to_string(w) + " x " + std::to_string(h) +
                             " pixels is too large");
-  cv::Mat img(static_cast<int>(h), static_cast<int>(w), CV_8UC1, cv::Scalar(kSliceUnknown));
-  const LogOddsModel& model = map.logOddsModel();
+  return bounds;
+}
+
+/// Calls fill(row, column, log-odds) for every known cell of the slice.
+template <class Fill>
+void forEachSliceCell(const OccupancyMap& map, const Box& bounds, const Key& zk, Fill&& fill) {
   map.forEachLeaf([&](const Box& b, float v) {
     if (zk.z < b.min.z || zk.z > b.max.z) return;
-    const std::uint8_t px = model.classify(v) == CellState::Occupied ? kSliceOccupied : kSliceFree;
-    for (std::int32_t y = b.min.y; y <= b.max.y; ++y) {
-      std::uint8_t* row = img.ptr<std::uint8_t>(bounds.max.y - y);
-      for (std::int32_t x = b.min.x; x <= b.max.x; ++x) row[x - bounds.min.x] = px;
-    }
+    for (std::int32_t y = b.min.y; y <= b.max.y; ++y)
+      for (std::int32_t x = b.min.x; x <= b.max.x; ++x) fill(bounds.max.y - y, x - bounds.min.x, v);
+  });
+}
+
+}  // namespace
+
+cv::Mat rasterizeSliceZ(const OccupancyMap& map, double z) {
+  Key zk;
+  const Box bounds = sliceGeometry(map, z, zk);
+  cv::Mat img(static_cast<int>(bounds.extent(1)), static_cast<int>(bounds.extent(0)), CV_8UC1,
+              cv::Scalar(kSliceUnknown));
+  const LogOddsModel& model = map.logOddsModel();
+  forEachSliceCell(map, bounds, zk, [&](std::int64_t r, std::int64_t c, float v) {
+    img.ptr<std::uint8_t>(static_cast<int>(r))[c] = model.classify(v) == CellState::Occupied ? kSliceOccupied : kSliceFree;
+  });
+  return img;
+}
+
+cv::Mat rasterizeSliceProbabilityZ(const OccupancyMap& map, double z) {
+  Key zk;
+  const Box bounds = sliceGeometry(map, z, zk);
+  cv::Mat img(static_cast<int>(bounds.extent(1)), static_cast<int>(bounds.extent(0)), CV_8UC3,
+              cv::Scalar(kSliceUnknownColour[0], kSliceUnknownColour[1], kSliceUnknownColour[2]));
+  forEachSliceCell(map, bounds, zk, [&](std::int64_t r, std::int64_t c, float v) {
+    const double p = 1.0 / (1.0 + std::exp(-double(v)));
+    const auto g = static_cast<std::uint8_t>(std::lround(255.0 * (1.0 - p)));
+    std::uint8_t* px = img.ptr<std::uint8_t>(static_cast<int>(r)) + 3 * c;
+    px[0] = px[1] = px[2] = g;
   });
   return img;
 }

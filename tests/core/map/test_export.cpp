@@ -357,6 +357,37 @@ TEST(SliceExport, EveryPixelMatchesTheMap) {
   }
 }
 
+// The probability slice: known pixels grey 255 * (1 - P) of the cell, unknown ones the marker colour.
+TEST(SliceExport, ProbabilitySliceShowsEachCellsProbability) {
+  for (const OccupancyMap* map : {&mergedMap(), &unmergedMap()}) {
+    const double z = 0.3;
+    const cv::Mat img = image::rasterizeSliceProbabilityZ(*map, z);
+    const Box b = map->keyBounds();
+    ASSERT_EQ(img.type(), CV_8UC3);
+    ASSERT_EQ(img.cols, b.extent(0));
+    ASSERT_EQ(img.rows, b.extent(1));
+    const std::int32_t kz = map->lattice().key(Eigen::Vector3d(0, 0, z)).z;
+    std::int64_t wrong = 0, known = 0, unknown = 0;
+    for (int r = 0; r < img.rows; ++r)
+      for (int c = 0; c < img.cols; ++c) {
+        const Key k{b.min.x + c, b.max.y - r, kz};
+        const cv::Vec3b px = img.at<cv::Vec3b>(r, c);
+        if (const auto l = map->logOdds(k)) {
+          const auto g = static_cast<std::uint8_t>(std::lround(255.0 * (1.0 - map->occupancy(k))));
+          wrong += px != cv::Vec3b(g, g, g);
+          ++known;
+        } else {
+          wrong += px != cv::Vec3b(image::kSliceUnknownColour[0], image::kSliceUnknownColour[1], image::kSliceUnknownColour[2]);
+          ++unknown;
+        }
+      }
+    EXPECT_EQ(wrong, 0);
+    EXPECT_GT(known, 100);
+    EXPECT_GT(unknown, 100);
+  }
+  EXPECT_THROW(image::rasterizeSliceProbabilityZ(OccupancyMap(), 0.0), std::invalid_argument);
+}
+
 TEST(SliceExport, BadInput) {
   EXPECT_THROW(image::rasterizeSliceZ(OccupancyMap(), 0.0), std::invalid_argument);
   EXPECT_THROW(image::rasterizeSliceZ(mergedMap(), std::nan("")), std::invalid_argument);

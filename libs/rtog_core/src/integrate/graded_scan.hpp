@@ -34,6 +34,14 @@ class GradedScan {
   }
   /// Groups the marked cells by brick, bricks in Morton order, cells by local index. Ends marking.
   void finalize();
+  /// Builds the finalized set directly, brick by brick, instead of mark() and finalize(): after
+  /// clear(), bricks in ascending Morton code, each with its cells in ascending local index (and
+  /// no miss mask).
+  void appendBrick(const Key& brick, std::uint64_t code, const GradedCell* cells, std::size_t n) {
+    bricks_.push_back(BrickEntry{brick, code, nullptr, static_cast<std::uint32_t>(cells_.size()),
+                                 static_cast<std::uint32_t>(n)});
+    cells_.insert(cells_.end(), cells, cells + n);
+  }
 
   std::size_t brickCount() const { return bricks_.size(); }
   const Key& brick(std::size_t b) const { return bricks_[b].key; }

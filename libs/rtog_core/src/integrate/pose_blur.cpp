@@ -2,6 +2,8 @@
 // weighted sample set by the sensor model's own rules, each cell's probabilities are mixed, and
 // the mixture is entered once as a graded change (doc/pose-uncertainty.md).
 #include <algorithm>
+#include <array>
+#include <memory>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -20,79 +22,112 @@ namespace {
 
 double sigmoid(double l) { return 1.0 / (1.0 + std::exp(-l)); }
 
-Key cellOf(const Key& brick_origin, int local) {
-  const Key l = localKey(local);
-  return Key{brick_origin.x + l.x, brick_origin.y + l.y, brick_origin.z + l.z};
-}
 
-/// Per cell, the weighted sum of (P_i - P0) over the sample set: cells a pose's scan did not
-/// touch add nothing, which is their prior.
+/// One pose's updates of one brick: a finalized batch's brick or a graded scan's.
+struct BrickSource {
+  std::uint64_t code;  // the brick's Morton code
+  std::uint32_t pose;
+  std::uint32_t index;  // brick index in that pose's batch / graded scan
+};
+
+/// The mixture, brick by brick: per cell the weighted sum over the poses of (P_i - P0), in pose
+/// order (so the sums do not depend on the thread count), in a dense brick array; cells a pose's
+/// scan did not touch add nothing, which is their prior. Each touched cell is then appended to `out`
+/// with its change logit(P0 + sum) - l0, bricks in Morton order as finalize() leaves them.
 class Mixture {
  public:
-  explicit Mixture(const LogOddsModel& model) : l0_(model.prior()), p0_(sigmoid(model.prior())) {}
+  Mixture(const LogOddsModel& model, const std::vector<double>& weights)
+      : model_(model), weights_(weights), p0_(sigmoid(model.prior())),
+        hit_(sigmoid(double(model.prior()) + model.hitDelta()) - p0_),
+        miss_(sigmoid(double(model.prior()) + model.missDelta()) - p0_) {}
 
-  void add(const Key& k, double weight, float delta) {
-    const auto fresh = static_cast<std::uint32_t>(keys_.size());
-    const std::uint32_t at = index_.findOrInsert(packKey(k), fresh);
-    if (at == fresh) {
-      keys_.push_back(k);
-      sums_.push_back(0.0);
-    }
-    sums_[at] += weight * (sigmoid(static_cast<double>(l0_) + delta) - p0_);
+  void mixBatches(const std::vector<UpdateBatch>& batches, GradedScan& out) {
+    std::vector<BrickSource> sources;
+    for (std::uint32_t i = 0; i < weights_.size(); ++i)
+      for (std::uint32_t b = 0; b < batches[i].brickCodes().size(); ++b)
+        sources.push_back(BrickSource{batches[i].brickCodes()[b], i, b});
+    forEachBrick(sources, out, [&](const BrickSource& s) {
+      const auto& upd = *batches[s.pose].bricks()[s.index];
+      const double w = weights_[s.pose];
+      addMask(upd.occupied, w * hit_);
+      addMask(upd.free, w * miss_);  // finalize() dropped the free marks of occupied cells
+      return upd.brick;
+    });
   }
-  /// Adds the cells of a finalized batch: occupied cells take the hit change, free ones the miss.
-  void addBatch(const UpdateBatch& batch, double weight, const LogOddsModel& model) {
-    for (std::size_t b = 0; b < batch.bricks().size(); ++b) {
-      const auto& upd = *batch.bricks()[b];
-      addMask(upd.brick, upd.occupied, weight, model.hitDelta());
-      addMask(upd.brick, upd.free, weight, model.missDelta());
-    }
-  }
-  /// Adds the cells of a finalized graded scan (a cell in both its miss mask and its own cells
-  /// takes the larger change, as applyGraded() does).
-  void addGraded(const GradedScan& scan, double weight, const LogOddsModel& model) {
-    for (std::size_t b = 0; b < scan.brickCount(); ++b) {
-      const BrickMask* miss = scan.missMask(b);
+
+  void mixGraded(const std::vector<GradedScan>& scans, GradedScan& out) {
+    std::vector<BrickSource> sources;
+    for (std::uint32_t i = 0; i < weights_.size(); ++i)
+      for (std::uint32_t b = 0; b < scans[i].brickCount(); ++b) sources.push_back(BrickSource{scans[i].brickCode(b), i, b});
+    forEachBrick(sources, out, [&](const BrickSource& s) {
+      const GradedScan& scan = scans[s.pose];
+      const double w = weights_[s.pose];
+      // A cell in both the miss mask and the graded cells takes the larger change, as applyGraded() does.
+      const BrickMask* miss = scan.missMask(s.index);
       BrickMask own{};
-      const GradedCell* cells = scan.cells(b);
-      const Key origin = brickOrigin(scan.brick(b));
-      for (std::size_t c = 0; c < scan.cellCount(b); ++c) {
+      const GradedCell* cells = scan.cells(s.index);
+      for (std::size_t c = 0; c < scan.cellCount(s.index); ++c) {
         const int i = cells[c].local;
         const std::uint64_t bit = std::uint64_t{1} << (i & 63);
-        own[static_cast<std::size_t>(i >> 6)] |= bit;
+        const auto word = static_cast<std::size_t>(i >> 6);
+        own[word] |= bit;
         float delta = cells[c].delta;
-        if (miss && ((*miss)[static_cast<std::size_t>(i >> 6)] & bit)) delta = std::max(delta, model.missDelta());
-        add(cellOf(origin, i), weight, delta);
+        if (miss && ((*miss)[word] & bit)) delta = std::max(delta, model_.missDelta());
+        sum_[static_cast<std::size_t>(i)] += w * (sigmoid(double(model_.prior()) + delta) - p0_);
+        touched_[word] |= bit;
       }
-      if (!miss) continue;
-      BrickMask rest;
-      for (int w = 0; w < kBrickWords; ++w) rest[w] = (*miss)[w] & ~own[w];
-      addMask(scan.brick(b), rest, weight, model.missDelta());
-    }
-  }
-  /// Marks each cell's mixture as its change logit(P) - l0 in `out`.
-  void emit(GradedScan& out) const {
-    for (std::size_t i = 0; i < keys_.size(); ++i) {
-      // P lies between the smallest and the largest P_i, all in (0, 1); the clamp only guards
-      // against rounding at the ends.
-      const double p = std::clamp(p0_ + sums_[i], 1e-12, 1.0 - 1e-12);
-      out.mark(keys_[i], static_cast<float>(std::log(p / (1.0 - p)) - static_cast<double>(l0_)));
-    }
+      if (miss) {
+        BrickMask rest;
+        for (std::size_t k = 0; k < rest.size(); ++k) rest[k] = (*miss)[k] & ~own[k];
+        addMask(rest, w * miss_);
+      }
+      return scan.brick(s.index);
+    });
   }
 
  private:
-  void addMask(const Key& brick, const BrickMask& mask, double weight, float delta) {
-    const Key origin = brickOrigin(brick);
-    for (int w = 0; w < kBrickWords; ++w)
+  void addMask(const BrickMask& mask, double v) {
+    for (std::size_t w = 0; w < mask.size(); ++w) {
+      touched_[w] |= mask[w];
       for (std::uint64_t bits = mask[w]; bits != 0; bits &= bits - 1)
-        add(cellOf(origin, w * 64 + __builtin_ctzll(bits)), weight, delta);
+        sum_[w * 64 + static_cast<std::size_t>(__builtin_ctzll(bits))] += v;
+    }
+  }
+  /// Groups `sources` by brick (Morton order, poses in order within one), has add(source) sum each
+  /// into the dense brick (it returns the brick's key), then marks the brick's cells in `out`.
+  template <class Add>
+  void forEachBrick(std::vector<BrickSource>& sources, GradedScan& out, Add&& add) {
+    std::sort(sources.begin(), sources.end(), [](const BrickSource& a, const BrickSource& b) {
+      return a.code != b.code ? a.code < b.code : a.pose < b.pose;
+    });
+    for (std::size_t first = 0; first < sources.size();) {
+      std::size_t last = first;
+      Key brick{};
+      for (; last < sources.size() && sources[last].code == sources[first].code; ++last) brick = add(sources[last]);
+      cells_.clear();
+      for (std::size_t w = 0; w < touched_.size(); ++w) {
+        for (std::uint64_t bits = touched_[w]; bits != 0; bits &= bits - 1) {
+          const auto i = w * 64 + static_cast<std::size_t>(__builtin_ctzll(bits));
+          // P lies between the smallest and the largest P_i, all in (0, 1); the clamp only guards
+          // against rounding at the ends.
+          const double p = std::clamp(p0_ + sum_[i], 1e-12, 1.0 - 1e-12);
+          cells_.push_back(GradedCell{static_cast<std::uint16_t>(i),
+                                      static_cast<float>(std::log(p / (1.0 - p)) - double(model_.prior()))});
+          sum_[i] = 0.0;
+        }
+        touched_[w] = 0;
+      }
+      out.appendBrick(brick, sources[first].code, cells_.data(), cells_.size());
+      first = last;
+    }
   }
 
-  float l0_;
-  double p0_;
-  detail::FlatHashMap64 index_;
-  std::vector<Key> keys_;
-  std::vector<double> sums_;
+  const LogOddsModel& model_;
+  const std::vector<double>& weights_;
+  double p0_, hit_, miss_;
+  std::array<double, kBrickCells> sum_{};
+  BrickMask touched_{};
+  std::vector<GradedCell> cells_;  // one brick's, for out.appendBrick()
 };
 
 }  // namespace
@@ -169,19 +204,16 @@ InsertStats ScanIntegrator::insertBlurred(const WeightedScan* scans, std::size_t
       }
     }
   });
-  Mixture mix(store_.model);
-  for (std::size_t i = 0; i < n; ++i) {
-    const double w = scans[i].weight / total;
-    if (graded) {
-      mix.addGraded(scratch.graded[i], w, store_.model);
-    } else {
-      mix.addBatch(scratch.batches[i], w, store_.model);
-    }
-  }
+  std::vector<double> weights(n);
+  for (std::size_t i = 0; i < n; ++i) weights[i] = scans[i].weight / total;
   GradedScan& out = scratch.graded[graded ? n : 0];
   out.clear();
-  mix.emit(out);
-  out.finalize();
+  auto mix = std::make_unique<Mixture>(store_.model, weights);  // 36 KB of dense brick sums
+  if (graded) {
+    mix->mixGraded(scratch.graded, out);
+  } else {
+    mix->mixBatches(scratch.batches, out);
+  }
   // The beams are those of one scan: counted once, as the first pose's trace counts them.
   InsertStats stats = part[0];
   stats.cells_free = stats.cells_occupied = stats.cells_unchanged = 0;

@@ -21,4 +21,12 @@ constexpr std::uint8_t kSliceUnknown = 128;  ///< grey
 /// and std::length_error if the image would exceed 2^28 pixels.
 cv::Mat rasterizeSliceZ(const OccupancyMap& map, double z);
 
+/// The same slice with each known cell's probability: an 8-bit 3-channel (BGR) image whose known
+/// pixels are grey 255 * (1 - P(occupied)) (certainly occupied black, certainly free white, P = 0.5
+/// mid grey) and whose unknown pixels are kSliceUnknownColour, so that "no evidence" and
+/// "evidence of 0.5" stay apart. Same geometry and errors as rasterizeSliceZ().
+cv::Mat rasterizeSliceProbabilityZ(const OccupancyMap& map, double z);
+/// Unknown cells of rasterizeSliceProbabilityZ() (BGR: a light blue).
+constexpr std::uint8_t kSliceUnknownColour[3] = {235, 206, 135};
+
 }  // namespace rtog::image
