@@ -13,6 +13,8 @@
 #include <mrpt/maps/CSimplePointsMap.h>
 #include <octomap/OcTree.h>
 
+#include <Eigen/Geometry>
+
 #include "rtog/core/occupancy_map.hpp"
 
 namespace rtog::bench {
@@ -64,6 +66,55 @@ class RtogMethod : public Method {
   std::string label_;
   MapParams params_;
   InsertParams ip_;
+  std::unique_ptr<OccupancyMap> map_;
+};
+
+/// A scan taken from an uncertain pose, blurred into the map (doc/pose-uncertainty.md): a planar
+/// pose covariance diag(sigma^2, sigma^2, sigma_yaw^2) about each scan's origin, its six sigma
+/// poses, the scan moved to each (timed: a user's adapter does the same) and inserted blurred.
+class RtogBlurredMethod : public Method {
+ public:
+  RtogBlurredMethod(std::string label, double res, InsertParams ip, double sigma, double sigma_yaw)
+      : label_(std::move(label)), ip_(ip) {
+    params_.resolution = res;
+    params_.merge = MergePolicy::Equal;
+    Eigen::MatrixXd cov = Eigen::MatrixXd::Zero(3, 3);
+    cov(0, 0) = cov(1, 1) = sigma * sigma;
+    cov(2, 2) = sigma_yaw * sigma_yaw;
+    sigma_ = sigmaPoints(cov);
+  }
+  std::string name() const override { return label_; }
+  double build(const Dataset& d) override {
+    map_ = std::make_unique<OccupancyMap>(params_);
+    std::vector<std::vector<Eigen::Vector3f>> moved(sigma_.size());
+    std::vector<WeightedScan> scans(sigma_.size());
+    const auto t0 = Clock::now();
+    for (const Scan& s : d.scans) {
+      for (std::size_t i = 0; i < sigma_.size(); ++i) {
+        const Eigen::VectorXd& o = sigma_[i].offset;
+        const Eigen::Vector3d origin = s.origin + Eigen::Vector3d(o[0], o[1], 0.0);
+        const Eigen::Matrix3d rot = Eigen::AngleAxisd(o[2], Eigen::Vector3d::UnitZ()).toRotationMatrix();
+        moved[i].resize(s.points.size());
+        for (std::size_t k = 0; k < s.points.size(); ++k)
+          moved[i][k] = (origin + rot * (s.points[k].cast<double>() - s.origin)).cast<float>();
+        scans[i] = WeightedScan{sigma_[i].weight, origin, moved[i].data(), moved[i].size(), nullptr};
+      }
+      map_->insertBlurred(scans, ip_);
+    }
+    return seconds(t0, Clock::now());
+  }
+  std::size_t structureBytes() const override { return map_->memoryBytes(); }
+  std::size_t leaves() const override { return map_->leafCount(); }
+  double queryNs(const std::vector<Eigen::Vector3d>& pts) const override {
+    return timeQueries(pts, [&](const Eigen::Vector3d& p) { return std::size_t(map_->stateAt(p)); });
+  }
+  const OccupancyMap* rtogMap() const override { return map_.get(); }
+
+ private:
+  std::string label_;
+  MapParams params_;
+  InsertParams ip_;
+  std::vector<SigmaPoint> sigma_;
   std::unique_ptr<OccupancyMap> map_;
 };
 
@@ -243,6 +294,11 @@ std::vector<std::unique_ptr<Method>> methodsFor(const Dataset& d, double res, co
   m.push_back(std::make_unique<RtogMethod>("rtog end point, merge equal", res, MergePolicy::Equal, endpoint));
   m.push_back(std::make_unique<RtogMethod>("rtog range noise (sigma 0.02 m + 0.01 m/m), merge equal", res,
                                            MergePolicy::Equal, noise));
+  m.push_back(std::make_unique<RtogBlurredMethod>("rtog beam, pose blur (sigma 0.05 m, 1 deg), merge equal", res,
+                                                  beam, 0.05, 1.0 * M_PI / 180.0));
+  m.push_back(std::make_unique<RtogBlurredMethod>(
+      "rtog range noise (sigma 0.02 m + 0.01 m/m), pose blur (sigma 0.05 m, 1 deg), merge equal", res, noise, 0.05,
+      1.0 * M_PI / 180.0));
   for (const bool lazy : {false, true})
     for (const bool discretize : {false, true})
       m.push_back(std::make_unique<OctomapMethod>(res, lazy, discretize, o.max_range));
