@@ -1,7 +1,8 @@
 // libFuzzer target: insertion from structured input. The bytes are decoded (FuzzedDataProvider)
 // into a resolution, insertion options, a robot pose and a few observations (2D scans, point
-// clouds, rotating scans) for CRTreeOccupancyGridMap / CRTreeBackedGridMap2D, or into an origin,
-// points and InsertParams for the core OccupancyMap. After every insertion the map must be sound;
+// clouds, rotating scans; a pose PDF with poseUncertainty) for CRTreeOccupancyGridMap /
+// CRTreeBackedGridMap2D, or into an origin, points and InsertParams for the core OccupancyMap
+// (plain or blurred over a few shifted poses). After every insertion the map must be sound;
 // each observation is also scored, and a few queries run.
 //
 // Sizes are bounded (beams, points, ranges over resolution) so that one input takes well under a
@@ -24,6 +25,7 @@
 #include <mrpt/obs/CObservationPointCloud.h>
 #include <mrpt/obs/CObservationRotatingScan.h>
 #include <mrpt/poses/CPose3D.h>
+#include <mrpt/poses/CPose3DPDFGaussian.h>
 
 #include "rtog/core/occupancy_map.hpp"
 #include "rtog/mrpt/CRTreeBackedGridMap2D.h"
@@ -87,6 +89,7 @@ CRTreeOccupancyGridMap::TInsertionOptions insertionOptions(Fdp& in) {
   io.mapAltitude = static_cast<float>(value(in, -1.0, 1.0));
   io.horizontalTolerance = static_cast<float>(value(in, 0.0, 0.2));
   io.threads = in.ConsumeIntegralInRange<int>(0, 7) == 0 ? 2 : 1;
+  io.poseUncertainty = in.ConsumeBool();  // with mrpt_grid: refused
   if (in.ConsumeBool()) {
     io.rotatingScan_minElevation_deg = static_cast<float>(value(in, -30.0, 0.0));
     io.rotatingScan_maxElevation_deg = static_cast<float>(value(in, 0.0, 30.0));
@@ -173,10 +176,19 @@ void fuzzPlugin(Fdp& in) {
   for (int k = 0; k < count && in.remaining_bytes() > 0; ++k) {
     const auto obs = observation(in);
     const auto p = pose(in, 4.0);
+    const bool uncertain = !backed && in.ConsumeBool();
     try {
-      m.insertObservation(*obs, p);
+      if (uncertain) {
+        // A pose PDF: a diagonal covariance of fuzzed variances (bad ones must be refused).
+        mrpt::poses::CPose3DPDFGaussian pdf(p);
+        pdf.cov.setZero();
+        for (int d = 0; d < 6; ++d) pdf.cov(d, d) = in.ConsumeBool() ? 0.0 : value(in, 0.0, 0.01);
+        plain->insertObservation(*obs, pdf);
+      } else {
+        m.insertObservation(*obs, p);
+      }
     } catch (const std::exception&) {
-      // refused with a reason (e.g. a rotating scan of an unknown lidar)
+      // refused with a reason (e.g. a rotating scan of an unknown lidar, a covariance that is none)
     }
     checkSound(r.map());
     // Scoring must not crash on any input; its values are the likelihood tests' business.
@@ -220,8 +232,23 @@ void fuzzCore(Fdp& in) {
       pts.emplace_back(x, y, z);
       hit.push_back(in.ConsumeIntegralInRange<int>(0, 7) != 0);
     }
+    const std::uint8_t* hits = in.ConsumeBool() ? hit.data() : nullptr;
     try {
-      map.insertPointCloud(origin, pts.data(), pts.size(), ip, in.ConsumeBool() ? hit.data() : nullptr);
+      if (in.ConsumeIntegralInRange<int>(0, 3) == 0) {
+        // The scan from a few shifted poses, blurred (weights may be bad: refused).
+        const int poses = in.ConsumeIntegralInRange<int>(1, 4);
+        std::vector<std::vector<Eigen::Vector3f>> moved(static_cast<std::size_t>(poses));
+        std::vector<rtog::WeightedScan> scans;
+        for (int i = 0; i < poses; ++i) {
+          const Eigen::Vector3f shift(static_cast<float>(value(in, -0.2, 0.2)), static_cast<float>(value(in, -0.2, 0.2)), 0.0f);
+          for (const auto& p : pts) moved[static_cast<std::size_t>(i)].push_back(p + shift);
+          scans.push_back(rtog::WeightedScan{value(in, 0.01, 1.0), origin + shift.cast<double>(),
+                                             moved[static_cast<std::size_t>(i)].data(), pts.size(), hits});
+        }
+        map.insertBlurred(scans, ip);
+      } else {
+        map.insertPointCloud(origin, pts.data(), pts.size(), ip, hits);
+      }
     } catch (const std::exception&) {
     }
     checkSound(map);

@@ -1,6 +1,7 @@
 #include "accuracy.hpp"
 
 #include <chrono>
+#include <algorithm>
 #include <cmath>
 #include <functional>
 #include <sstream>
@@ -41,16 +42,20 @@ struct MapView {
 
 // ---- rtog ------------------------------------------------------------------------------
 
-MapView buildRtog(const std::vector<sim::Scan>& scans, double res, double max_range, const sim::TruthGrid& region) {
+/// rtog with the beam model ("rtog"), or with the range-noise model at the sensor's own sigma
+/// ("rtog_range_noise", doc/range-noise.md) if sigma > 0.
+MapView buildRtog(const std::vector<sim::Scan>& scans, double res, double max_range, const sim::TruthGrid& region,
+                  double sigma = 0.0) {
   MapParams mp;
   mp.resolution = res;
   OccupancyMap map(mp);
   InsertParams ip;
-  ip.model = SensorModel::BeamBased;
+  ip.model = sigma > 0.0 ? SensorModel::RangeNoise : SensorModel::BeamBased;
+  ip.range_noise_std = sigma;
   ip.max_range = max_range;
   const auto t0 = Clock::now();
   for (const auto& s : scans) map.insertPointCloud(s.origin, s.points.data(), s.points.size(), ip, s.is_hit.data());
-  MapView v("rtog", region.size());
+  MapView v(sigma > 0.0 ? "rtog_range_noise" : "rtog", region.size());
   v.insert_seconds = secondsSince(t0);
   const Box& R = region.region();
   const LogOddsModel& model = map.logOddsModel();
@@ -198,13 +203,15 @@ MapView buildMrpt2D(const std::vector<sim::Scan>& scans, const std::vector<sim::
 
 // ---- scoring -----------------------------------------------------------------------------
 
-void score(const std::string& scenario_name, const std::vector<MapView>& maps, const sim::TruthGrid& truth,
-           Scenario& sc, std::vector<MapResult>& out) {
-  // The evaluation region: every cell at least one of the maps observed.
+// The evaluation region is every cell that at least one of the first `region_maps` maps (rtog's
+// beam model, OctoMap, MRPT's grid) observed. The maps after them (other sensor models) are scored
+// on the same cells, so that adding one does not move the others' figures.
+void score(const std::string& scenario_name, const std::vector<MapView>& maps, std::size_t region_maps,
+           const sim::TruthGrid& truth, Scenario& sc, std::vector<MapResult>& out) {
   std::vector<std::uint8_t> eval(truth.size(), 0);
-  for (const auto& m : maps)
+  for (std::size_t k = 0; k < region_maps && k < maps.size(); ++k)
     for (std::size_t i = 0; i < truth.size(); ++i)
-      if (m.state[i] != sim::Predicted::Unknown) eval[i] = 1;
+      if (maps[k].state[i] != sim::Predicted::Unknown) eval[i] = 1;
   sc.region_cells = truth.size();
   for (std::size_t i = 0; i < truth.size(); ++i)
     if (eval[i]) {
@@ -226,9 +233,10 @@ void score(const std::string& scenario_name, const std::vector<MapView>& maps, c
     r.observed_cells = observed;
     r.observed_outside = m.outside;
     r.metrics = ev.finish();
-    // Class agreement with the second map (OctoMap) over the evaluated cells.
+    // Class agreement with OctoMap's map over the evaluated cells.
+    const auto octomap = std::find_if(maps.begin(), maps.end(), [](const MapView& v) { return v.name == "octomap"; });
     std::size_t same = 0;
-    for (std::size_t i = 0; i < truth.size(); ++i) same += eval[i] && m.state[i] == maps[1].state[i];
+    for (std::size_t i = 0; i < truth.size(); ++i) same += eval[i] && m.state[i] == octomap->state[i];
     r.agreement_octomap = sc.evaluated_cells ? static_cast<double>(same) / static_cast<double>(sc.evaluated_cells) : 0.0;
     out.push_back(std::move(r));
   }
@@ -283,7 +291,12 @@ Report run(const Config& cfg, std::ostream& log) {
     log << "  octomap     " << maps.back().insert_seconds << " s\n";
     maps.push_back(buildMrpt3D(simlog.lidar, cfg.resolution, cfg.lidar.max_range, truth));
     log << "  mrpt_grid3d " << maps.back().insert_seconds << " s\n";
-    score(sc.name, maps, truth, sc, rep.results);
+    const std::size_t region_maps = maps.size();
+    if (cfg.lidar.sigma > 0) {
+      maps.push_back(buildRtog(simlog.lidar, cfg.resolution, cfg.lidar.max_range, truth, cfg.lidar.sigma));
+      log << "  rtog_range_noise " << maps.back().insert_seconds << " s\n";
+    }
+    score(sc.name, maps, region_maps, truth, sc, rep.results);
     rep.scenarios.push_back(sc);
   }
 
@@ -313,7 +326,12 @@ Report run(const Config& cfg, std::ostream& log) {
     log << "  octomap     " << maps.back().insert_seconds << " s\n";
     maps.push_back(buildMrpt2D(simlog.planar, simlog.poses, cfg.scanner, cfg.resolution, truth));
     log << "  mrpt_grid2d " << maps.back().insert_seconds << " s\n";
-    score(sc.name, maps, truth, sc, rep.results);
+    const std::size_t region_maps = maps.size();
+    if (cfg.scanner.sigma > 0) {
+      maps.push_back(buildRtog(simlog.planar, cfg.resolution, cfg.scanner.max_range, truth, cfg.scanner.sigma));
+      log << "  rtog_range_noise " << maps.back().insert_seconds << " s\n";
+    }
+    score(sc.name, maps, region_maps, truth, sc, rep.results);
     rep.scenarios.push_back(sc);
   }
   rep.total_seconds = secondsSince(t_start);

@@ -18,6 +18,7 @@ namespace {
 cv::Scalar colourOf(const std::string& map) {  // BGR
   if (map == "rtog") return {40, 40, 220};
   if (map == "octomap") return {200, 110, 20};
+  if (map == "rtog_range_noise") return {180, 40, 180};  // magenta
   return {40, 160, 40};  // MRPT grids
 }
 
@@ -85,7 +86,7 @@ void panel(cv::Mat& img, cv::Rect area, const Report& r, const Scenario& sc, con
   for (std::size_t j = 0; j < maps.size(); ++j) {
     char buf[96];
     std::snprintf(buf, sizeof buf, "%s  AUC %.4f", maps[j]->map.c_str(), maps[j]->metrics.auc);
-    const cv::Point lp(plot.x + plot.width - 240, plot.y + plot.height - 20 - 22 * static_cast<int>(maps.size() - 1 - j));
+    const cv::Point lp(plot.x + plot.width - 290, plot.y + plot.height - 20 - 22 * static_cast<int>(maps.size() - 1 - j));
     cv::line(img, lp + cv::Point(0, -5), lp + cv::Point(25, -5), colourOf(maps[j]->map), j == 0 ? 2 : 5, cv::LINE_AA);
     text(img, buf, lp + cv::Point(32, 0), 0.5);
   }

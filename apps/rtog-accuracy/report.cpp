@@ -39,6 +39,9 @@ Json resultJson(const MapResult& m) {
   const sim::ClassMetrics& x = m.metrics;
   Json roc = Json::array();
   for (const auto& [fpr, tpr] : x.roc) roc.push_back({fpr, tpr});
+  Json reliability = Json::array();
+  for (const auto& b : x.reliability)
+    reliability.push_back({{"mean_p", b.mean_p}, {"occupied_share", b.occupied_share}, {"cells", b.cells}});
   return Json{{"scenario", m.scenario},
               {"map", m.map},
               {"insert_seconds", m.insert_seconds},
@@ -56,6 +59,10 @@ Json resultJson(const MapResult& m) {
               {"precision_free", x.precision_free},
               {"recall_free", x.recall_free},
               {"auc", x.auc},
+              {"brier", x.brier},
+              {"nll", x.nll},
+              {"ece", x.ece},
+              {"reliability", reliability},
               {"roc", roc}};
 }
 }  // namespace
@@ -88,14 +95,14 @@ void writeMarkdown(const Report& r, std::ostream& os) {
     os << "**" << s.name << "** — " << s.description << "; " << s.scans << " scans, " << s.beams << " beams ("
        << s.returns << " returns); evaluated cells " << s.evaluated_cells << " (truth: " << s.truth_occupied
        << " occupied, " << s.truth_free << " free)\n\n";
-    os << "| map | observed cells | occupied precision | occupied recall | free precision | free recall | ROC AUC | "
-          "same class as OctoMap | insert time [s] |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+    os << "| map | observed cells | occupied precision | occupied recall | free precision | free recall | ROC AUC | Brier | NLL [nats] | ECE | "
+          "same class as OctoMap | insert time [s] |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
     for (const MapResult& m : r.results) {
       if (m.scenario != s.name) continue;
       const auto& x = m.metrics;
       os << "| " << m.map << " | " << m.observed_cells << " | " << std::setprecision(4) << x.precision_occupied
          << " | " << x.recall_occupied << " | " << x.precision_free << " | " << x.recall_free << " | " << x.auc
-         << " | " << m.agreement_octomap << " | " << std::setprecision(2) << m.insert_seconds << " |\n";
+         << " | " << x.brier << " | " << x.nll << " | " << x.ece << " | " << m.agreement_octomap << " | " << std::setprecision(2) << m.insert_seconds << " |\n";
     }
     os << "\n";
   }

@@ -225,6 +225,31 @@ TEST(SimMetrics, PrecisionRecallAuc) {
   EXPECT_EQ(m.roc.back(), std::make_pair(1.0, 1.0));
 }
 
+// Brier score, NLL and ECE of the same five cells, by hand: P = {0.9, 0.8, 0.3, 0.2, 0.5 (unknown)},
+// truth = {1, 0, 1, 0, 0}.
+TEST(SimMetrics, CalibrationFigures) {
+  Evaluator ev;
+  ev.add(0.9, Predicted::Occupied, true);
+  ev.add(0.8, Predicted::Occupied, false);
+  ev.add(0.3, Predicted::Free, true);
+  ev.add(0.2, Predicted::Free, false);
+  ev.add(0.9, Predicted::Unknown, false);
+  const ClassMetrics m = ev.finish();
+  EXPECT_NEAR(m.brier, (0.01 + 0.64 + 0.49 + 0.04 + 0.25) / 5, 1e-15);
+  EXPECT_NEAR(m.nll, -(std::log(0.9) + std::log(0.2) + std::log(0.3) + std::log(0.8) + std::log(0.5)) / 5, 1e-15);
+  // Bins: [0.2,0.3) {0.2: free}, [0.3,0.4) {0.3: occupied}, [0.5,0.6) {0.5: free}, [0.8,0.9) {0.8: free},
+  // [0.9,1] {0.9: occupied}: each one cell, |p - share| = 0.2, 0.7, 0.5, 0.8, 0.1.
+  EXPECT_NEAR(m.ece, (0.2 + 0.7 + 0.5 + 0.8 + 0.1) / 5, 1e-12);
+  ASSERT_EQ(m.reliability.size(), std::size_t(kCalibrationBins));
+  EXPECT_EQ(m.reliability[3].cells, 1u);
+  EXPECT_DOUBLE_EQ(m.reliability[3].occupied_share, 1.0);
+  EXPECT_EQ(m.reliability[0].cells, 0u);
+  // A perfectly calibrated predictor: P = 0.25 on cells a quarter of which are occupied.
+  Evaluator cal;
+  for (int i = 0; i < 400; ++i) cal.add(0.25, Predicted::Free, i % 4 == 0);
+  EXPECT_NEAR(cal.finish().ece, 0.0, 1e-12);
+}
+
 // rtog built from exact scans must call the occupied cells it saw occupied: of the truth-occupied
 // cells that hold an exact end point, >= 95 % must be Occupied in the map (the rest were crossed
 // by grazing beams of other scans more often than hit). Precision must be perfect.

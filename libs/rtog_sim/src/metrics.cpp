@@ -1,5 +1,8 @@
 #include "rtog/sim/metrics.hpp"
 
+#include <algorithm>
+#include <cmath>
+
 namespace rtog::sim {
 
 void Evaluator::add(double p_occ, Predicted pred, bool truth) {
@@ -35,6 +38,34 @@ ClassMetrics Evaluator::finish() const {
     m.roc.emplace_back(N > 0 ? fp / N : 0.0, P > 0 ? tp / P : 0.0);
   }
   m.auc = (P > 0 && N > 0) ? area / (P * N) : 0.0;
+  // Calibration from the same histogram. P is kept off 0 and 1 by 1e-12 for the logarithm: every
+  // map here clamps its probabilities far inside that.
+  m.reliability.assign(kCalibrationBins, {});
+  std::vector<double> sum_p(kCalibrationBins, 0.0), occupied(kCalibrationBins, 0.0);
+  double brier = 0, nll = 0;
+  for (const auto& [p, counts] : hist_) {
+    const double pos = static_cast<double>(counts.first), neg = static_cast<double>(counts.second);
+    const double q = std::clamp(p, 1e-12, 1.0 - 1e-12);
+    brier += pos * (1 - p) * (1 - p) + neg * p * p;
+    nll -= pos * std::log(q) + neg * std::log(1 - q);
+    const int b = std::clamp(static_cast<int>(p * kCalibrationBins), 0, kCalibrationBins - 1);
+    sum_p[b] += p * (pos + neg);
+    occupied[b] += pos;
+    m.reliability[b].cells += counts.first + counts.second;
+  }
+  const double cells = static_cast<double>(m.cells);
+  if (cells > 0) {
+    m.brier = brier / cells;
+    m.nll = nll / cells;
+    for (int b = 0; b < kCalibrationBins; ++b) {
+      auto& bin = m.reliability[b];
+      if (bin.cells == 0) continue;
+      const double n = static_cast<double>(bin.cells);
+      bin.mean_p = sum_p[b] / n;
+      bin.occupied_share = occupied[b] / n;
+      m.ece += n / cells * std::abs(bin.mean_p - bin.occupied_share);
+    }
+  }
   return m;
 }
 

@@ -1,5 +1,7 @@
 // Classification figures of an occupancy map against ground truth: precision and recall of
-// the occupied and free classes, and the ROC curve and its AUC of P(occupied).
+// the occupied and free classes, the ROC curve and its AUC of P(occupied), and how well the
+// probabilities are calibrated (Brier score, negative log-likelihood, expected calibration error
+// and the reliability diagram's bins).
 #pragma once
 
 #include <cstdint>
@@ -21,7 +23,18 @@ struct ClassMetrics {
   double precision_occupied = 0, recall_occupied = 0, precision_free = 0, recall_free = 0;
   double auc = 0;                                 ///< area under the ROC curve
   std::vector<std::pair<double, double>> roc;     ///< (false positive rate, true positive rate)
+  /// Calibration, over the same cells (unknown ones at the prior 0.5): the mean of (P - truth)^2;
+  /// the mean of -ln P(truth) [nats]; and the expected calibration error over kCalibrationBins
+  /// equal-width bins of P, sum over bins of (cells in bin / cells) * |mean P - occupied share|.
+  double brier = 0, nll = 0, ece = 0;
+  struct ReliabilityBin {
+    double mean_p = 0, occupied_share = 0;
+    std::size_t cells = 0;
+  };
+  std::vector<ReliabilityBin> reliability;  ///< kCalibrationBins bins of P, [k/n, (k+1)/n)
 };
+
+constexpr int kCalibrationBins = 10;
 
 /// Accumulates cells, then computes the figures. Unknown cells count as not predicted for
 /// precision/recall and score 0.5 in the ROC (the prior).
