@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 #include <stdexcept>
+#include <string>
 
 #include <mrpt/config/CConfigFileBase.h>
 #include <mrpt/obs/CObservation2DRangeScan.h>
@@ -107,6 +108,11 @@ int8_t toMrptCell(float v) {
 
 // ---- the view ----------------------------------------------------------------------------
 
+namespace {
+/// The most cells a 2D view holds (one byte each): 1 GiB.
+constexpr double kMaxViewCells = double(std::uint64_t{1} << 30);
+}  // namespace
+
 CRTreeOccupancyGridMap::GridView::GridView(const OccupancyMap& m, float lo, float hi, const std::optional<Rect>& ex,
                                            const TGridFrame2D* frame)
     : minZ(lo), maxZ(hi), extra(ex) {
@@ -123,6 +129,7 @@ CRTreeOccupancyGridMap::GridView::GridView(const OccupancyMap& m, float lo, floa
                                     (*extra)[2] <= frame->x_max && (*extra)[3] <= frame->y_max);
     if (!(holds && reaches)) frame = nullptr;
   }
+  if (frame && double(frame->size_x) * double(frame->size_y) > double(kMaxViewCells)) frame = nullptr;
   if (frame) {
     grid.setGeometry(*frame);
     fillCells(m, kb, mrpt_grid::keyOffsetX(*frame), mrpt_grid::keyOffsetY(*frame));
@@ -139,6 +146,13 @@ CRTreeOccupancyGridMap::GridView::GridView(const OccupancyMap& m, float lo, floa
     gx1 = std::max(any ? gx1 : gx0, key((*extra)[2]));
     gy1 = std::max(any ? gy1 : gy0, key((*extra)[3]));
   }
+  // MRPT sizes its cell array with 32-bit arithmetic: a view of 2^32 cells or more gets none
+  // (a scan whose end points lie a million cells away asks for one). Refused with the reason.
+  const double cells = (gx1 - gx0 + 1) * (gy1 - gy0 + 1);
+  if (cells > double(kMaxViewCells))
+    throw std::length_error("rtog::CRTreeOccupancyGridMap: the 2D view of the map and the observation would have " +
+                            std::to_string(cells) + " cells (more than " + std::to_string(kMaxViewCells) +
+                            "): the observation reaches too far from the map's cells");
   // Cell k of the lattice is cell k - g*0 of the grid: setSize keeps multiples of res.
   grid.setSize(static_cast<float>(gx0 * res), static_cast<float>((gx1 + 1) * res), static_cast<float>(gy0 * res),
                static_cast<float>((gy1 + 1) * res), fres, 0.5f);
@@ -174,8 +188,10 @@ void CRTreeOccupancyGridMap::GridView::fillCells(const OccupancyMap& m, const Bo
   bandMaxima(m, region, best);
   auto& cells = grid.cells();
   const auto ox = static_cast<std::int64_t>(kb.min.x - gx0), oy = static_cast<std::int64_t>(kb.min.y - gy0);
-  for (std::int64_t y = 0; y < ny && y + oy < sy; ++y)
-    for (std::int64_t x = 0; x < nx && x + ox < sx; ++x) {
+  // Known cells outside the view's frame (a grid frame that 2D scans grew, cells that other
+  // observations put beyond it) are not drawn: clipped on every side.
+  for (std::int64_t y = std::max<std::int64_t>(0, -oy); y < ny && y + oy < sy; ++y)
+    for (std::int64_t x = std::max<std::int64_t>(0, -ox); x < nx && x + ox < sx; ++x) {
       const float v = best[static_cast<std::size_t>(y * nx + x)];
       if (!std::isnan(v)) cells[static_cast<std::size_t>((y + oy) * sx + x + ox)] = toMrptCell(v);
     }
