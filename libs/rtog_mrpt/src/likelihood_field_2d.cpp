@@ -11,6 +11,14 @@
 namespace rtog {
 namespace {
 
+// COccupancyGridMap2D::x2idx / y2idx, without its float-to-int cast of a point beyond the int
+// range (undefined behaviour): such a point is outside the grid, -1, as x86 turns the cast
+// into INT_MIN, which the stock grid then counts outside too.
+int cellIndex(double v, double lo, double res) {
+  const double i = (v - lo) / res;
+  return i > -2147483648.0 && i < 2147483647.0 ? static_cast<int>(i) : -1;
+}
+
 using Grid = mrpt::maps::COccupancyGridMap2D;
 
 /// The field's constants in the precision the stock grid computes them in (floats where its
@@ -101,8 +109,8 @@ double LikelihoodField2D::scanLogLikelihood(const Grid& g, const mrpt::obs::CObs
   std::size_t m = 0;
   for (std::size_t j = 0; j < n; j += step, ++m) {
     const double lx = xs[j], ly = ys[j];
-    const int cx = g.x2idx(pose.x() + lx * c - ly * s);
-    const int cy = g.y2idx(pose.y() + lx * s + ly * c);
+    const int cx = cellIndex(pose.x() + lx * c - ly * s, g.getXMin(), g.getResolution());
+    const int cy = cellIndex(pose.y() + lx * s + ly * c, g.getYMin(), g.getResolution());
     // The grid's last row and column count as outside, as in the stock grid.
     if (static_cast<unsigned>(cx) >= last_x || static_cast<unsigned>(cy) >= last_y) {
       sum += outside_value;
