@@ -6,15 +6,10 @@
 #include <functional>
 #include <sstream>
 
-#include <mrpt/maps/COccupancyGridMap2D.h>
-#include <mrpt/maps/COccupancyGridMap3D.h>
-#include <mrpt/maps/CSimplePointsMap.h>
-#include <mrpt/obs/CObservation2DRangeScan.h>
-#include <mrpt/poses/CPose3D.h>
 #include <mrpt/version.h>
-#include <octomap/octomap.h>
 
-#include "rtog/core/occupancy_map.hpp"
+#include "builders.hpp"
+#include "rtog/sim/calibration.hpp"
 
 #ifndef RTOG_OCTOMAP_VERSION
 #define RTOG_OCTOMAP_VERSION "unknown"
@@ -26,180 +21,6 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 double secondsSince(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
-
-constexpr double kPi = 3.14159265358979323846;
-
-/// What one map says about every cell of the region: P(occupied) and its class.
-struct MapView {
-  std::string name;
-  double insert_seconds = 0;
-  std::vector<float> p;                 // P(occupied); only meaningful when state != Unknown
-  std::vector<sim::Predicted> state;
-  std::size_t outside = 0;              // known cells outside the region
-  explicit MapView(std::string n, std::size_t cells)
-      : name(std::move(n)), p(cells, 0.5f), state(cells, sim::Predicted::Unknown) {}
-};
-
-// ---- rtog ------------------------------------------------------------------------------
-
-/// rtog with the beam model ("rtog"), or with the range-noise model at the sensor's own sigma
-/// ("rtog_range_noise", doc/range-noise.md) if sigma > 0.
-MapView buildRtog(const std::vector<sim::Scan>& scans, double res, double max_range, const sim::TruthGrid& region,
-                  double sigma = 0.0) {
-  MapParams mp;
-  mp.resolution = res;
-  OccupancyMap map(mp);
-  InsertParams ip;
-  ip.model = sigma > 0.0 ? SensorModel::RangeNoise : SensorModel::BeamBased;
-  ip.range_noise_std = sigma;
-  ip.max_range = max_range;
-  const auto t0 = Clock::now();
-  for (const auto& s : scans) map.insertPointCloud(s.origin, s.points.data(), s.points.size(), ip, s.is_hit.data());
-  MapView v(sigma > 0.0 ? "rtog_range_noise" : "rtog", region.size());
-  v.insert_seconds = secondsSince(t0);
-  const Box& R = region.region();
-  const LogOddsModel& model = map.logOddsModel();
-  map.forEachLeaf([&](const Box& b, float value) {
-    const Box c = b.intersection(R);
-    v.outside += static_cast<std::size_t>(b.volume() - (c.isEmpty() ? 0 : c.volume()));
-    if (c.isEmpty()) return;
-    const float prob = static_cast<float>(probability(value));
-    const sim::Predicted st =
-        model.classify(value) == CellState::Occupied ? sim::Predicted::Occupied : sim::Predicted::Free;
-    forEachCell(c, [&](const Key& k) {
-      const std::size_t i = region.index(k);
-      v.p[i] = prob;
-      v.state[i] = st;
-    });
-  });
-  return v;
-}
-
-// ---- OctoMap ----------------------------------------------------------------------------
-
-MapView buildOctomap(const std::vector<sim::Scan>& scans, double res, double max_range, const sim::TruthGrid& region) {
-  octomap::OcTree tree(res);  // OctoMap's defaults: hit 0.7, miss 0.4, clamp 0.1192/0.971
-  const auto t0 = Clock::now();
-  for (const auto& s : scans) {
-    octomap::Pointcloud pc;
-    pc.reserve(s.points.size());
-    for (std::size_t i = 0; i < s.points.size(); ++i) {
-      Eigen::Vector3f p = s.points[i];
-      if (!s.is_hit[i]) {  // no return: place it beyond max_range so OctoMap only clears up to it
-        const Eigen::Vector3f o = s.origin.cast<float>();
-        p = o + (p - o).normalized() * static_cast<float>(max_range + 1.0);
-      }
-      pc.push_back(p.x(), p.y(), p.z());
-    }
-    tree.insertPointCloud(pc, octomap::point3d(static_cast<float>(s.origin.x()), static_cast<float>(s.origin.y()),
-                                               static_cast<float>(s.origin.z())),
-                          max_range);
-  }
-  MapView v("octomap", region.size());
-  v.insert_seconds = secondsSince(t0);
-  const Box& R = region.region();
-  const int depth = static_cast<int>(tree.getTreeDepth());
-  const std::int32_t off = std::int32_t{1} << (depth - 1);  // OctoMap key of cell 0 (32768)
-  for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) {
-    const octomap::OcTreeKey k0 = it.getIndexKey();
-    const std::int32_t n = 1 << (depth - static_cast<int>(it.getDepth()));
-    const Key lo{static_cast<std::int32_t>(k0[0]) - off, static_cast<std::int32_t>(k0[1]) - off,
-                 static_cast<std::int32_t>(k0[2]) - off};
-    const Box b{lo, Key{lo.x + n - 1, lo.y + n - 1, lo.z + n - 1}};
-    const Box c = b.intersection(R);
-    v.outside += static_cast<std::size_t>(b.volume() - (c.isEmpty() ? 0 : c.volume()));
-    if (c.isEmpty()) continue;
-    const float prob = static_cast<float>(it->getOccupancy());
-    const sim::Predicted st = tree.isNodeOccupied(*it) ? sim::Predicted::Occupied : sim::Predicted::Free;
-    forEachCell(c, [&](const Key& k) {
-      const std::size_t i = region.index(k);
-      v.p[i] = prob;
-      v.state[i] = st;
-    });
-  }
-  return v;
-}
-
-// ---- MRPT --------------------------------------------------------------------------------
-
-// Same sensor model as the others, as far as MRPT's options go: P(occ | hit) = 0.7 and
-// P(free | miss) = 0.6. (MRPT's 3D grid triples the occupied log-odds increment internally.)
-constexpr float kMrptOcc = 0.7f, kMrptFree = 0.6f;
-
-void readMrpt(MapView& v, const sim::TruthGrid& region, double res, const std::function<float(double, double, double)>& freeness) {
-  for (std::size_t i = 0; i < region.size(); ++i) {
-    const Key k = region.key(i);
-    const float f = freeness((k.x + 0.5) * res, (k.y + 0.5) * res, (k.z + 0.5) * res);
-    if (f == 0.5f) continue;  // log-odds 0: never observed (or observed to exactly the prior)
-    v.p[i] = 1.0f - f;
-    v.state[i] = f < 0.5f ? sim::Predicted::Occupied : sim::Predicted::Free;
-  }
-}
-
-MapView buildMrpt3D(const std::vector<sim::Scan>& scans, double res, double max_range, const sim::TruthGrid& region) {
-  const Box& R = region.region();
-  mrpt::maps::COccupancyGridMap3D grid(mrpt::math::TPoint3D(R.min.x * res, R.min.y * res, R.min.z * res),
-                                       mrpt::math::TPoint3D((R.max.x + 1) * res, (R.max.y + 1) * res, (R.max.z + 1) * res),
-                                       static_cast<float>(res));
-  grid.insertionOptions.maxOccupancyUpdateCertainty = kMrptOcc;
-  grid.insertionOptions.maxFreenessUpdateCertainty = kMrptFree;
-  grid.insertionOptions.maxDistanceInsertion = static_cast<float>(max_range + 1.0);
-  grid.insertionOptions.decimation = 1;
-  const auto t0 = Clock::now();
-  for (const auto& s : scans) {
-    mrpt::maps::CSimplePointsMap pts;
-    pts.reserve(s.points.size());
-    const mrpt::math::TPoint3D o(s.origin.x(), s.origin.y(), s.origin.z());
-    for (std::size_t i = 0; i < s.points.size(); ++i)
-      if (s.is_hit[i]) pts.insertPointFast(s.points[i].x(), s.points[i].y(), s.points[i].z());
-    grid.insertPointCloud(o, pts);
-    for (std::size_t i = 0; i < s.points.size(); ++i)
-      if (!s.is_hit[i])
-        grid.insertRay(o, mrpt::math::TPoint3D(s.points[i].x(), s.points[i].y(), s.points[i].z()), false);
-  }
-  MapView v("mrpt_grid3d", region.size());
-  v.insert_seconds = secondsSince(t0);
-  readMrpt(v, region, res, [&](double x, double y, double z) {
-    return grid.getFreenessByPos(static_cast<float>(x), static_cast<float>(y), static_cast<float>(z));
-  });
-  return v;
-}
-
-MapView buildMrpt2D(const std::vector<sim::Scan>& scans, const std::vector<sim::Pose>& poses,
-                    const sim::ScannerParams& sp, double res, const sim::TruthGrid& region) {
-  const Box& R = region.region();
-  mrpt::maps::COccupancyGridMap2D grid(static_cast<float>(R.min.x * res), static_cast<float>((R.max.x + 1) * res),
-                                       static_cast<float>(R.min.y * res), static_cast<float>((R.max.y + 1) * res),
-                                       static_cast<float>(res));
-  grid.insertionOptions.maxOccupancyUpdateCertainty = kMrptOcc;
-  grid.insertionOptions.maxFreenessUpdateCertainty = kMrptFree;
-  grid.insertionOptions.maxFreenessInvalidRanges = kMrptFree;
-  grid.insertionOptions.maxDistanceInsertion = static_cast<float>(sp.max_range + 1.0);
-  grid.insertionOptions.considerInvalidRangesAsFreeSpace = true;
-  grid.insertionOptions.wideningBeamsWithDistance = false;
-  const int n = sp.beams();
-  const auto t0 = Clock::now();
-  for (std::size_t s = 0; s < scans.size(); ++s) {
-    mrpt::obs::CObservation2DRangeScan obs;
-    obs.aperture = static_cast<float>(sp.fov_deg * kPi / 180.0);
-    obs.rightToLeft = true;
-    obs.maxRange = static_cast<float>(sp.max_range);
-    obs.sensorPose = mrpt::poses::CPose3D(0, 0, sp.height, 0, 0, 0);
-    obs.resizeScan(static_cast<std::size_t>(n));
-    for (int i = 0; i < n; ++i) {
-      obs.setScanRange(static_cast<std::size_t>(i), scans[s].range[static_cast<std::size_t>(i)]);
-      obs.setScanRangeValidity(static_cast<std::size_t>(i), scans[s].is_hit[static_cast<std::size_t>(i)] != 0);
-    }
-    const sim::Pose& p = poses[s];
-    grid.insertObservation(obs, mrpt::poses::CPose3D(p.position.x(), p.position.y(), p.position.z(), p.yaw, 0, 0));
-  }
-  MapView v("mrpt_grid2d", region.size());
-  v.insert_seconds = secondsSince(t0);
-  readMrpt(v, region, res, [&](double x, double y, double) {
-    return grid.getPos(static_cast<float>(x), static_cast<float>(y));
-  });
-  return v;
-}
 
 // ---- scoring -----------------------------------------------------------------------------
 
@@ -248,6 +69,73 @@ std::string mrptVersion() {
   return os.str();
 }
 
+/// The scans of one scenario, as the maps receive them.
+struct ScenarioInput {
+  Scenario sc;
+  const std::vector<sim::Scan>* scans = nullptr;
+  std::vector<sim::Pose> poses;  // as placed (believed)
+  double max_range = 0, sigma = 0;
+  bool calibrated = false;
+  sim::InverseModelRates rates;  // measured in the calibration world, if calibrated
+};
+
+void runScenario(const Config& cfg, const ScenarioInput& in, const sim::TruthGrid& truth, std::ostream& log, Report& rep) {
+  Scenario sc = in.sc;
+  const auto& scans = *in.scans;
+  sc.scans = scans.size();
+  for (const auto& s : scans) {
+    sc.beams += s.points.size();
+    sc.returns += s.hits();
+  }
+  const double yaw_sigma = cfg.pose_sigma_yaw_deg * 3.14159265358979323846 / 180.0;
+  const Eigen::Matrix3d cov =
+      Eigen::Vector3d(cfg.pose_sigma_xy * cfg.pose_sigma_xy, cfg.pose_sigma_xy * cfg.pose_sigma_xy, yaw_sigma * yaw_sigma)
+          .asDiagonal();
+  log << sc.name << "\n";
+  std::vector<MapView> maps;
+  auto logged = [&](MapView v) {
+    log << "  " << v.name << " " << v.insert_seconds << " s\n";
+    maps.push_back(std::move(v));
+  };
+  logged(buildRtog(scans, cfg.resolution, in.max_range, truth, RtogVariant{"rtog", SensorModel::BeamBased, 0.0, false, {}}, cov));
+  logged(buildOctomap(scans, cfg.resolution, in.max_range, truth));
+  logged(sc.planar ? buildMrpt2D(scans, in.poses, cfg.scanner, cfg.resolution, truth)
+                   : buildMrpt3D(scans, cfg.resolution, in.max_range, truth));
+  const std::size_t region_maps = maps.size();
+  std::vector<RtogVariant> more{{"rtog_endpoint", SensorModel::BeamEndPoint, 0.0, false, {}}};
+  if (in.sigma > 0) more.push_back({"rtog_range_noise", SensorModel::RangeNoise, in.sigma, false, {}});
+  if (sc.pose_noise) {
+    const std::size_t n = more.size();
+    more.insert(more.begin(), RtogVariant{"rtog", SensorModel::BeamBased, 0.0, false, {}});
+    for (std::size_t k = 0; k <= n; ++k) {
+      RtogVariant b = more[k];
+      b.name += "_pose_blur";
+      b.pose_blur = true;
+      more.push_back(b);
+    }
+    more.erase(more.begin());
+  }
+  if (in.calibrated) {
+    // The sensor stated by its rates measured in the calibration world, and the clamping at the
+    // log-odds of calibrated_clamp_readings agreeing readings (prior 0.5).
+    LogOddsParams lo;
+    lo.prob_hit = in.rates.prob_hit;
+    lo.prob_miss = in.rates.prob_miss;
+    const double n = cfg.calibrated_clamp_readings;
+    lo.clamp_min = probability(n * logit(in.rates.prob_miss));
+    lo.clamp_max = probability(n * logit(in.rates.prob_hit));
+    more.push_back({"rtog_calibrated", SensorModel::BeamBased, 0.0, false, lo});
+    if (in.sigma > 0) {
+      more.push_back({"rtog_range_noise_calibrated", SensorModel::RangeNoise, in.sigma, false, lo});
+      if (sc.pose_noise)
+        more.push_back({"rtog_range_noise_pose_blur_calibrated", SensorModel::RangeNoise, in.sigma, true, lo});
+    }
+  }
+  for (const RtogVariant& v : more) logged(buildRtog(scans, cfg.resolution, in.max_range, truth, v, cov));
+  score(sc.name, maps, region_maps, truth, sc, rep.results);
+  rep.scenarios.push_back(sc);
+}
+
 }  // namespace
 
 Report run(const Config& cfg, std::ostream& log) {
@@ -265,74 +153,106 @@ Report run(const Config& cfg, std::ostream& log) {
       sim::simulate(world, cfg.lidar, cfg.scanner, cfg.lidar_seed, cfg.scanner_seed, cfg.stride);
   log << "simulated " << simlog.lidar.size() << " LiDAR and " << simlog.planar.size() << " 2D scans in "
       << secondsSince(t0) << " s\n";
+  const bool pose_noise = cfg.pose_sigma_xy > 0 || cfg.pose_sigma_yaw_deg > 0;
+  const std::vector<sim::PoseError> errors = sim::samplePoseErrors(
+      simlog.poses.size(), cfg.pose_sigma_xy, cfg.pose_sigma_yaw_deg * 3.14159265358979323846 / 180.0, cfg.pose_seed,
+      cfg.pose_correlation);
+  std::vector<sim::Pose> believed = simlog.poses;
+  for (std::size_t i = 0; i < believed.size(); ++i) {
+    believed[i].position += Eigen::Vector3d(errors[i].dx, errors[i].dy, 0.0);
+    believed[i].yaw += errors[i].dyaw;
+  }
+  auto displacedAll = [&](const std::vector<sim::Scan>& scans) {
+    std::vector<sim::Scan> out;
+    for (std::size_t i = 0; i < scans.size(); ++i) out.push_back(sim::displaced(scans[i], errors[i]));
+    return out;
+  };
+  std::ostringstream pose_desc;
+  pose_desc << "; believed poses off by Gauss-Markov errors, sigma_xy " << cfg.pose_sigma_xy << " m, sigma_yaw "
+            << cfg.pose_sigma_yaw_deg << " deg, correlation " << cfg.pose_correlation << " (seed " << cfg.pose_seed << ")";
 
   const Lattice lat(cfg.resolution);
   const Box region3 = sim::worldKeyBox(world, lat, 2);
 
+  // The calibration world: another seed's world, scanned at exact poses by the same sensors
+  // (their own noise seeds), against its own truth.
+  sim::InverseModelRates rates3, rates2;
+  const bool calibrate = cfg.calibration_seed != cfg.seed;
+  if (calibrate) {
+    const sim::World cw = sim::World::generate(cfg.world, cfg.calibration_seed);
+    const sim::SimulatedLog clog =
+        sim::simulate(cw, cfg.lidar, cfg.scanner, cfg.lidar_seed + 1, cfg.scanner_seed + 1, cfg.stride);
+    const Box cr = sim::worldKeyBox(cw, lat, 2);
+    rates3 = sim::measureInverseModel(sim::TruthGrid::rasterize(cw, lat, cr), lat, clog.lidar);
+    const double cz = clog.planar.front().origin.z();
+    Box cr2 = cr;
+    cr2.min.z = cr2.max.z = static_cast<std::int32_t>(std::floor(lat.toLattice(cz)));
+    rates2 = sim::measureInverseModel(sim::TruthGrid::rasterizeSlice(cw, lat, cr2, cz), lat, clog.planar);
+    log << "calibration world (seed " << cfg.calibration_seed << "): LiDAR prob_hit " << rates3.prob_hit << " prob_miss "
+        << rates3.prob_miss << "; 2D scanner prob_hit " << rates2.prob_hit << " prob_miss " << rates2.prob_miss << "\n";
+  }
+  rep.calibration_lidar = rates3;
+  rep.calibration_scanner = rates2;
+
   // ---- 3D LiDAR ----
   {
-    Scenario sc;
-    sc.name = "lidar3d";
     std::ostringstream d;
     d << cfg.lidar.rings << "-ring LiDAR, " << cfg.lidar.azimuth_steps << " azimuth steps, elevation ["
       << cfg.lidar.elev_min_deg << ", " << cfg.lidar.elev_max_deg << "] deg, max range " << cfg.lidar.max_range
       << " m, sigma " << cfg.lidar.sigma << " m, " << cfg.lidar.height << " m above the floor";
-    sc.description = d.str();
-    sc.scans = simlog.lidar.size();
-    for (const auto& s : simlog.lidar) {
-      sc.beams += s.points.size();
-      sc.returns += s.hits();
-    }
     const sim::TruthGrid truth = sim::TruthGrid::rasterize(world, lat, region3);
-    std::vector<MapView> maps;
-    maps.push_back(buildRtog(simlog.lidar, cfg.resolution, cfg.lidar.max_range, truth));
-    log << "  rtog        " << maps.back().insert_seconds << " s\n";
-    maps.push_back(buildOctomap(simlog.lidar, cfg.resolution, cfg.lidar.max_range, truth));
-    log << "  octomap     " << maps.back().insert_seconds << " s\n";
-    maps.push_back(buildMrpt3D(simlog.lidar, cfg.resolution, cfg.lidar.max_range, truth));
-    log << "  mrpt_grid3d " << maps.back().insert_seconds << " s\n";
-    const std::size_t region_maps = maps.size();
-    if (cfg.lidar.sigma > 0) {
-      maps.push_back(buildRtog(simlog.lidar, cfg.resolution, cfg.lidar.max_range, truth, cfg.lidar.sigma));
-      log << "  rtog_range_noise " << maps.back().insert_seconds << " s\n";
+    ScenarioInput in;
+    in.sc.name = "lidar3d";
+    in.sc.description = d.str();
+    in.scans = &simlog.lidar;
+    in.poses = simlog.poses;
+    in.max_range = cfg.lidar.max_range;
+    in.sigma = cfg.lidar.sigma;
+    in.calibrated = calibrate;
+    in.rates = rates3;
+    runScenario(cfg, in, truth, log, rep);
+    if (pose_noise) {
+      const std::vector<sim::Scan> noisy = displacedAll(simlog.lidar);
+      in.sc.name = "lidar3d_pose_noise";
+      in.sc.description = d.str() + pose_desc.str();
+      in.sc.pose_noise = true;
+      in.scans = &noisy;
+      in.poses = believed;
+      runScenario(cfg, in, truth, log, rep);
     }
-    score(sc.name, maps, region_maps, truth, sc, rep.results);
-    rep.scenarios.push_back(sc);
   }
 
   // ---- 2D scanner: the layer of cells containing the scan plane ----
   {
-    Scenario sc;
-    sc.name = "scanner2d";
     const double plane_z = simlog.planar.empty() ? world.floorZ() + cfg.scanner.height : simlog.planar.front().origin.z();
     const std::int32_t kz = static_cast<std::int32_t>(std::floor(lat.toLattice(plane_z)));
     std::ostringstream d;
     d << "planar scanner, " << cfg.scanner.fov_deg << " deg field of view in " << cfg.scanner.step_deg
       << " deg steps, max range " << cfg.scanner.max_range << " m, sigma " << cfg.scanner.sigma << " m, plane z = "
       << plane_z << " m (cell layer " << kz << ")";
-    sc.description = d.str();
-    sc.scans = simlog.planar.size();
-    for (const auto& s : simlog.planar) {
-      sc.beams += s.points.size();
-      sc.returns += s.hits();
-    }
     Box region2 = region3;
     region2.min.z = region2.max.z = kz;
     const sim::TruthGrid truth = sim::TruthGrid::rasterizeSlice(world, lat, region2, plane_z);
-    std::vector<MapView> maps;
-    maps.push_back(buildRtog(simlog.planar, cfg.resolution, cfg.scanner.max_range, truth));
-    log << "  rtog        " << maps.back().insert_seconds << " s\n";
-    maps.push_back(buildOctomap(simlog.planar, cfg.resolution, cfg.scanner.max_range, truth));
-    log << "  octomap     " << maps.back().insert_seconds << " s\n";
-    maps.push_back(buildMrpt2D(simlog.planar, simlog.poses, cfg.scanner, cfg.resolution, truth));
-    log << "  mrpt_grid2d " << maps.back().insert_seconds << " s\n";
-    const std::size_t region_maps = maps.size();
-    if (cfg.scanner.sigma > 0) {
-      maps.push_back(buildRtog(simlog.planar, cfg.resolution, cfg.scanner.max_range, truth, cfg.scanner.sigma));
-      log << "  rtog_range_noise " << maps.back().insert_seconds << " s\n";
+    ScenarioInput in;
+    in.sc.name = "scanner2d";
+    in.sc.planar = true;
+    in.sc.description = d.str();
+    in.scans = &simlog.planar;
+    in.poses = simlog.poses;
+    in.max_range = cfg.scanner.max_range;
+    in.sigma = cfg.scanner.sigma;
+    in.calibrated = calibrate;
+    in.rates = rates2;
+    runScenario(cfg, in, truth, log, rep);
+    if (pose_noise) {
+      const std::vector<sim::Scan> noisy = displacedAll(simlog.planar);
+      in.sc.name = "scanner2d_pose_noise";
+      in.sc.description = d.str() + pose_desc.str();
+      in.sc.pose_noise = true;
+      in.scans = &noisy;
+      in.poses = believed;
+      runScenario(cfg, in, truth, log, rep);
     }
-    score(sc.name, maps, region_maps, truth, sc, rep.results);
-    rep.scenarios.push_back(sc);
   }
   rep.total_seconds = secondsSince(t_start);
   return rep;

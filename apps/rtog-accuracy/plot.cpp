@@ -11,20 +11,13 @@
 #include <opencv2/imgproc.hpp>
 
 #include "accuracy.hpp"
+#include "plot_common.hpp"
 
 namespace rtog::accuracy {
 
 namespace {
-cv::Scalar colourOf(const std::string& map) {  // BGR
-  if (map == "rtog") return {40, 40, 220};
-  if (map == "octomap") return {200, 110, 20};
-  if (map == "rtog_range_noise") return {180, 40, 180};  // magenta
-  return {40, 160, 40};  // MRPT grids
-}
-
-void text(cv::Mat& img, const std::string& s, cv::Point at, double scale = 0.5, cv::Scalar c = {0, 0, 0}, int thick = 1) {
-  cv::putText(img, s, at, cv::FONT_HERSHEY_SIMPLEX, scale, c, thick, cv::LINE_AA);
-}
+using plot::colourOf;
+using plot::text;
 
 struct Range {
   double x0, x1, y0, y1;
@@ -54,24 +47,12 @@ void panel(cv::Mat& img, cv::Rect area, const Report& r, const Scenario& sc, con
     if (cv::clipLine(plot, a, b)) cv::line(img, a, b, {160, 160, 160}, 1, cv::LINE_AA);
   }
   text(img, "false positive rate (free cells called occupied)", cv::Point(plot.x + 20, plot.y + plot.height + 42), 0.5);
-  // Vertical y label, drawn horizontally into a small image and rotated.
-  {
-    cv::Mat lab(24, plot.height, CV_8UC3, cv::Scalar(255, 255, 255));
-    text(lab, "true positive rate (occupied recall)", cv::Point(plot.height / 2 - 150, 17), 0.5);
-    cv::Mat rot;
-    cv::rotate(lab, rot, cv::ROTATE_90_COUNTERCLOCKWISE);
-    rot.copyTo(img(cv::Rect(area.x + 4, plot.y, rot.cols, rot.rows)));
-  }
+  plot::verticalLabel(img, "true positive rate (occupied recall)", cv::Point(area.x + 4, plot.y), plot.height);
   const bool zoom = rg.x1 - rg.x0 < 1.0;
-  text(img, std::string(sc.name == "lidar3d" ? "3D LiDAR (" + std::to_string(sc.scans) + " scans)"
-                                             : "2D scanner, scan-plane layer (" + std::to_string(sc.scans) + " scans)") +
-                (zoom ? " - zoom" : ""),
-       cv::Point(plot.x, area.y + 26), 0.6, {0, 0, 0}, 1);
+  text(img, plot::scenarioTitle(sc) + (zoom ? " - zoom" : ""), cv::Point(plot.x, area.y + 26), 0.5, {0, 0, 0}, 1);
   // Curves, the first map (rtog) last and thinnest so that it stays visible where another
   // map's curve is the same; then the legend.
-  std::vector<const MapResult*> maps;
-  for (const MapResult& m : r.results)
-    if (m.scenario == sc.name) maps.push_back(&m);
+  const std::vector<const MapResult*> maps = plot::shownMaps(r, sc, true);
   for (std::size_t j = maps.size(); j-- > 0;) {
     const cv::Scalar c = colourOf(maps[j]->map);
     std::vector<cv::Point> pts;
@@ -86,9 +67,9 @@ void panel(cv::Mat& img, cv::Rect area, const Report& r, const Scenario& sc, con
   for (std::size_t j = 0; j < maps.size(); ++j) {
     char buf[96];
     std::snprintf(buf, sizeof buf, "%s  AUC %.4f", maps[j]->map.c_str(), maps[j]->metrics.auc);
-    const cv::Point lp(plot.x + plot.width - 290, plot.y + plot.height - 20 - 22 * static_cast<int>(maps.size() - 1 - j));
+    const cv::Point lp(plot.x + plot.width - 404, plot.y + plot.height - 14 - 22 * static_cast<int>(maps.size() - 1 - j));
     cv::line(img, lp + cv::Point(0, -5), lp + cv::Point(25, -5), colourOf(maps[j]->map), j == 0 ? 2 : 5, cv::LINE_AA);
-    text(img, buf, lp + cv::Point(32, 0), 0.5);
+    text(img, buf, lp + cv::Point(32, 0), 0.45);
   }
 }
 }  // namespace

@@ -33,7 +33,11 @@ Json configJson(const Config& c) {
                 {"step_deg", c.scanner.step_deg},
                 {"max_range", c.scanner.max_range},
                 {"sigma", c.scanner.sigma},
-                {"height", c.scanner.height}}}};
+                {"height", c.scanner.height}}},
+              {"pose_noise",
+               {{"sigma_xy", c.pose_sigma_xy}, {"sigma_yaw_deg", c.pose_sigma_yaw_deg}, {"correlation", c.pose_correlation}, {"seed", c.pose_seed}}},
+              {"calibration_seed", c.calibration_seed},
+              {"calibrated_clamp_readings", c.calibrated_clamp_readings}};
 }
 
 Json resultJson(const MapResult& m) {
@@ -78,6 +82,10 @@ void writeJson(const Report& r, std::ostream& os) {
   j["world"] = r.world_summary;
   j["versions"] = {{"octomap", r.octomap_version}, {"mrpt", r.mrpt_version}};
   j["total_seconds"] = r.total_seconds;
+  auto rates = [](const sim::InverseModelRates& x) {
+    return Json{{"prob_hit", x.prob_hit}, {"prob_miss", x.prob_miss}, {"end_cells", x.end_cells}, {"crossed_cells", x.crossed_cells}};
+  };
+  j["calibration"] = {{"lidar3d", rates(r.calibration_lidar)}, {"scanner2d", rates(r.calibration_scanner)}};
   j["scenarios"] = Json::array();
   for (const Scenario& s : r.scenarios)
     j["scenarios"].push_back({{"name", s.name},

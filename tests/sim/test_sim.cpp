@@ -8,6 +8,7 @@
 #include <unordered_set>
 
 #include "rtog/core/occupancy_map.hpp"
+#include "rtog/sim/calibration.hpp"
 #include "rtog/sim/metrics.hpp"
 #include "rtog/sim/sensors.hpp"
 #include "rtog/sim/world.hpp"
@@ -178,6 +179,73 @@ TEST(SimSensors, NoiseStatistics) {
     }
 }
 
+TEST(SimSensors, DisplacedScanIsTheScanAtTheBelievedPose) {
+  const World w = World::generate(kParams, kSeed);
+  LidarParams lp;
+  lp.azimuth_steps = 64;
+  Lidar3D lidar(lp, 5);
+  const Pose pose = w.trajectory()[5];
+  const Scan s = lidar.scan(w, pose);
+  const PoseError e{0.07, -0.03, 0.02};
+  const Scan d = displaced(s, e);
+  ASSERT_EQ(d.points.size(), s.points.size());
+  EXPECT_EQ(d.is_hit, s.is_hit);
+  EXPECT_EQ(d.range, s.range);
+  EXPECT_NEAR((d.origin - s.origin - Eigen::Vector3d(e.dx, e.dy, 0)).norm(), 0.0, 1e-12);
+  // Beam i of the believed scan leaves the believed pose along the sensor's direction i turned
+  // by the believed heading, and ends at the measured range.
+  const double yaw = pose.yaw + e.dyaw;
+  for (std::size_t i = 0; i < d.points.size(); ++i) {
+    const Eigen::Vector3d& u = lidar.directions()[i];
+    const Eigen::Vector3d dir(std::cos(yaw) * u.x() - std::sin(yaw) * u.y(), std::sin(yaw) * u.x() + std::cos(yaw) * u.y(), u.z());
+    const Eigen::Vector3d expect = d.origin + dir * double{s.range[i]};
+    ASSERT_LT((d.points[i].cast<double>() - expect).norm(), 1e-5) << i;
+  }
+  // The inverse error brings it back.
+  const Scan back = displaced(d, PoseError{-e.dx, -e.dy, 0.0});
+  const Scan back2 = displaced(back, PoseError{0.0, 0.0, -e.dyaw});
+  for (std::size_t i = 0; i < s.points.size(); ++i) ASSERT_LT((back2.points[i] - s.points[i]).norm(), 1e-5f) << i;
+}
+
+TEST(SimSensors, PoseErrorStatistics) {
+  const std::vector<PoseError> a = samplePoseErrors(20000, 0.05, 0.02, 9);
+  EXPECT_EQ(samplePoseErrors(20000, 0.05, 0.02, 9).back().dyaw, a.back().dyaw);  // seeded
+  double sx = 0, sxx = 0, syy = 0, saa = 0, sxa = 0;
+  for (const auto& e : a) {
+    sx += e.dx;
+    sxx += e.dx * e.dx;
+    syy += e.dy * e.dy;
+    saa += e.dyaw * e.dyaw;
+    sxa += e.dx * e.dyaw;
+  }
+  const double n = static_cast<double>(a.size());
+  EXPECT_LT(std::abs(sx / n), 5 * 0.05 / std::sqrt(n));
+  EXPECT_NEAR(std::sqrt(sxx / n) / 0.05, 1.0, 5 / std::sqrt(2 * n));
+  EXPECT_NEAR(std::sqrt(syy / n) / 0.05, 1.0, 5 / std::sqrt(2 * n));
+  EXPECT_NEAR(std::sqrt(saa / n) / 0.02, 1.0, 5 / std::sqrt(2 * n));
+  EXPECT_LT(std::abs(sxa / n) / (0.05 * 0.02), 5 / std::sqrt(n));  // independent
+  EXPECT_TRUE(samplePoseErrors(3, 0, 0, 1)[2].dx == 0.0);
+  EXPECT_THROW(samplePoseErrors(3, -1, 0, 1), std::invalid_argument);
+  EXPECT_THROW(samplePoseErrors(3, 0.1, 0, 1, 1.0), std::invalid_argument);
+  EXPECT_THROW(samplePoseErrors(3, 0.1, 0, 1, -0.1), std::invalid_argument);
+  // Correlated: the same marginal sigma, and consecutive errors correlate by rho.
+  const double rho = 0.9;
+  const std::vector<PoseError> c = samplePoseErrors(40000, 0.05, 0.02, 10, rho);
+  double cxx = 0, cx1 = 0, caa = 0;
+  for (std::size_t k = 0; k + 1 < c.size(); ++k) {
+    cxx += c[k].dx * c[k].dx;
+    cx1 += c[k].dx * c[k + 1].dx;
+    caa += c[k].dyaw * c[k].dyaw;
+  }
+  const double m = static_cast<double>(c.size() - 1);
+  // An AR(1) sequence has about n (1 - rho^2) / (1 + rho^2) effective samples for its variance.
+  const double eff = m * (1 - rho * rho) / (1 + rho * rho);
+  EXPECT_NEAR(std::sqrt(cxx / m) / 0.05, 1.0, 5 / std::sqrt(2 * eff));
+  EXPECT_NEAR(std::sqrt(caa / m) / 0.02, 1.0, 5 / std::sqrt(2 * eff));
+  EXPECT_NEAR(cx1 / cxx, rho, 0.01);
+  EXPECT_THROW(samplePoseErrors(3, 0, std::nan(""), 1), std::invalid_argument);
+}
+
 TEST(SimTruth, RasterMatchesPerCellTruthAndHitPoints) {
   const World w = World::generate(kParams, kSeed);
   const Lattice lat(0.1);
@@ -299,4 +367,33 @@ TEST(SimAccuracy, RtogClassifiesObservedOccupiedCells) {
   ASSERT_GT(seen, 10000u);
   EXPECT_GE(hit_fraction, 0.95);
   EXPECT_EQ(called_occ_true, called_occ);
+}
+
+// The rates a calibration measures: exact scans end in occupied cells and cross free ones; range
+// noise moves end points off the surface and into walls, so both rates move towards 0.5.
+TEST(SimCalibration, ExactScansGiveSharpRatesAndNoiseBlursThem) {
+  const World w = World::generate(kParams, kSeed);
+  const Lattice lat(0.1);
+  const TruthGrid truth = TruthGrid::rasterize(w, lat, worldKeyBox(w, lat, 2));
+  InverseModelRates rate[2];
+  std::size_t hits[2] = {0, 0};
+  for (int noisy = 0; noisy < 2; ++noisy) {
+    LidarParams lp;
+    lp.sigma = noisy ? 0.05 : 0.0;
+    lp.azimuth_steps = 360;
+    Lidar3D lidar(lp, 9);
+    std::vector<Scan> scans;
+    for (std::size_t p = 0; p < w.trajectory().size(); p += 20) scans.push_back(lidar.scan(w, w.trajectory()[p]));
+    for (const Scan& s : scans) hits[noisy] += s.hits();
+    rate[noisy] = measureInverseModel(truth, lat, scans);
+  }
+  // Every return is a hit sample (the region holds the whole world), and a beam crosses many cells.
+  EXPECT_EQ(rate[0].end_cells, hits[0]);
+  EXPECT_EQ(rate[1].end_cells, hits[1]);
+  EXPECT_GT(rate[0].crossed_cells, 10 * rate[0].end_cells);
+  EXPECT_GE(rate[0].prob_hit, 0.999);
+  EXPECT_LT(rate[0].prob_miss, 0.02);
+  EXPECT_LT(rate[1].prob_hit, rate[0].prob_hit - 0.05);
+  EXPECT_GT(rate[1].prob_miss, rate[0].prob_miss);
+  EXPECT_THROW(measureInverseModel(truth, lat, {}), std::invalid_argument);
 }

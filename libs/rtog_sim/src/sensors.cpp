@@ -107,4 +107,36 @@ SimulatedLog simulate(const World& w, const LidarParams& lp, const ScannerParams
   return log;
 }
 
+Scan displaced(const Scan& s, const PoseError& e) {
+  Scan out = s;
+  const double c = std::cos(e.dyaw), sn = std::sin(e.dyaw);
+  const Eigen::Vector3d shift(e.dx, e.dy, 0.0);
+  for (auto& p : out.points) {
+    const Eigen::Vector3d d = p.cast<double>() - s.origin;
+    p = (s.origin + shift + Eigen::Vector3d(c * d.x() - sn * d.y(), sn * d.x() + c * d.y(), d.z())).cast<float>();
+  }
+  out.origin = s.origin + shift;
+  return out;
+}
+
+std::vector<PoseError> samplePoseErrors(std::size_t n, double sigma_xy, double sigma_yaw, std::uint32_t seed,
+                                        double correlation) {
+  if (!(sigma_xy >= 0) || !(sigma_yaw >= 0) || !std::isfinite(sigma_xy) || !std::isfinite(sigma_yaw))
+    throw std::invalid_argument("rtog::sim::samplePoseErrors: sigmas must be finite and >= 0");
+  if (!(correlation >= 0 && correlation < 1))
+    throw std::invalid_argument("rtog::sim::samplePoseErrors: the correlation must be in [0, 1)");
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> unit(0.0, 1.0);
+  const double rho = correlation, fresh = std::sqrt(1.0 - rho * rho);
+  std::vector<PoseError> out(n);
+  for (std::size_t k = 0; k < n; ++k) {
+    const PoseError prev = k == 0 ? PoseError{} : out[k - 1];
+    const double a = k == 0 ? 1.0 : fresh, r = k == 0 ? 0.0 : rho;
+    out[k].dx = r * prev.dx + a * sigma_xy * unit(rng);
+    out[k].dy = r * prev.dy + a * sigma_xy * unit(rng);
+    out[k].dyaw = r * prev.dyaw + a * sigma_yaw * unit(rng);
+  }
+  return out;
+}
+
 }  // namespace rtog::sim

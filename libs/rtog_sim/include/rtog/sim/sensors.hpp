@@ -81,6 +81,25 @@ class PlanarScanner {
   RangeNoise noise_;
 };
 
+/// An error of a planar pose: the robot believes it stands at (x + dx, y + dy) heading yaw + dyaw.
+struct PoseError {
+  double dx = 0.0, dy = 0.0, dyaw = 0.0;
+};
+
+/// The scan as a robot that is wrong about its pose by `e` places it in the map: every point
+/// rotated by dyaw about the vertical through the sensor (which stands above the pose), then
+/// points and origin shifted by (dx, dy). Flags and ranges are unchanged.
+Scan displaced(const Scan& s, const PoseError& e);
+
+/// `n` pose errors along a trajectory, each component a stationary Gauss-Markov sequence:
+/// e_0 ~ N(0, sigma^2), e_{k+1} = rho e_k + sqrt(1 - rho^2) sigma n_k, so every error has
+/// dx, dy ~ N(0, sigma_xy^2), dyaw ~ N(0, sigma_yaw^2) [rad] and consecutive errors correlate by
+/// `correlation` = rho in [0, 1) (0: independent; near 1: the slowly drifting error of dead
+/// reckoning or of a SLAM map). From their own std::mt19937 (deterministic for a seed). Throws
+/// std::invalid_argument for a negative or non-finite sigma or rho outside [0, 1).
+std::vector<PoseError> samplePoseErrors(std::size_t n, double sigma_xy, double sigma_yaw, std::uint32_t seed,
+                                        double correlation = 0.0);
+
 /// All scans of both sensors along the world's trajectory.
 struct SimulatedLog {
   std::vector<Scan> lidar;
