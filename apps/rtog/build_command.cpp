@@ -93,6 +93,7 @@ std::shared_ptr<CRTreeOccupancyGridMap> makeMap(const BuildOptions& o) {
     io.clampingMax = float(lp.clamp_max);
     io.occupiedThreshold = float(lp.occupied_threshold);
     io.poseUncertainty = o.pose_uncertainty;
+    io.sonarConeWeighting = o.sonar_cone_weighting;
     io.validate();
     return std::make_shared<CRTreeOccupancyGridMap>(o.map.resolution, io);
   }

@@ -27,6 +27,9 @@ struct BuildOptions {
   /// --simplemap: blur each frame by its pose covariance (poseUncertainty = on; without --ini).
   /// (Default: false)
   bool pose_uncertainty = false;
+  /// Sonar / IR readings of a rawlog or simplemap (CObservationRange): weighting across the cone,
+  /// uniform | elfes (sonarConeWeighting; without --ini). (Default: elfes)
+  std::string sonar_cone_weighting = "elfes";
   bool progress_bar = false;  ///< redraw one progress line (terminal) instead of printing lines
 };
 

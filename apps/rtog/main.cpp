@@ -57,6 +57,10 @@ int main(int argc, char** argv) {
   false_alarm->needs(miss_rate);
   b->add_flag("--pose-uncertainty", build.pose_uncertainty,
              "--simplemap: blur each frame by its pose covariance (poseUncertainty = on)");
+  b->add_option("--sonar-cone-weighting", build.sonar_cone_weighting,
+                "Sonar / IR readings: evidence across the cone, uniform | elfes (sonarConeWeighting)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"uniform", "elfes"}));
   b->add_option("--threads", build.insert.threads, "Threads tracing beams")->capture_default_str()->check(rtog::app::checks::integer(1, 256));
   b->add_flag("--discretize", build.insert.discretize, "Trace beams to end-cell centres, once per cell (OctoMap's discretize)");
   b->add_option("--stride", build.stride, "Use every n-th pixel")->capture_default_str()->check(rtog::app::checks::integer(1, 1 << 16));

@@ -9,6 +9,7 @@
 #include <limits>
 #include <sstream>
 
+#include <mrpt/obs/CObservationRange.h>
 #include <mrpt/config/CConfigFileBase.h>
 #include <mrpt/obs/CObservation2DRangeScan.h>
 #include <mrpt/serialization/CArchive.h>
@@ -130,8 +131,23 @@ bool CRTreeBackedGridMap2D::internal_insertObservation(const mrpt::obs::CObserva
   if (rtree_.insertionOptions.mrptGrid())
     if (const auto* scan = dynamic_cast<const mrpt::obs::CObservation2DRangeScan*>(&obs))
       return insertGridScan(*scan, robotPose ? *robotPose : mrpt::poses::CPose3D());
-  ObservationBeams beams;
   const mrpt::poses::CPose3D pose = robotPose ? *robotPose : mrpt::poses::CPose3D();
+  if (const auto* range = dynamic_cast<const mrpt::obs::CObservationRange*>(&obs)) {
+    // Cones: the region is each reading's disc of its range about its sensor.
+    std::size_t invalid = 0;
+    const std::vector<ConeReading> cones = rtree_.sonarReadings(*range, pose, invalid);  // throws before any change
+    if (!rtree_.insertObservation(obs, robotPose)) return false;
+    if (cones.empty()) return true;
+    double x0 = cones[0].origin.x(), x1 = x0, y0 = cones[0].origin.y(), y1 = y0;
+    for (const ConeReading& c : cones) {
+      x0 = std::min(x0, c.origin.x() - c.range), x1 = std::max(x1, c.origin.x() + c.range);
+      y0 = std::min(y0, c.origin.y() - c.range), y1 = std::max(y1, c.origin.y() + c.range);
+    }
+    const double pad = 2.0 * rtree_.resolution();
+    refreshRegion(x0 - pad, y0 - pad, x1 + pad, y1 + pad);
+    return true;
+  }
+  ObservationBeams beams;
   if (!rtree_.extractBeams(obs, pose, beams, true)) return false;
   if (!rtree_.insertObservation(obs, robotPose)) return false;
   // The region the beams can have changed: their bounding box, beams cut at maxDistanceInsertion.

@@ -10,6 +10,7 @@
 
 #include <mrpt/config/CConfigFileBase.h>
 #include <mrpt/obs/CObservation2DRangeScan.h>
+#include <mrpt/obs/CObservationRange.h>
 
 namespace rtog {
 
@@ -265,6 +266,7 @@ std::shared_ptr<const Grid2D> CRTreeOccupancyGridMap::gridView() const {
 std::optional<double> CRTreeOccupancyGridMap::gridViewLikelihood(const mrpt::obs::CObservation& obs,
                                                                  const mrpt::poses::CPose3D& pose) const {
   if (!likelihoodOptions.scanLikelihoodOnGridView) return std::nullopt;
+  if (const auto* range = dynamic_cast<const mrpt::obs::CObservationRange*>(&obs)) return sonarLikelihood(*range, pose);
   const auto* scan = dynamic_cast<const mrpt::obs::CObservation2DRangeScan*>(&obs);
   if (!scan) return std::nullopt;
   // Non-finite poses (of the robot or of the sensor on it) and tilted scans are left to the

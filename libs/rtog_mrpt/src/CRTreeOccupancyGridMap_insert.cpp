@@ -8,6 +8,7 @@
 #include <mrpt/obs/CObservation2DRangeScan.h>
 #include <mrpt/obs/CObservation3DRangeScan.h>
 #include <mrpt/obs/CObservationPointCloud.h>
+#include <mrpt/obs/CObservationRange.h>
 #include <mrpt/obs/CObservationRotatingScan.h>
 #include <mrpt/obs/CObservationVelodyneScan.h>
 
@@ -197,6 +198,13 @@ bool CRTreeOccupancyGridMap::extractBeams(const mrpt::obs::CObservation& obs, co
     addLocalPoints(sensor, local, out);
     return true;
   }
+  if (const auto* range = dynamic_cast<const CObservationRange*>(&obs)) {
+    // Insertion takes the readings as cones (insertSonar), never as beams; for the likelihood
+    // they are the echoes on the axes.
+    if (forInsertion) return false;
+    sonarEndPoints(*range, robotPose, out);
+    return true;
+  }
   if (const auto* pc = dynamic_cast<const CObservationPointCloud*>(&obs)) {
     pc->load();
     if (!pc->pointcloud) return false;
@@ -300,6 +308,8 @@ bool CRTreeOccupancyGridMap::internal_insertObservation(const mrpt::obs::CObserv
   if (insertionOptions.mrptGrid())
     if (const auto* scan = dynamic_cast<const mrpt::obs::CObservation2DRangeScan*>(&obs))
       return insertGridScan(*scan, robotPose ? *robotPose : CPose3D());
+  if (const auto* range = dynamic_cast<const mrpt::obs::CObservationRange*>(&obs))
+    return insertSonar(*range, robotPose ? *robotPose : CPose3D());
   ObservationBeams beams;
   if (!extractBeams(obs, robotPose ? *robotPose : CPose3D(), beams, true)) return false;
   syncParams();

@@ -6,6 +6,7 @@
 #include <mrpt/obs/CObservation2DRangeScan.h>
 #include <mrpt/obs/CObservation3DRangeScan.h>
 #include <mrpt/obs/CObservationPointCloud.h>
+#include <mrpt/obs/CObservationRange.h>
 #include <mrpt/obs/CObservationRotatingScan.h>
 #include <mrpt/obs/CObservationVelodyneScan.h>
 
@@ -30,7 +31,7 @@ bool CRTreeOccupancyGridMap::internal_canComputeObservationLikelihood(const mrpt
   if (isEmpty()) return false;
   return dynamic_cast<const CObservation2DRangeScan*>(&obs) || dynamic_cast<const CObservationPointCloud*>(&obs) ||
          dynamic_cast<const CObservationVelodyneScan*>(&obs) || dynamic_cast<const CObservationRotatingScan*>(&obs) ||
-         dynamic_cast<const CObservation3DRangeScan*>(&obs);
+         dynamic_cast<const CObservation3DRangeScan*>(&obs) || dynamic_cast<const CObservationRange*>(&obs);
 }
 
 double CRTreeOccupancyGridMap::internal_computeObservationLikelihood(const mrpt::obs::CObservation& obs,

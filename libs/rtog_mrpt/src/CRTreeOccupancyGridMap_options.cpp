@@ -77,6 +77,7 @@ void CRTreeOccupancyGridMap::TInsertionOptions::loadFromConfigFile(const mrpt::c
   rotatingScan_minElevation_deg = s.read_float(sec, "rotatingScan_minElevation_deg", rotatingScan_minElevation_deg);
   rotatingScan_maxElevation_deg = s.read_float(sec, "rotatingScan_maxElevation_deg", rotatingScan_maxElevation_deg);
   poseUncertainty = readOnOff(s, sec, "poseUncertainty", poseUncertainty);
+  sonarConeWeighting = s.read_string(sec, "sonarConeWeighting", sonarConeWeighting);
   // COccupancyGridMap2D's keys that concern what rtog does not build (its CFD features).
   reportUnknownKeys(s, sec,
                     {"sensorModelPreset", "sensorModel", "rangeNoiseStd", "rangeNoiseStdPerMeter", "rangeNoiseCutoff",
@@ -85,7 +86,7 @@ void CRTreeOccupancyGridMap::TInsertionOptions::loadFromConfigFile(const mrpt::c
                      "useMapAltitude", "mapAltitude", "wideningBeamsWithDistance", "clampingMin", "clampingMax",
                      "occupiedThreshold", "maxDistanceInsertion", "decimation", "decimation_3d_range", "mergePolicy",
                      "discretize", "threads", "planarCache", "rotatingScan_minElevation_deg",
-                     "rotatingScan_maxElevation_deg", "poseUncertainty", "CFD_features_gaussian_size", "CFD_features_median_size"});
+                     "rotatingScan_maxElevation_deg", "poseUncertainty", "sonarConeWeighting", "CFD_features_gaussian_size", "CFD_features_median_size"});
   validateInSection(sec, [this] { validate(); });
 }
 
@@ -124,6 +125,7 @@ void CRTreeOccupancyGridMap::TInsertionOptions::saveToConfigFile(mrpt::config::C
     c.write(sec, "rotatingScan_maxElevation_deg", rotatingScan_maxElevation_deg);
   }
   c.write(sec, "poseUncertainty", poseUncertainty ? "on" : "off");
+  c.write(sec, "sonarConeWeighting", sonarConeWeighting);
 }
 
 void CRTreeOccupancyGridMap::TInsertionOptions::applySensorChannel(const std::string& sec) {
@@ -177,6 +179,11 @@ void CRTreeOccupancyGridMap::TInsertionOptions::validate() const {
   if (mrptGrid() && poseUncertainty)
     badOption(sec, "poseUncertainty",
               "on needs sensorModelPreset = octomap (COccupancyGridMap2D's int8 steps have no graded update)");
+  if (sonarConeWeighting != "uniform" && sonarConeWeighting != "elfes")
+    badOption(sec, "sonarConeWeighting", "must be uniform or elfes, got '" + sonarConeWeighting + "'");
+  if (mrptGrid() && sonarConeWeighting != "uniform")
+    badOption(sec, "sonarConeWeighting",
+              "elfes needs sensorModelPreset = octomap (COccupancyGridMap2D's int8 steps are whole steps)");
   if (mrptGrid() && wideningBeamsWithDistance)
     badOption(sec, "wideningBeamsWithDistance",
               "COccupancyGridMap2D's widening beams are not reproduced by the mrpt_grid preset: set it to false");

@@ -7,6 +7,8 @@
 #include <mrpt/obs/CSensoryFrame.h>
 
 #include "rtog/core/pose_blur.hpp"
+#include <mrpt/obs/CObservationRange.h>
+
 #include "rtog/mrpt/CRTreeOccupancyGridMap.h"
 
 namespace rtog {
@@ -14,6 +16,8 @@ namespace rtog {
 bool CRTreeOccupancyGridMap::insertObservation(const mrpt::obs::CObservation& obs,
                                                const mrpt::poses::CPose3DPDFGaussian& pose) {
   if (!insertionOptions.poseUncertainty) return insertObservation(obs, pose.mean);
+  // A sonar reading already spreads over its cone: inserted at the mean (doc/sonar.md).
+  if (dynamic_cast<const mrpt::obs::CObservationRange*>(&obs)) return insertObservation(obs, pose.mean);
   insertionOptions.validate();  // the mrpt_grid preset has no graded update
   Eigen::MatrixXd cov(6, 6);
   for (int r = 0; r < 6; ++r)

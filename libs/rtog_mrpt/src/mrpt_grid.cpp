@@ -193,18 +193,8 @@ bool planScan(const mrpt::obs::CObservation2DRangeScan& o, const mrpt::poses::CP
     x1 = std::max(x1, x), x0 = std::min(x0, x);
     y1 = std::max(y1, y), y0 = std::min(y0, y);
   }
-  // The grid grows by 2 m (and resizeGrid's 4 m more) where a point comes within 15 cells of its border.
-  const float margin = 15 * f.resolution;
-  plan.grow[1] = x1 > f.x_max - margin ? x1 + 2 * margin : f.x_max;
-  plan.grow[0] = x0 < f.x_min + margin ? x0 - 2 : f.x_min;
-  plan.grow[3] = y1 > f.y_max - margin ? y1 + 2 * margin : f.y_max;
-  plan.grow[2] = y0 < f.y_min + margin ? y0 - 2 : f.y_min;
-  // Beyond the key range no cell has a key: refuse before the grid's geometry grows there.
+  growRect(f, x0, x1, y0, y1, plan.grow);
   const double reach = std::ldexp(1.0, kKeyBits - 2) * f.resolution;
-  for (const float g : plan.grow)
-    if (!(std::fabs(g) < reach))
-      throw std::out_of_range("rtog::CRTreeOccupancyGridMap: a 2D scan reaches " + std::to_string(g) +
-                              " m, beyond the key range (+-" + std::to_string(reach) + " m)");
   // The sensor too: a scan without usable beams does not grow the grid, and the raster would
   // cast the sensor's cell beyond int (found by rtog_fuzz_insert).
   for (const float p : {plan.px, plan.py})
@@ -212,6 +202,21 @@ bool planScan(const mrpt::obs::CObservation2DRangeScan& o, const mrpt::poses::CP
       throw std::out_of_range("rtog::CRTreeOccupancyGridMap: a 2D scan taken at " + std::to_string(p) +
                               " m, beyond the key range (+-" + std::to_string(reach) + " m)");
   return true;
+}
+
+void growRect(const TGridFrame2D& f, float x0, float x1, float y0, float y1, float grow[4]) {
+  // The grid grows by 2 m (and resizeGrid's 4 m more) where a point comes within 15 cells of its border.
+  const float margin = 15 * f.resolution;
+  grow[1] = x1 > f.x_max - margin ? x1 + 2 * margin : f.x_max;
+  grow[0] = x0 < f.x_min + margin ? x0 - 2 : f.x_min;
+  grow[3] = y1 > f.y_max - margin ? y1 + 2 * margin : f.y_max;
+  grow[2] = y0 < f.y_min + margin ? y0 - 2 : f.y_min;
+  // Beyond the key range no cell has a key: refuse before the grid's geometry grows there.
+  const double reach = std::ldexp(1.0, kKeyBits - 2) * f.resolution;
+  for (int i = 0; i < 4; ++i)
+    if (!(std::fabs(grow[i]) < reach))
+      throw std::out_of_range("rtog::CRTreeOccupancyGridMap: an observation reaches " + std::to_string(grow[i]) +
+                              " m, beyond the key range (+-" + std::to_string(reach) + " m)");
 }
 
 void traceScan(const mrpt::obs::CObservation2DRangeScan& o, const ScanPlan& plan,

@@ -46,6 +46,11 @@ void checkFrame(const TGridFrame2D& f, double resolution);
 std::int32_t keyOffsetX(const TGridFrame2D& f);
 std::int32_t keyOffsetY(const TGridFrame2D& f);
 
+/// The rectangle the grid grows to (x_min, x_max, y_min, y_max) to hold points spanning
+/// [x0, x1] x [y0, y1], as COccupancyGridMap2D grows for an observation; throws
+/// std::out_of_range where it would reach beyond the key range.
+void growRect(const TGridFrame2D& f, float x0, float x1, float y0, float y1, float grow[4]);
+
 /// One scan's beams as the grid computes them before it grows to hold them.
 struct ScanPlan {
   float px = 0, py = 0;            ///< sensor position

@@ -14,6 +14,7 @@
 #include "integrate/planar/planar_batch.hpp"
 #include "integrate/planar/planar_cache.hpp"
 #include "integrate/update_batch.hpp"
+#include "rtog/core/cone.hpp"
 #include "rtog/core/params.hpp"
 #include "rtog/core/pose_blur.hpp"
 #include "rtog/core/stats.hpp"
@@ -76,6 +77,11 @@ class ScanIntegrator {
   /// Integrates one scan from a weighted set of poses (OccupancyMap::insertBlurred; pose_blur.cpp).
   InsertStats insertBlurred(const WeightedScan* scans, std::size_t n, const InsertParams& ip,
                             const std::function<void()>& flush_pending);
+
+  /// Integrates readings of range sensors with a wide beam, one update each, in order
+  /// (OccupancyMap::insertCones; cone.cpp).
+  InsertStats insertCones(const ConeReading* readings, std::size_t n, ConeWeighting w, const InsertParams& ip,
+                          const std::function<void()>& flush_pending);
 
   /// Traces beams into `batch` (no change to the map). Throws std::out_of_range if the origin
   /// has no key.

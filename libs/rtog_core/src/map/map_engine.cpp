@@ -40,6 +40,16 @@ InsertStats MapEngine::insertBlurred(const WeightedScan* scans, std::size_t n, c
   return stats;
 }
 
+InsertStats MapEngine::insertCones(const ConeReading* readings, std::size_t n, ConeWeighting w,
+                                   const InsertParams& ip) {
+  ScratchScope scope(scratch);
+  const InsertStats stats = ScanIntegrator(store, planar, *scope).insertCones(readings, n, w, ip, [this] {
+    if (cover_pending.load(std::memory_order_acquire)) flush();
+  });
+  scope.keepAtMost(store.index.memoryBytesAtLeast() / 2 + planar.memoryBytes());
+  return stats;
+}
+
 InsertStats MapEngine::applyStepRuns(std::int32_t z, const StepRun* runs, std::size_t n, const StepRule& rule,
                                      std::vector<float>* after) {
   if (after) after->clear();

@@ -30,6 +30,7 @@ class MapEngine {
   InsertStats insertPointCloud(const Eigen::Vector3d& origin, const Eigen::Vector3f* points, std::size_t count,
                                const InsertParams& ip, const std::uint8_t* is_hit);
   InsertStats insertBlurred(const WeightedScan* scans, std::size_t n, const InsertParams& ip);
+  InsertStats insertCones(const ConeReading* readings, std::size_t n, ConeWeighting w, const InsertParams& ip);
   InsertStats applyStepRuns(std::int32_t z, const StepRun* runs, std::size_t n, const StepRule& rule,
                             std::vector<float>* after);
   /// Step 1 of an insertion: traces the beams into `batch`; no change to the map.

@@ -56,6 +56,11 @@ InsertStats OccupancyMap::insertBlurred(const WeightedScan* scans, std::size_t n
   return engine_->insertBlurred(scans, n, ip);
 }
 
+InsertStats OccupancyMap::insertCones(const ConeReading* readings, std::size_t n, ConeWeighting w,
+                                      const InsertParams& ip) {
+  return engine_->insertCones(readings, n, w, ip);
+}
+
 InsertStats OccupancyMap::applyStepRuns(std::int32_t z, const StepRun* runs, std::size_t n, const StepRule& rule,
                                         std::vector<float>* after) {
   return engine_->applyStepRuns(z, runs, n, rule, after);

@@ -15,6 +15,7 @@
 
 #include <Eigen/Core>
 
+#include "rtog/core/cone.hpp"
 #include "rtog/core/key.hpp"
 #include "rtog/core/log_odds.hpp"
 #include "rtog/core/params.hpp"
@@ -73,6 +74,17 @@ class OccupancyMap {
   InsertStats insertBlurred(const std::vector<WeightedScan>& scans, const InsertParams& ip = {}) {
     return insertBlurred(scans.data(), scans.size(), ip);
   }
+
+  /// Integrates readings of range sensors with a wide beam (sonar, IR; rtog/core/cone.hpp), in
+  /// order, each one measurement: the cells of its cone (coneCells) take weight * the hit change
+  /// (arc) or weight * the miss change (inside), once. The axis is a beam of `ip`: cut at
+  /// ip.max_range (no echo then), skipped and counted as a beam is. ip.model and ip.discretize
+  /// do not apply. A reading of non-finite range or yaw is skipped and counted in
+  /// skipped_non_finite, one of range <= 0 in skipped_zero_length. Throws, changing nothing,
+  /// std::invalid_argument for a non-finite origin or an aperture outside [0, pi] and
+  /// std::out_of_range for an origin without a key.
+  InsertStats insertCones(const ConeReading* readings, std::size_t n, ConeWeighting w = ConeWeighting::Elfes,
+                          const InsertParams& ip = {});
 
   using StepRun = rtog::StepRun;
   static constexpr int kRunFracBits = kStepRunFracBits;

@@ -1,0 +1,193 @@
+// rtog::CRTreeOccupancyGridMap: sonar and IR readings (CObservationRange) inserted as cones
+// (rtog/core/cone.hpp, doc/sonar.md), and their end points for the likelihood.
+//
+// MRPT 2.5's COccupancyGridMap2D inserts every reading of a CObservationRange at the pose of the
+// first one (sensedData[0].sensorPose) and centres each cone half an aperture clockwise of that
+// sensor's axis (COccupancyGridMap2D_insert.cpp: A = phi - aperture / 2, then the triangle
+// A +- aperture / 2). Here each reading is at its own sensorPose with its cone about its axis.
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <string>
+
+#include <mrpt/obs/CObservationRange.h>
+
+#include "CRTreeOccupancyGridMap_grid2d.hpp"
+#include "mrpt_grid.hpp"
+#include "rtog/mrpt/CRTreeOccupancyGridMap.h"
+
+namespace rtog {
+
+using mrpt::poses::CPose3D;
+
+std::vector<ConeReading> CRTreeOccupancyGridMap::sonarReadings(const mrpt::obs::CObservationRange& o,
+                                                               const CPose3D& robotPose, std::size_t& invalid) const {
+  constexpr double kPi = 3.14159265358979323846;
+  const double aperture = o.sensorConeApperture;
+  if (!(aperture >= 0.0 && aperture <= kPi))
+    throw std::invalid_argument("rtog::CRTreeOccupancyGridMap: a CObservationRange's sensorConeApperture must lie in "
+                                "[0, pi] rad, got " + std::to_string(aperture));
+  const double max_sensor = o.maxSensorDistance;
+  if (!(max_sensor > 0.0 && std::isfinite(max_sensor)))
+    throw std::invalid_argument("rtog::CRTreeOccupancyGridMap: a CObservationRange's maxSensorDistance must be "
+                                "positive and finite, got " + std::to_string(max_sensor));
+  const TInsertionOptions& io = insertionOptions;
+  const double cut = io.maxDistanceInsertion > 0.0f ? static_cast<double>(io.maxDistanceInsertion)
+                                                    : std::numeric_limits<double>::infinity();
+  std::vector<ConeReading> out;
+  invalid = 0;
+  for (const auto& d : o.sensedData) {
+    const CPose3D sensor = robotPose + CPose3D(d.sensorPose);
+    if (io.useMapAltitude && std::fabs(io.mapAltitude - sensor.z()) > 0.001) continue;  // as the grid filters
+    ConeReading r;
+    r.origin = Eigen::Vector3d(sensor.x(), sensor.y(), sensor.z());
+    r.yaw = sensor.yaw();
+    r.aperture = aperture;
+    const double z = d.sensedDistance;
+    if (!std::isfinite(z) || !(z > 0.0)) {  // no reading at all (MRPT's sonarSimulator writes 0)
+      ++invalid;
+      continue;
+    }
+    r.hit = z < max_sensor;
+    r.range = r.hit ? z : max_sensor;
+    if (!r.hit && !io.considerInvalidRangesAsFreeSpace) {
+      ++invalid;
+      continue;
+    }
+    if (r.range > cut) {  // cut as beams are: free up to maxDistanceInsertion, no arc
+      r.range = cut;
+      r.hit = false;
+    }
+    out.push_back(r);
+  }
+  return out;
+}
+
+bool CRTreeOccupancyGridMap::insertSonar(const mrpt::obs::CObservationRange& o, const CPose3D& robotPose) {
+  syncParams();
+  std::size_t invalid = 0;
+  const std::vector<ConeReading> readings = sonarReadings(o, robotPose, invalid);
+  InsertStats stats;
+  if (!insertionOptions.mrptGrid()) {
+    stats = map_.insertCones(readings.data(), readings.size(),
+                             coneWeightingFromString(insertionOptions.sonarConeWeighting),
+                             insertionOptions.toInsertParams());
+  } else if (!readings.empty()) {
+    // COccupancyGridMap2D's whole steps, every cone in the grid's one layer; the grid grows to
+    // hold the cones as it grows for a scan's end points.
+    const double res = map_.resolution();
+    TGridFrame2D grown = frame_;
+    if (!grown.has_layer) {
+      Key k;
+      if (!map_.lattice().tryKey(readings.front().origin, k))
+        throw std::out_of_range("rtog::CRTreeOccupancyGridMap: a sonar reading's height has no key");
+      grown.has_layer = true;
+      grown.layer = k.z;
+    }
+    std::vector<std::vector<ConeCell>> cells(readings.size());
+    float x0 = std::numeric_limits<float>::max(), x1 = -x0, y0 = x0, y1 = -x0;
+    for (std::size_t i = 0; i < readings.size(); ++i) {
+      ConeReading r = readings[i];
+      r.origin.z() = (grown.layer + 0.5) * res;
+      if (r.range / res > insertionOptions.toInsertParams().max_ray_cells) {  // bounded as a beam is
+        ++stats.skipped_too_long;
+        continue;
+      }
+      coneCells(map_.lattice(), r, ConeWeighting::Uniform, cells[i], nullptr);
+      ++(r.hit ? stats.rays_hit : stats.rays_truncated);
+      for (const ConeCell& c : cells[i]) {
+        x0 = std::min(x0, static_cast<float>(c.x * res)), x1 = std::max(x1, static_cast<float>((c.x + 1) * res));
+        y0 = std::min(y0, static_cast<float>(c.y * res)), y1 = std::max(y1, static_cast<float>((c.y + 1) * res));
+      }
+    }
+    if (x0 <= x1) {
+      float g[4];
+      mrpt_grid::growRect(grown, x0, x1, y0, y1, g);
+      mrpt_grid::resize(grown, g[0], g[1], g[2], g[3]);
+      std::vector<OccupancyMap::StepRun> runs;
+      for (const auto& rc : cells)
+        for (const ConeCell& c : rc) {
+          OccupancyMap::StepRun s{};
+          s.x = c.x, s.y = c.y;
+          s.kind = c.kind;
+          s.count = c.kind == StepKind::Occupied ? 0 : 1;
+          s.end = c.kind == StepKind::Occupied;
+          s.end_x = c.x, s.end_y = c.y;
+          runs.push_back(s);
+        }
+      const StepRule rule = mrpt_grid::stepRule(mrpt_grid::stepsOf(insertionOptions));
+      stats += map_.applyStepRuns(grown.layer, runs.data(), runs.size(), rule);
+      frame_ = grown;
+    }
+  }
+  invalidRangesSkipped += invalid;
+  lastInsertStats = stats;
+  totalInsertStats += stats;
+  notifyMapChanged();
+  return true;
+}
+
+std::optional<double> CRTreeOccupancyGridMap::sonarLikelihood(const mrpt::obs::CObservationRange& o,
+                                                              const CPose3D& pose) const {
+  // A sonar echoes from the nearest surface anywhere in its cone: the reading expected from a
+  // pose is the shortest of rays cast across the aperture on the 2D view (as MRPT's
+  // sonarSimulator computes a reading), and each echo scores a Gaussian of rayTracing_stdHit
+  // about it mixed with LF_zHit / LF_zRandom, as the ray-tracing likelihood of beams. A surface
+  // nearer than the echo inside the cone counts against a pose, which a likelihood field of the
+  // axis's end point cannot see (MRPT's grid scores that, doc/sonar.md).
+  likelihoodOptions.validate();
+  if (!(std::isfinite(pose.x()) && std::isfinite(pose.y()) && std::isfinite(pose.yaw()))) return std::nullopt;
+  const double aperture = o.sensorConeApperture, max_range = o.maxSensorDistance;
+  if (!(aperture >= 0.0 && aperture <= 3.14159265358979323846) || !(max_range > 0.0 && std::isfinite(max_range)))
+    return std::nullopt;
+  const auto& lo = likelihoodOptions;
+  const double inv2var = 1.0 / (2.0 * double(lo.rayTracing_stdHit) * lo.rayTracing_stdHit);
+  const double z_random = double(lo.LF_zRandom) / lo.LF_maxRange;
+  const auto v = gridViewShared(nullptr);
+  std::lock_guard<std::mutex> lk(v->mutex);
+  const double res = v->grid.getResolution();
+  double sum = 0.0;
+  for (const auto& d : o.sensedData) {
+    const double z = d.sensedDistance;
+    if (!std::isfinite(z) || !(z > 0.0) || !(z < max_range)) continue;  // echoes only
+    const CPose3D sensor = pose + CPose3D(d.sensorPose);
+    if (!(std::isfinite(sensor.x()) && std::isfinite(sensor.y()) && std::isfinite(sensor.yaw()))) return std::nullopt;
+    // Rays half a cell apart at the far end of the cone.
+    const auto n = static_cast<int>(std::min(512.0, std::ceil(aperture * max_range / (0.5 * res)))) + 1;
+    double expected = max_range;
+    for (int j = 0; j < n; ++j) {
+      const double a = sensor.yaw() + (n == 1 ? 0.0 : aperture * (static_cast<double>(j) / (n - 1) - 0.5));
+      float r = 0.0f;
+      bool valid = false;
+      v->grid.simulateScanRay(sensor.x(), sensor.y(), a, r, valid, max_range, 0.5f, 0.0, 0.0);
+      if (valid) expected = std::min<double>(expected, r);
+    }
+    const double e = z - expected;
+    sum += std::log(z_random + lo.LF_zHit * std::exp(-e * e * inv2var));
+  }
+  return sum;
+}
+
+void CRTreeOccupancyGridMap::sonarEndPoints(const mrpt::obs::CObservationRange& o, const CPose3D& robotPose,
+                                            ObservationBeams& out) const {
+  // The likelihood of a reading is that of its axis's end point, as COccupancyGridMap2D scores a
+  // CObservationRange (a points map of the readings, then its likelihood field).
+  const CPose3D first = o.sensedData.empty() ? robotPose : robotPose + CPose3D(o.sensedData.front().sensorPose);
+  out.origin = Eigen::Vector3d(first.x(), first.y(), first.z());
+  for (const auto& d : o.sensedData) {
+    const double z = d.sensedDistance;
+    if (!std::isfinite(z) || !(z > 0.0) || !(z < o.maxSensorDistance)) {
+      ++out.invalid;
+      continue;
+    }
+    const CPose3D sensor = robotPose + CPose3D(d.sensorPose);
+    double gx = 0, gy = 0, gz = 0;
+    sensor.composePoint(z, 0.0, 0.0, gx, gy, gz);
+    out.points.emplace_back(static_cast<float>(gx), static_cast<float>(gy), static_cast<float>(gz));
+    out.is_hit.push_back(1);
+    out.ranges.push_back(static_cast<float>(z));
+  }
+}
+
+}  // namespace rtog
