@@ -85,12 +85,13 @@ bool CRTreeOccupancyGridMap::insertSonar(const mrpt::obs::CObservationRange& o, 
       grown.has_layer = true;
       grown.layer = k.z;
     }
+    const std::uint32_t max_cells = insertionOptions.toInsertParams().max_ray_cells;  // 0: unbounded
     std::vector<std::vector<ConeCell>> cells(readings.size());
     float x0 = std::numeric_limits<float>::max(), x1 = -x0, y0 = x0, y1 = -x0;
     for (std::size_t i = 0; i < readings.size(); ++i) {
       ConeReading r = readings[i];
       r.origin.z() = (grown.layer + 0.5) * res;
-      if (r.range / res > insertionOptions.toInsertParams().max_ray_cells) {  // bounded as a beam is
+      if (max_cells > 0 && r.range / res > max_cells) {  // bounded as a beam is
         ++stats.skipped_too_long;
         continue;
       }

@@ -128,23 +128,4 @@ double LikelihoodField2D::scanLogLikelihood(const Grid& g, const mrpt::obs::CObs
   return logs ? sum : std::log(sum / static_cast<double>(m));
 }
 
-double LikelihoodField2D::logTermAt(const Grid& g, double x, double y) {
-  const Field f = fieldOf(g);
-  const int cx = cellIndex(x, g.getXMin(), g.getResolution()), cy = cellIndex(y, g.getYMin(), g.getResolution());
-  if (static_cast<unsigned>(cx) >= g.getSizeX() - 1 || static_cast<unsigned>(cy) >= g.getSizeY() - 1)
-    return std::log(f.zRandomTerm + f.zHit * std::exp(f.q * f.maxCorrDistSq));
-  // Kept only beside the logarithms of scanLogLikelihood, not its LF_alternateAverageMethod terms.
-  const bool keep = g.likelihoodOptions.enableLikelihoodCache && !g.likelihoodOptions.LF_alternateAverageMethod;
-  const std::size_t cells = std::size_t{g.getSizeX()} * g.getSizeY();
-  if (keep && (terms_.size() != cells || !logs_)) {
-    terms_.assign(cells, std::numeric_limits<double>::quiet_NaN());
-    logs_ = true;
-  }
-  const std::size_t at = static_cast<std::size_t>(cx) + static_cast<std::size_t>(cy) * g.getSizeX();
-  if (keep && !std::isnan(terms_[at])) return terms_[at];
-  const double v = std::log(termAt(g, f, cx, cy));
-  if (keep) terms_[at] = v;
-  return v;
-}
-
 }  // namespace rtog

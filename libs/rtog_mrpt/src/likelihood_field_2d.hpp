@@ -22,10 +22,6 @@ class LikelihoodField2D {
   /// if the grid's enableLikelihoodCache is on.
   double scanLogLikelihood(const mrpt::maps::COccupancyGridMap2D& grid, const mrpt::obs::CObservation2DRangeScan& scan,
                            const mrpt::poses::CPose3D& pose);
-  /// The logarithm of the field's term at the cell of point (x, y): what one end point there adds
-  /// to scanLogLikelihood (the outside value beyond the grid's cells or on its last row or
-  /// column). Kept per cell as scanLogLikelihood keeps it.
-  double logTermAt(const mrpt::maps::COccupancyGridMap2D& grid, double x, double y);
 
  private:
   /// Per grid cell: the logarithm of its term (or the term itself, for LF_alternateAverageMethod),
