@@ -18,6 +18,7 @@
 #include <mrpt/obs/CObservation2DRangeScan.h>
 #include <mrpt/poses/CPose3D.h>
 
+#include "rtog/core/occupancy_map.hpp"
 #include "rtog/mrpt/CRTreeBackedGridMap2D.h"
 #include "rtog/mrpt/CRTreeOccupancyGridMap.h"
 #include "rtog/mrpt/ini_checks.h"
@@ -146,5 +147,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     loadSection<CRTreeOccupancyGridMap::TMatchingOptions>(cfg, sec);
     createMaps(cfg, sec);
   }
+  // As in rtog_fuzz_insert: buffers kept for the next map would make libFuzzer run a leak pass.
+  rtog::OccupancyMap::releaseInsertBuffers();
   return 0;
 }

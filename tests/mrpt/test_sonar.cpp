@@ -11,12 +11,16 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <random>
 #include <vector>
 
 #include <mrpt/maps/COccupancyGridMap2D.h>
+#include <mrpt/maps/CSimpleMap.h>
 #include <mrpt/math/wrap2pi.h>
 #include <mrpt/obs/CObservationRange.h>
+#include <mrpt/obs/CSensoryFrame.h>
+#include <mrpt/poses/CPose3DPDFGaussian.h>
 #include <mrpt/poses/CPose2D.h>
 #include <mrpt/poses/CPose3D.h>
 #include <mrpt/random/RandomGenerators.h>
@@ -114,9 +118,15 @@ TEST(Sonar, ConesAgreeWithCOccupancyGridMap2DAndTheTruthOnTheMalagaMap) {
   mrpt::maps::COccupancyGridMap2D oracle(truth.getXMin(), truth.getXMax(), truth.getYMin(), truth.getYMax(), res);
   mrpt::maps::COccupancyGridMap2D as_is(truth.getXMin(), truth.getXMax(), truth.getYMin(), truth.getYMax(), res);
   std::size_t echoes = 0;
+  // RTOG_SONAR_SIMPLEMAP=FILE keeps the simulated rings as a simplemap (doc/sonar.md's pictures
+  // are made from it with rtog build and MRPT's observations2map).
+  mrpt::maps::CSimpleMap keep;
   for (const CPose2D& p : poses) {
     const CObservationRange o = simulate(truth, p);
     const CPose3D pose3(p);
+    auto sf = mrpt::obs::CSensoryFrame::Create();
+    sf->insert(std::make_shared<CObservationRange>(o));
+    keep.insert(std::make_shared<mrpt::poses::CPose3DPDFGaussian>(pose3), sf);
     ASSERT_TRUE(ours->insertObservation(o, pose3));
     as_is.insertObservation(o, pose3);  // MRPT's own handling of the whole ring
     for (const auto& m : o.sensedData) {
@@ -128,6 +138,7 @@ TEST(Sonar, ConesAgreeWithCOccupancyGridMap2DAndTheTruthOnTheMalagaMap) {
     }
   }
   ASSERT_GT(echoes, 800u);
+  if (const char* file = std::getenv("RTOG_SONAR_SIMPLEMAP")) ASSERT_TRUE(keep.saveToFile(file)) << file;
   const auto cell = [&](const auto& g) {
     return [&g](float x, float y) {
       const int ix = g.x2idx(x), iy = g.y2idx(y);
