@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdint>
 #include <exception>
+#include <algorithm>
 #include <memory>
 #include <string>
 #include <vector>
@@ -32,6 +33,30 @@ using rtog::CRTreeOccupancyGridMap;
 // Bounds that keep one input fast; a large input is no more interesting than a small one here.
 constexpr std::size_t kMaxSections = 8;
 constexpr std::size_t kMaxMaps = 4;
+// Our maps' initial 2D grid (min_x..max_x by min_y..max_y, default 20 m square) is cut to this
+// half-width about the origin before the map is made: the fixed scan reaches 2.5 m and the grid
+// grows to hold it, as COccupancyGridMap2D's does. A full-size grid is zero-filled by MRPT and
+// again by the view's likelihood field for every map, which held the target to about 150 inputs
+// per second (and a 1 mm grid to far fewer). The size limits themselves are fuzzed by
+// rtog_fuzz_insert and tested in tests/mrpt.
+constexpr float kMaxHalfWidth = 3.0f;
+
+template <class Def>
+void cutExtent(Def& d) {
+  // Only a valid extent: a bad one (NaN, reversed) must still reach the map's own checks.
+  if (!(d.min_x < d.max_x && d.min_y < d.max_y)) return;
+  d.min_x = std::max(d.min_x, -kMaxHalfWidth), d.max_x = std::min(d.max_x, kMaxHalfWidth);
+  d.min_y = std::max(d.min_y, -kMaxHalfWidth), d.max_y = std::min(d.max_y, kMaxHalfWidth);
+  if (!(d.min_x < d.max_x)) d.min_x = -kMaxHalfWidth, d.max_x = kMaxHalfWidth;  // wholly beyond it
+  if (!(d.min_y < d.max_y)) d.min_y = -kMaxHalfWidth, d.max_y = kMaxHalfWidth;
+}
+
+/// Cuts the extent of one of our definitions; false for a stock map's.
+bool ourDefinitionCut(mrpt::maps::TMetricMapInitializer& def) {
+  if (auto* d = dynamic_cast<CRTreeOccupancyGridMap::TMapDefinition*>(&def)) return cutExtent(*d), true;
+  if (auto* d = dynamic_cast<rtog::CRTreeBackedGridMap2D::TMapDefinition*>(&def)) return cutExtent(*d), true;
+  return false;
+}
 
 template <class Options>
 void loadSection(const mrpt::config::CConfigFileBase& cfg, const std::string& sec) {
@@ -71,6 +96,21 @@ void useMap(mrpt::maps::CMetricMap& m) {
   (void)m.isEmpty();
 }
 
+/// Case-insensitive, as MRPT's section names.
+bool endsWith(const std::string& s, const char* tail) {
+  const std::size_t n = std::char_traits<char>::length(tail);
+  return s.size() >= n && strcasecmp(s.c_str() + s.size() - n, tail) == 0;
+}
+
+/// Whether the section has a key "*_count" (a CMultiMetricMap definition).
+bool countsMaps(const mrpt::config::CConfigFileBase& cfg, const std::string& sec) {
+  std::vector<std::string> keys;
+  cfg.getAllKeys(sec, keys);
+  for (const std::string& key : keys)
+    if (endsWith(key, "_count")) return true;
+  return false;
+}
+
 bool isOurMapCount(const std::string& key) {
   for (const char* name : {"rtreeOccupancyGrid_count", "rtog::CRTreeOccupancyGridMap_count", "rtreeGridMap2D_count",
                            "rtog::CRTreeBackedGridMap2D_count"})
@@ -89,7 +129,7 @@ mrpt::config::CConfigFileMemory withOurMapsOnly(const mrpt::config::CConfigFileM
   std::vector<std::string> keys;
   ours.getAllKeys(sec, keys);
   for (const std::string& key : keys)
-    if (key.size() > 6 && strcasecmp(key.c_str() + key.size() - 6, "_count") == 0 && !isOurMapCount(key))
+    if (endsWith(key, "_count") && !isOurMapCount(key))
       ours.write(sec, key, 0);
   return ours;
 }
@@ -103,10 +143,8 @@ void createMaps(const mrpt::config::CConfigFileMemory& all, const std::string& s
     return;
   }
   std::size_t made = 0;
-  for (const auto& def : inits) {
-    const bool ours = dynamic_cast<const CRTreeOccupancyGridMap::TMapDefinition*>(def.get()) ||
-                      dynamic_cast<const rtog::CRTreeBackedGridMap2D::TMapDefinition*>(def.get());
-    if (!ours || made++ == kMaxMaps) continue;
+  for (auto& def : inits) {
+    if (!ourDefinitionCut(*def) || made++ == kMaxMaps) continue;
     std::unique_ptr<mrpt::maps::CMetricMap> m;
     try {
       m.reset(mrpt::maps::internal::TMetricMapTypesRegistry::Instance().factoryMapObjectFromDefinition(*def));
@@ -140,12 +178,16 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   std::vector<std::string> sections;
   cfg.getAllSections(sections);
   if (sections.size() > kMaxSections) sections.resize(kMaxSections);
+  // Each section as MRPT's apps read it: options from the sections named for them (rtog build
+  // and the map definitions use *_insertOpts, *_likelihoodOpts, *_creationOpts, *_matchingOpts),
+  // map definitions from a section that counts maps. Every reader on every section took four
+  // times the work for the same code: MRPT's readers format each default into a 2 KiB string.
   for (const auto& sec : sections) {
-    loadSection<CRTreeOccupancyGridMap::TInsertionOptions>(cfg, sec);
-    loadSection<CRTreeOccupancyGridMap::TLikelihoodOptions>(cfg, sec);
-    loadSection<CRTreeOccupancyGridMap::TGridViewOptions>(cfg, sec);
-    loadSection<CRTreeOccupancyGridMap::TMatchingOptions>(cfg, sec);
-    createMaps(cfg, sec);
+    if (endsWith(sec, "insertOpts")) loadSection<CRTreeOccupancyGridMap::TInsertionOptions>(cfg, sec);
+    if (endsWith(sec, "likelihoodOpts")) loadSection<CRTreeOccupancyGridMap::TLikelihoodOptions>(cfg, sec);
+    if (endsWith(sec, "creationOpts")) loadSection<CRTreeOccupancyGridMap::TGridViewOptions>(cfg, sec);
+    if (endsWith(sec, "matchingOpts")) loadSection<CRTreeOccupancyGridMap::TMatchingOptions>(cfg, sec);
+    if (countsMaps(cfg, sec)) createMaps(cfg, sec);
   }
   // As in rtog_fuzz_insert: buffers kept for the next map would make libFuzzer run a leak pass.
   rtog::OccupancyMap::releaseInsertBuffers();

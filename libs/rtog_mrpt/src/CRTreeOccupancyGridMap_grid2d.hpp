@@ -38,6 +38,9 @@ struct CRTreeOccupancyGridMap::GridView {
   /// A COccupancyGridMap2D whose cells and caches the view may set directly.
   class Grid : public mrpt::maps::COccupancyGridMap2D {
    public:
+    /// Two cells: the view sets its own geometry at once. (MRPT's default grid, 800 x 800 cells,
+    /// was zero-filled and thrown away by every new view.)
+    Grid() : COccupancyGridMap2D(0.0f, 1.0f, 0.0f, 0.5f, 0.5f) {}
     std::vector<cellType>& cells() { return m_map; }
     void setNonEmpty() { m_is_empty = false; }
     void invalidateLikelihoodCache() { m_likelihoodCacheOutDated = true; }
