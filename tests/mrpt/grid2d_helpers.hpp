@@ -57,20 +57,23 @@ inline mrpt::maps::COccupancyGridMap2D stockCopy(const mrpt::maps::COccupancyGri
 }
 
 struct MalagaFixture {
-  mrpt::maps::COccupancyGridMap2D grid;  // 2006-MalagaCampus.gridmap.gz as MRPT loads it
+  mrpt::maps::COccupancyGridMap2D grid;  // a .gridmap(.gz) as MRPT loads it
   rtog::CRTreeOccupancyGridMap map;      // the same file through loadFromGridmapFile
 };
 
+/// One of MRPT's datasets' .gridmap(.gz) files, loaded both ways.
+inline MalagaFixture gridmapFixture(const std::string& name) {
+  MalagaFixture fx;
+  const std::string file = dataset(name);
+  mrpt::io::CFileGZInputStream in(file);
+  auto ar = mrpt::serialization::archiveFrom(in);
+  ar >> fx.grid;
+  if (!fx.map.loadFromGridmapFile(file)) throw std::runtime_error("cannot import " + file);
+  return fx;
+}
+
 inline const MalagaFixture& malagaFixture() {
-  static MalagaFixture f = [] {
-    MalagaFixture fx;
-    const std::string file = dataset("2006-MalagaCampus.gridmap.gz");
-    mrpt::io::CFileGZInputStream in(file);
-    auto ar = mrpt::serialization::archiveFrom(in);
-    ar >> fx.grid;
-    if (!fx.map.loadFromGridmapFile(file)) throw std::runtime_error("cannot import " + file);
-    return fx;
-  }();
+  static const MalagaFixture f = gridmapFixture("2006-MalagaCampus.gridmap.gz");
   return f;
 }
 
