@@ -5,9 +5,9 @@
 // (plain or blurred over a few shifted poses). After every insertion the map must be sound;
 // each observation is also scored, and a few queries run.
 //
-// Sizes are bounded (beams, points, ranges over resolution) so that one input takes well under a
-// millisecond: the issue asks >= 1,000 executions/s, and a long ray is no more interesting than a
-// short one to the code under test. Values outside the bounds come in as special values (NaN,
+// Sizes are bounded (48 beams or points, ranges of 4 m) so that one input takes about a
+// millisecond: a long ray or a big scan is no more interesting than a short one to the code under
+// test, and grown inputs at twice these bounds ran at 450-600 per second. Values outside the bounds come in as special values (NaN,
 // +-Inf, 0, negative, huge) instead, which is where input handling goes wrong.
 #include <cmath>
 #include <cstdint>
@@ -38,9 +38,9 @@ namespace {
 using rtog::CRTreeOccupancyGridMap;
 using Fdp = FuzzedDataProvider;
 
-constexpr double kMaxRange = 8.0;   // metres, in-bounds ranges and coordinates
-constexpr std::size_t kMaxBeams = 96;
-constexpr std::size_t kMaxPoints = 96;
+constexpr double kMaxRange = 4.0;   // metres, in-bounds ranges and coordinates
+constexpr std::size_t kMaxBeams = 48;
+constexpr std::size_t kMaxPoints = 48;
 
 [[noreturn]] void fail(const std::string& why) {
   std::fprintf(stderr, "rtog_fuzz_insert: %s\n", why.c_str());
