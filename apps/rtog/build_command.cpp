@@ -149,6 +149,7 @@ int build(const BuildOptions& o, std::ostream& out) {
     const auto& io = map->insertionOptions;
     const InsertParams ip = io.toInsertParams();
     for (std::size_t i = 0; i < seq.frames.size(); ++i) {
+      if (i < o.scans_from || i >= o.scans_to) continue;
       const image::WorldScan scan = image::loadDepthScan(seq.frames[i], seq.intrinsics, o.stride);
       timed([&] { map->lastInsertStats = map->map().insertPointCloud(scan.origin, scan.points, ip); });
       // The core map is fed directly here: the figures the summary prints are kept by hand.
@@ -164,6 +165,7 @@ int build(const BuildOptions& o, std::ostream& out) {
     loadQuietly("simplemap", o.simplemap_path, [&] { return sm.loadFromFile(o.simplemap_path) && !sm.empty(); });
     Progress progress(out, sm.size(), o.progress_bar);
     for (std::size_t i = 0; i < sm.size(); ++i) {
+      if (i < o.scans_from || i >= o.scans_to) continue;
       const auto [pose, sf] = sm.get(i);
       // The frame's pose PDF as a Gaussian: with poseUncertainty on, its covariance blurs the
       // frame; else it is inserted at the mean.
@@ -182,8 +184,11 @@ int build(const BuildOptions& o, std::ostream& out) {
     mrpt::obs::CRawlog log;
     loadQuietly("rawlog", o.rawlog_path, [&] { return log.loadFromRawLogFile(o.rawlog_path) && log.size() > 0; });
     Progress progress(out, log.size(), o.progress_bar, "rawlog entries");
+    std::size_t index = 0;  // of the observation, for --scans
     forEachOdometryObservation(log, [&](const mrpt::obs::CObservation::Ptr& obs, const mrpt::poses::CPose3D& robot,
                                         std::size_t entry) {
+      const std::size_t i = index++;
+      if (i < o.scans_from || i >= o.scans_to) return;
       const std::size_t before = map->totalInsertStats.raysTotal();
       bool used = false;
       timed([&] { used = map->insertObservation(*obs, robot); });

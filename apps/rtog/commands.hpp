@@ -1,11 +1,13 @@
 // The rtog tool's commands, callable from tests; main.cpp only parses arguments.
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <iosfwd>
 #include <memory>
 #include <optional>
 #include <string>
+#include <utility>
 
 #include "rtog/core/occupancy_map.hpp"
 
@@ -31,7 +33,15 @@ struct BuildOptions {
   /// uniform | elfes (sonarConeWeighting; without --ini). (Default: elfes)
   std::string sonar_cone_weighting = "elfes";
   bool progress_bar = false;  ///< redraw one progress line (terminal) instead of printing lines
+  /// Only scans scans_from <= i < scans_to of the log (TUM frames, simplemap frames, rawlog
+  /// observations, counted from 0): chunks of one log built apart and joined by `rtog fuse`.
+  /// (Default: all)
+  std::size_t scans_from = 0, scans_to = static_cast<std::size_t>(-1);
 };
+
+/// "A:B" (either may be empty: from the start, to the end) as [A, B); throws
+/// std::invalid_argument unless A < B.
+std::pair<std::size_t, std::size_t> parseScanRange(const std::string& text);
 
 /// Builds a map from real logs, prints progress and a summary (scans, points, time, leaves,
 /// memory) to `out`, and saves it. Throws std::invalid_argument / std::runtime_error with a
@@ -61,6 +71,25 @@ struct ExportOptions {
 /// std::invalid_argument for bad options and std::runtime_error (naming the file) for
 /// unreadable maps or failed writes. Returns the process exit code.
 int exportMap(const ExportOptions& opts, std::ostream& out);
+
+struct FuseOptions {
+  std::string map_a;  ///< the map fused into (its lattice, clamping and merging are the result's)
+  std::string map_b;  ///< the map whose evidence is added
+  /// The second map's frame in the first's: x y z [m], yaw pitch roll [deg] (MRPT's CPose3D
+  /// order). (Default: 0 0 0 0 0 0)
+  std::array<double, 6> pose{};
+  std::string out_path;  ///< the fused map (.rtog; never one of the inputs)
+  int threads = defaultThreadCount();
+};
+
+/// The pose x y z [m] yaw pitch roll [deg] as MRPT's CPose3D has it; throws
+/// std::invalid_argument for a value that is not finite.
+Eigen::Isometry3d poseFromXyzYpr(const std::array<double, 6>& p);
+
+/// Fuses map_b into map_a (OccupancyMap::fuse) and saves the result, all or nothing. Throws
+/// std::invalid_argument for bad options (the same file twice, a bad pose, no --out) and
+/// std::runtime_error naming the file for unreadable maps or failed writes. Returns the exit code.
+int fuse(const FuseOptions& opts, std::ostream& out);
 
 /// Loads a map file (the core format or the MRPT map's gzip archive), from a file or a pipe;
 /// throws std::runtime_error naming the file on failure, including bytes after the map.

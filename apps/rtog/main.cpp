@@ -1,7 +1,10 @@
 // rtog: build, inspect and export R-tree occupancy grids.
 #include <unistd.h>
 
+#include <algorithm>
 #include <iostream>
+#include <tuple>
+#include <vector>
 
 #include <CLI/CLI.hpp>
 
@@ -63,6 +66,8 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"uniform", "elfes"}));
   b->add_option("--threads", build.insert.threads, "Threads tracing beams")->capture_default_str()->check(rtog::app::checks::integer(1, 256));
   b->add_flag("--discretize", build.insert.discretize, "Trace beams to end-cell centres, once per cell (OctoMap's discretize)");
+  std::string scan_range;
+  b->add_option("--scans", scan_range, "Only scans A <= i < B of the log (A:B, counted from 0; either may be left out)");
   b->add_option("--stride", build.stride, "Use every n-th pixel")->capture_default_str()->check(rtog::app::checks::integer(1, 1 << 16));
 
   std::string map_path;
@@ -87,6 +92,17 @@ int main(int argc, char** argv) {
   png->needs(sz);
   sz->needs(png);
 
+  rtog::cli::FuseOptions fu;
+  std::vector<double> pose;
+  auto* f = app.add_subcommand("fuse", "Fuse two maps (independent opinion pool: l = l1 + l2 - l0, clamped)");
+  f->add_option("map_a", fu.map_a, "The map fused into (.rtog; its resolution and options are the result's)")
+      ->required()
+      ->check(path);
+  f->add_option("map_b", fu.map_b, "The map whose evidence is added (.rtog)")->required()->check(path);
+  f->add_option("--pose", pose, "map_b's frame in map_a's: x y z [m] yaw pitch roll [deg]")->expected(6);
+  f->add_option("--out", fu.out_path, "Output map (.rtog)")->required()->check(path);
+  f->add_option("--threads", fu.threads, "Threads applying the update")->capture_default_str()->check(rtog::app::checks::integer(1, 256));
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& err) {
@@ -107,8 +123,13 @@ int main(int argc, char** argv) {
         if (!build.ini_path.empty()) throw std::invalid_argument("--miss-rate/--false-alarm-rate: with --ini, set missRate and falseAlarmRate in its _insertOpts");
         build.map.log_odds = rtog::withChannel(build.map.log_odds, channel);
       }
+      if (!scan_range.empty()) std::tie(build.scans_from, build.scans_to) = rtog::cli::parseScanRange(scan_range);
       build.progress_bar = isatty(STDOUT_FILENO) != 0;
       return rtog::cli::build(build, std::cout);
+    }
+    if (f->parsed()) {
+      if (!pose.empty()) std::copy(pose.begin(), pose.end(), fu.pose.begin());
+      return rtog::cli::fuse(fu, std::cout);
     }
     if (e->parsed()) {
       if (sz->count() > 0) ex.slice_z = slice_z;

@@ -124,7 +124,9 @@ TEST(FuzzRegressions, StoredBoolsOtherThanZeroOrOneAreRefused) {
 // inserts the scan into a grid that it grows to every valid end point: a pose 6e8 m away (or a
 // valid range of 1e9 m) made MRPT's resizeGrid abort (an assertion), and a valid range of -1e9 m
 // made it write out of bounds (SEGV). Such poses go to the native path, such ranges are no returns
-// for those methods.
+// for those methods. Later (2026-12-03) the same for consensus, which reads the cell of every valid
+// end point unchecked: the view is grown to the end points, but not to one 1e9 m behind the
+// sensor (SEGV in computeObservationLikelihood_Consensus; fuzz/regressions/insert-consensus-bad-range.bin).
 TEST(FuzzRegressions, GridViewLikelihoodOfAHugeRange) {
   CRTreeOccupancyGridMap m(0.1);
   mrpt::obs::CObservation2DRangeScan scan;
@@ -138,7 +140,8 @@ TEST(FuzzRegressions, GridViewLikelihoodOfAHugeRange) {
   scan.setScanRangeValidity(5, false);  // a no-return beam, stepped up to maxRange
   scan.setScanRange(6, -1e9f);          // "valid", behind the sensor: MRPT wrote beyond its grid
   scan.maxRange = 1e9f;                  // a driver's "no limit"
-  for (const auto method : {CRTreeOccupancyGridMap::lmCellsDifference, CRTreeOccupancyGridMap::lmMeanInformation}) {
+  for (const auto method : {CRTreeOccupancyGridMap::lmCellsDifference, CRTreeOccupancyGridMap::lmMeanInformation,
+                            CRTreeOccupancyGridMap::lmConsensus}) {
     m.likelihoodOptions.likelihoodMethod = method;
     ASSERT_TRUE(m.likelihoodOptions.scanLikelihoodOnGridView);
     (void)m.computeObservationLikelihood(scan, mrpt::poses::CPose3D(0.05, 0.0, 0.0, 0.01, 0, 0));

@@ -78,6 +78,15 @@ void CRTreeOccupancyGridMap::notifyMapChanged() {
   caches_.band_points_dirty = true;
 }
 
+InsertStats CRTreeOccupancyGridMap::fuse(const CRTreeOccupancyGridMap& other, const mrpt::poses::CPose3D& pose) {
+  Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
+  t.linear() = pose.getRotationMatrix().asEigen();
+  t.translation() = Eigen::Vector3d(pose.x(), pose.y(), pose.z());
+  const InsertStats st = map_.fuse(other.map_, t, insertionOptions.threads > 0 ? insertionOptions.threads : defaultThreadCount());
+  notifyMapChanged();
+  return st;
+}
+
 void CRTreeOccupancyGridMap::internal_clear() {
   map_.clear();
   setGridFrame(-10, 10, -10, 10);  // as COccupancyGridMap2D::clear()

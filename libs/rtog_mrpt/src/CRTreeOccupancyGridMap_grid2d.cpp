@@ -285,10 +285,32 @@ std::optional<double> CRTreeOccupancyGridMap::gridViewLikelihood(const mrpt::obs
   // others check bounds (getCell, or the field's own test) and run on the view as it is.
   const auto method = likelihoodOptions.likelihoodMethod;
   std::optional<std::array<double, 4>> need;
+  // Consensus, MI and cells-difference read or write the cells of every valid end point: a
+  // "valid" range that is not finite, negative (an end point behind the sensor) or beyond the
+  // scan's maxRange or 100 km (beyond any range sensor) is taken as no return for them, on a
+  // copy made only for a scan that has one. (Not the insertion range: the stock grid scores
+  // beams beyond it, and so must the view.)
+  std::optional<mrpt::obs::CObservation2DRangeScan> trimmed;  // made only when needed: a scan is a heavy object
+  const mrpt::obs::CObservation2DRangeScan* scored = scan;
+  if (method == lmConsensus || method == lmMeanInformation || method == lmCellsDifference) {
+    const float limit = scan->maxRange > 0.0f ? std::min(scan->maxRange, 1e5f) : 1e5f;
+    const auto farOrBad = [&](std::size_t i) {
+      const float r = scan->getScanRange(i);
+      return scan->getScanRangeValidity(i) && !(std::isfinite(r) && r >= 0.0f && r <= limit);
+    };
+    std::size_t i = 0;
+    while (i < scan->getScanSize() && !farOrBad(i)) ++i;
+    if (i < scan->getScanSize()) {
+      trimmed.emplace(*scan);
+      for (; i < trimmed->getScanSize(); ++i)
+        if (farOrBad(i)) trimmed->setScanRangeValidity(i, false);
+      scored = &*trimmed;
+    }
+  }
   if (method == lmConsensus) {
     double r = 0;
-    for (std::size_t i = 0; i < scan->getScanSize(); ++i)
-      if (scan->getScanRangeValidity(i)) r = std::max<double>(r, scan->getScanRange(i));
+    for (std::size_t i = 0; i < scored->getScanSize(); ++i)
+      if (scored->getScanRangeValidity(i)) r = std::max<double>(r, scored->getScanRange(i));
     r += std::hypot(scan->sensorPose.x(), scan->sensorPose.y()) + 1.0;
     need = std::array<double, 4>{pose.x() - r, pose.y() - r, pose.x() + r, pose.y() + r};
     // A pose whose scan cannot reach the map's cells is left to the native path: growing the
@@ -299,20 +321,10 @@ std::optional<double> CRTreeOccupancyGridMap::gridViewLikelihood(const mrpt::obs
     if ((*need)[0] < lo.x() - r || (*need)[1] < lo.y() - r || (*need)[2] > hi.x() + r || (*need)[3] > hi.y() + r)
       return std::nullopt;
   }
-  // MI and cells-difference insert the scan into a grid, which MRPT grows to hold every valid end
-  // point: a "valid" range of 1e9 m (or of -1e9 m, an end point behind the sensor) overflows its
-  // size arithmetic and resizeGrid aborts or writes out of bounds. Such ranges (not finite,
-  // negative, or beyond the scan's maxRange or 100 km, beyond any range sensor) are no returns
-  // for these two methods; the copy is made only for a scan that has one.
-  std::optional<mrpt::obs::CObservation2DRangeScan> trimmed;  // made only when needed: a scan is a heavy object
-  const mrpt::obs::CObservation* scored = &obs;
-  if (method == lmMeanInformation || method == lmCellsDifference) {
-    // Not the insertion range: the stock grid scores beams beyond it, and so must the view.
+  if (method == lmConsensus || method == lmMeanInformation || method == lmCellsDifference) {
+    // The view (consensus) or the grid MI and cells-difference insert the scan into grows to
+    // hold every valid end point.
     const float limit = scan->maxRange > 0.0f ? std::min(scan->maxRange, 1e5f) : 1e5f;
-    const auto farOrBad = [&](std::size_t i) {
-      const float r = scan->getScanRange(i);
-      return scan->getScanRangeValidity(i) && !(std::isfinite(r) && r >= 0.0f && r <= limit);
-    };
     // And, as for lmConsensus, a pose whose scan cannot reach the map's cells is left to the
     // native path: the grid would grow from the map to a particle flung far away.
     const Box kb = map_.keyBounds();
@@ -326,14 +338,6 @@ std::optional<double> CRTreeOccupancyGridMap::gridViewLikelihood(const mrpt::obs
     for (const mrpt::poses::CPose3D* p : {&pose, &sensor})
       if (!(p->x() >= lo.x() - reach && p->y() >= lo.y() - reach && p->x() <= hi.x() + reach && p->y() <= hi.y() + reach))
         return std::nullopt;
-    std::size_t i = 0;
-    while (i < scan->getScanSize() && !farOrBad(i)) ++i;
-    if (i < scan->getScanSize()) {
-      trimmed.emplace(*scan);
-      for (; i < trimmed->getScanSize(); ++i)
-        if (farOrBad(i)) trimmed->setScanRangeValidity(i, false);
-      scored = &*trimmed;
-    }
   }
   const auto v = gridViewShared(need ? need->data() : nullptr);
   std::lock_guard<std::mutex> lk(v->mutex);

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 
 #include "rtog/core/cone.hpp"
 #include "rtog/core/key.hpp"
@@ -102,6 +103,18 @@ class OccupancyMap {
   /// std::out_of_range, changing nothing, if a cell has no key.
   InsertStats applyStepRuns(std::int32_t z, const StepRun* runs, std::size_t n, const StepRule& rule,
                             std::vector<float>* after = nullptr);
+
+  /// Fuses `other` (another robot's, sensor's or day's map) into this one by the independent
+  /// opinion pool: each cell becomes l1 + l2 - l0, clamped (l0: `other`'s prior, counted once), a
+  /// cell known in one map only keeps its value (exactly so when l0 is 0, the default). `other` is
+  /// placed by the rigid `pose` (its frame in this map's) and resampled into this lattice, each
+  /// cell taking `other`'s cell at its centre: cell for cell when the pose is a shift by whole
+  /// cells of an equal lattice. Cells beyond the key range are left out, each cuboid that has
+  /// some counted in skipped_out_of_range. Without clamping, maps built from two halves of a log fuse into the
+  /// map of the whole log, up to float rounding of the sums. Throws std::invalid_argument, changing
+  /// nothing, for a pose that is not rigid, threads < 1, or `other` being this map.
+  InsertStats fuse(const OccupancyMap& other, const Eigen::Isometry3d& pose = Eigen::Isometry3d::Identity(),
+                   int threads = defaultThreadCount());
 
   /// Insertion works in buffers that all maps of the process share through a pool: an idle one
   /// keeps the size of the largest insertion it served, and up to four are kept (one for each

@@ -143,6 +143,9 @@ class CRTreeOccupancyGridMap : public mrpt::maps::CMetricMap {
   const OccupancyMap& map() const { return map_; }
   void notifyMapChanged();
   double resolution() const { return map_.resolution(); }
+  /// Fuses another robot's (sensor's, day's) map into this one by the independent opinion pool,
+  /// `other` placed at `pose` (its frame in this map's): OccupancyMap::fuse. Returns its counts.
+  InsertStats fuse(const CRTreeOccupancyGridMap& other, const mrpt::poses::CPose3D& pose = {});
 
   using mrpt::maps::CMetricMap::insertObservation;
   /// Inserts `obs` taken from the uncertain robot pose `pose`. With insertionOptions.poseUncertainty

@@ -1,0 +1,120 @@
+// `rtog fuse` as a user runs it, on maps built by `rtog build` from the bundled TUM frames: the
+// saved result is OccupancyMap::fuse of the two loaded maps cell for cell (with and without a
+// pose), and bad input is one error line, a non-zero exit and no output file.
+#include <gtest/gtest.h>
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
+#include <iterator>
+#include <string>
+
+#include "commands.hpp"
+#include "rtog/image/tum_dataset.hpp"
+#include "map_cells.hpp"
+
+namespace {
+
+std::string tmp(const std::string& name) {
+  return ::testing::TempDir() + "/rtog_fuse_" + std::to_string(getpid()) + "_" + name;
+}
+
+int run(const std::string& args, std::string* output = nullptr) {
+  const std::string out_file = tmp("out.txt");
+  const int rc = std::system((std::string(RTOG_EXE) + " " + args + " > " + out_file + " 2>&1").c_str());
+  if (output) {
+    std::ifstream in(out_file);
+    std::stringstream ss;
+    ss << in.rdbuf();
+    *output = ss.str();
+  }
+  return WEXITSTATUS(rc);
+}
+
+bool exists(const std::string& p) { return std::ifstream(p).good(); }
+
+class CliFuse : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    const std::string tum = std::string(" --tum ") + RTOG_TEST_TUM_DIR + " --resolution 0.1 --stride 4 ";
+    std::string out;
+    ASSERT_EQ(run("build" + tum + "--out " + a_, &out), 0) << out;
+    ASSERT_EQ(run("build" + tum + "--max-range 2 --merge equal --out " + b_, &out), 0) << out;
+  }
+  static inline const std::string a_ = tmp("a.rtog"), b_ = tmp("b.rtog");
+};
+
+TEST_F(CliFuse, TheSavedMapIsTheLibrarysFusionCellForCell) {
+  const rtog::OccupancyMap a = rtog::cli::loadMap(a_), b = rtog::cli::loadMap(b_);
+  for (const std::string pose : {"", "--pose 1.5 -0.5 0.2 30 0 0"}) {
+    SCOPED_TRACE(pose);
+    const std::string c = tmp("c.rtog");
+    std::remove(c.c_str());
+    std::string out;
+    ASSERT_EQ(run("fuse " + a_ + " " + b_ + " " + pose + " --out " + c, &out), 0) << out;
+    EXPECT_NE(out.find("wrote " + c), std::string::npos) << out;
+    const rtog::OccupancyMap got = rtog::cli::loadMap(c);
+    EXPECT_EQ(got.checkInvariants(), "");
+    rtog::OccupancyMap want = a;
+    want.fuse(b, pose.empty() ? Eigen::Isometry3d::Identity() : rtog::cli::poseFromXyzYpr({1.5, -0.5, 0.2, 30, 0, 0}));
+    EXPECT_EQ(rtog::test::cellsOf(got), rtog::test::cellsOf(want));
+    // Both maps' evidence: more cells than either, and the first map's values where only it saw.
+    EXPECT_GE(got.cellCount(), a.cellCount());
+  }
+}
+
+TEST_F(CliFuse, BadInputIsOneErrorLineAndNoOutput) {
+  const std::string c = tmp("bad.rtog");
+  const auto refused = [&](const std::string& args, const std::string& why, int code = 1) {
+    std::remove(c.c_str());
+    std::string out;
+    EXPECT_EQ(run("fuse " + args, &out), code) << args << "\n" << out;
+    EXPECT_NE(out.find(why), std::string::npos) << args << "\n" << out;
+    EXPECT_EQ(std::count(out.begin(), out.end(), '\n'), 1) << out;
+    EXPECT_FALSE(exists(c)) << args;
+  };
+  refused(a_ + " " + a_ + " --out " + c, "the same file");
+  refused(a_ + " " + b_ + " --pose 0 0 0 nan 0 0 --out " + c, "six finite numbers");
+  refused(a_ + " " + b_ + " --pose 1 2 --out " + c, "--pose", 2);
+  refused(a_ + " " + tmp("missing.rtog") + " --out " + c, "cannot open map file");
+  refused(a_ + " " + b_, "--out", 2);
+  // The output may not be an input: the input stays as it was.
+  std::ifstream before_in(a_, std::ios::binary);
+  const std::string before((std::istreambuf_iterator<char>(before_in)), std::istreambuf_iterator<char>());
+  std::string out;
+  EXPECT_EQ(run("fuse " + a_ + " " + b_ + " --out " + a_, &out), 1) << out;
+  EXPECT_NE(out.find("refusing to overwrite an input"), std::string::npos) << out;
+  std::ifstream after_in(a_, std::ios::binary);
+  EXPECT_EQ(before, std::string((std::istreambuf_iterator<char>(after_in)), std::istreambuf_iterator<char>()));
+}
+
+// `build --scans A:B`: chunks of one log, built apart, joined by `fuse`. Chunk 3:4 is frame 3 alone.
+TEST(CliScans, AChunkIsItsScansAloneAndBadRangesAreRefused) {
+  const std::string tum = std::string(" --tum ") + RTOG_TEST_TUM_DIR + " --resolution 0.1 --stride 4 ";
+  const std::string c = tmp("chunk.rtog");
+  std::string out;
+  ASSERT_EQ(run("build" + tum + "--scans 3:4 --out " + c, &out), 0) << out;
+  EXPECT_NE(out.find("from 1 scans"), std::string::npos) << out;
+  const rtog::image::DepthSequence seq = rtog::image::readTumSequence(RTOG_TEST_TUM_DIR);
+  const rtog::image::WorldScan scan = rtog::image::loadDepthScan(seq.frames[3], seq.intrinsics, 4);
+  const rtog::OccupancyMap got = rtog::cli::loadMap(c);
+  rtog::OccupancyMap want(got.params());
+  rtog::InsertParams ip;
+  ip.max_range = 0.0;
+  want.insertPointCloud(scan.origin, scan.points, ip);
+  EXPECT_EQ(rtog::test::cellsOf(got), rtog::test::cellsOf(want));
+  ASSERT_EQ(run("build" + tum + "--scans 8: --out " + c, &out), 0) << out;
+  EXPECT_NE(out.find("from 2 scans"), std::string::npos) << out;
+  for (const std::string bad : {"5:2", "a:b", "3", "1:2:3", "-1:4"}) {
+    std::remove(c.c_str());
+    EXPECT_EQ(run("build" + tum + "--scans " + bad + " --out " + c, &out), 1) << bad << "\n" << out;
+    EXPECT_NE(out.find("--scans '" + bad + "'"), std::string::npos) << out;
+    EXPECT_FALSE(exists(c)) << bad;
+  }
+}
+
+}  // namespace
