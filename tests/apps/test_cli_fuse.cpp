@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
@@ -115,6 +116,33 @@ TEST(CliScans, AChunkIsItsScansAloneAndBadRangesAreRefused) {
     EXPECT_NE(out.find("--scans '" + bad + "'"), std::string::npos) << out;
     EXPECT_FALSE(exists(c)) << bad;
   }
+}
+
+// Issue #18 item 7: a log built in chunks by separate processes and joined by `fuse` is the
+// one-process build, cell for cell up to float rounding, when no cell can reach a clamp (the
+// .ini: hit 0.55, clamps 1e-30 / 0.99999994; TUM has 10 frames).
+TEST(CliScans, ChunksFusedAreTheWholeBuildWithoutClamping) {
+  const std::string ini = tmp("unclamped.ini");
+  std::ofstream(ini) << "[MappingApplication]\nrtreeOccupancyGrid_count=1\n"
+                        "[MappingApplication_rtreeOccupancyGrid_00_creationOpts]\nresolution=0.1\n"
+                        "[MappingApplication_rtreeOccupancyGrid_00_insertOpts]\nsensorModelPreset=octomap\n"
+                        "maxOccupancyUpdateCertainty=0.55\nclampingMin=1e-30\nclampingMax=0.99999994\n";
+  const std::string tum = std::string(" --tum ") + RTOG_TEST_TUM_DIR + " --stride 4 --ini " + ini + " ";
+  const std::string whole = tmp("whole.rtog"), c1 = tmp("c1.rtog"), c2 = tmp("c2.rtog"), joined = tmp("joined.rtog");
+  std::string out;
+  ASSERT_EQ(run("build" + tum + "--out " + whole, &out), 0) << out;
+  ASSERT_EQ(run("build" + tum + "--scans 0:4 --out " + c1, &out), 0) << out;
+  ASSERT_EQ(run("build" + tum + "--scans 4: --out " + c2, &out), 0) << out;
+  ASSERT_EQ(run("fuse " + c1 + " " + c2 + " --out " + joined, &out), 0) << out;
+  const auto got = rtog::test::cellsOf(rtog::cli::loadMap(joined)), want = rtog::test::cellsOf(rtog::cli::loadMap(whole));
+  ASSERT_EQ(got.size(), want.size());
+  double worst = 0;
+  for (std::size_t i = 0; i < got.size(); ++i) {
+    ASSERT_EQ(got[i].first, want[i].first);
+    worst = std::max(worst, double(std::fabs(got[i].second - want[i].second)));
+  }
+  std::printf("chunks 0:4 and 4: fused vs one build: %zu cells, largest difference %.3g\n", got.size(), worst);
+  EXPECT_LT(worst, 1e-6);
 }
 
 }  // namespace
