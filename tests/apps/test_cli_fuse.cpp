@@ -14,6 +14,7 @@
 #include <iterator>
 #include <string>
 
+#include "cli_helpers.hpp"
 #include "commands.hpp"
 #include "rtog/image/tum_dataset.hpp"
 #include "map_cells.hpp"
@@ -24,17 +25,8 @@ std::string tmp(const std::string& name) {
   return ::testing::TempDir() + "/rtog_fuse_" + std::to_string(getpid()) + "_" + name;
 }
 
-int run(const std::string& args, std::string* output = nullptr) {
-  const std::string out_file = tmp("out.txt");
-  const int rc = std::system((std::string(RTOG_EXE) + " " + args + " > " + out_file + " 2>&1").c_str());
-  if (output) {
-    std::ifstream in(out_file);
-    std::stringstream ss;
-    ss << in.rdbuf();
-    *output = ss.str();
-  }
-  return WEXITSTATUS(rc);
-}
+using rtog_cli_test::readAll;
+using rtog_cli_test::run;
 
 bool exists(const std::string& p) { return std::ifstream(p).good(); }
 
@@ -84,13 +76,11 @@ TEST_F(CliFuse, BadInputIsOneErrorLineAndNoOutput) {
   refused(a_ + " " + tmp("missing.rtog") + " --out " + c, "cannot open map file");
   refused(a_ + " " + b_, "--out", 2);
   // The output may not be an input: the input stays as it was.
-  std::ifstream before_in(a_, std::ios::binary);
-  const std::string before((std::istreambuf_iterator<char>(before_in)), std::istreambuf_iterator<char>());
+  const std::string before = readAll(a_);
   std::string out;
   EXPECT_EQ(run("fuse " + a_ + " " + b_ + " --out " + a_, &out), 1) << out;
   EXPECT_NE(out.find("refusing to overwrite an input"), std::string::npos) << out;
-  std::ifstream after_in(a_, std::ios::binary);
-  EXPECT_EQ(before, std::string((std::istreambuf_iterator<char>(after_in)), std::istreambuf_iterator<char>()));
+  EXPECT_EQ(readAll(a_), before);
 }
 
 // `build --scans A:B`: chunks of one log, built apart, joined by `fuse`. Chunk 3:4 is frame 3 alone.
