@@ -298,6 +298,18 @@ std::optional<double> CRTreeOccupancyGridMap::gridViewLikelihood(const mrpt::obs
       const float r = scan->getScanRange(i);
       return scan->getScanRangeValidity(i) && !(std::isfinite(r) && r >= 0.0f && r <= limit);
     };
+    // A pose whose scan cannot reach the map's cells is left to the native path: the view or
+    // grid would grow from the map to a particle flung far away. It must hold the robot and the
+    // sensor (which may be mounted, or misconfigured, far off); composed here only, as these
+    // methods cost far more than the composition. Written so that a NaN is refused too.
+    const Box kb = map_.keyBounds();
+    if (kb.isEmpty()) return std::nullopt;
+    const Eigen::Vector3d lo = map_.lattice().boxMin(kb), hi = map_.lattice().boxMax(kb);
+    const double reach = limit + 1.0;
+    const mrpt::poses::CPose3D sensor = pose + scan->sensorPose;
+    for (const mrpt::poses::CPose3D* p : {&pose, &sensor})
+      if (!(p->x() >= lo.x() - reach && p->y() >= lo.y() - reach && p->x() <= hi.x() + reach && p->y() <= hi.y() + reach))
+        return std::nullopt;
     std::size_t i = 0;
     while (i < scan->getScanSize() && !farOrBad(i)) ++i;
     if (i < scan->getScanSize()) {
@@ -320,24 +332,6 @@ std::optional<double> CRTreeOccupancyGridMap::gridViewLikelihood(const mrpt::obs
     const Eigen::Vector3d lo = map_.lattice().boxMin(kb), hi = map_.lattice().boxMax(kb);
     if ((*need)[0] < lo.x() - r || (*need)[1] < lo.y() - r || (*need)[2] > hi.x() + r || (*need)[3] > hi.y() + r)
       return std::nullopt;
-  }
-  if (method == lmConsensus || method == lmMeanInformation || method == lmCellsDifference) {
-    // The view (consensus) or the grid MI and cells-difference insert the scan into grows to
-    // hold every valid end point.
-    const float limit = scan->maxRange > 0.0f ? std::min(scan->maxRange, 1e5f) : 1e5f;
-    // And, as for lmConsensus, a pose whose scan cannot reach the map's cells is left to the
-    // native path: the grid would grow from the map to a particle flung far away.
-    const Box kb = map_.keyBounds();
-    if (kb.isEmpty()) return std::nullopt;
-    const Eigen::Vector3d lo = map_.lattice().boxMin(kb), hi = map_.lattice().boxMax(kb);
-    // The grid holds the robot and the sensor (which may be mounted, or misconfigured, far off).
-    // Composed here only: these two methods cost far more than the composition. Written so
-    // that a NaN (finite poses can compose to one) is refused too.
-    const double reach = limit + 1.0;
-    const mrpt::poses::CPose3D sensor = pose + scan->sensorPose;
-    for (const mrpt::poses::CPose3D* p : {&pose, &sensor})
-      if (!(p->x() >= lo.x() - reach && p->y() >= lo.y() - reach && p->x() <= hi.x() + reach && p->y() <= hi.y() + reach))
-        return std::nullopt;
   }
   const auto v = gridViewShared(need ? need->data() : nullptr);
   std::lock_guard<std::mutex> lk(v->mutex);

@@ -29,11 +29,8 @@ std::uint32_t UpdateBatch::brickSlot(const Key& b) {
   const std::uint32_t slot = index_.findOrInsert(packed, next);
   if (slot == next) {
     packed_keys_.push_back(packed);
-    BrickUpdates& u = bricks_.emplaceBack();
+    BrickUpdates& u = bricks_.emplaceBack();  // value-initialized: masks empty, any_occupied false
     u.brick = b;
-    u.occupied.fill(0);
-    u.free.fill(0);
-    u.any_occupied = false;
   }
   return slot;
 }
