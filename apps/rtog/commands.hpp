@@ -91,6 +91,20 @@ Eigen::Isometry3d poseFromXyzYpr(const std::array<double, 6>& p);
 /// std::runtime_error naming the file for unreadable maps or failed writes. Returns the exit code.
 int fuse(const FuseOptions& opts, std::ostream& out);
 
+struct PriorOptions {
+  std::string image_path;    ///< a blueprint image (PNG, JPEG, ...): white free, black occupied, mid-grey unknown
+  std::string gridmap_path;  ///< or an MRPT .gridmap / .gridmap.gz (its own geometry)
+  double resolution = 0.05;  ///< image only: metres per pixel (Default: 0.05)
+  std::array<double, 2> origin{};  ///< image only: map coordinates of its lower-left corner [m] (Default: 0 0)
+  double confidence = 0.7;   ///< TPriorMapOptions::priorConfidence, in (0.5, 1] (Default: 0.7)
+  std::string out_path;      ///< the map (.rtog; never the input)
+};
+
+/// Makes a map of a prior (CRTreeOccupancyGridMap::loadPrior) and saves it, all or nothing.
+/// Throws std::invalid_argument for bad options, std::runtime_error naming the file for an
+/// unreadable input or a failed write. Returns the exit code.
+int prior(const PriorOptions& opts, std::ostream& out);
+
 /// Loads a map file (the core format or the MRPT map's gzip archive), from a file or a pipe;
 /// throws std::runtime_error naming the file on failure, including bytes after the map.
 OccupancyMap loadMap(const std::string& path);

@@ -103,6 +103,25 @@ int main(int argc, char** argv) {
   f->add_option("--out", fu.out_path, "Output map (.rtog)")->required()->check(path);
   f->add_option("--threads", fu.threads, "Threads applying the update")->capture_default_str()->check(rtog::app::checks::integer(1, 256));
 
+  rtog::cli::PriorOptions pr;
+  std::vector<double> origin;
+  auto* p = app.add_subcommand("prior", "Start a map from a prior: a blueprint image or an MRPT .gridmap");
+  auto* image = p->add_option("--image", pr.image_path, "Blueprint image (PNG, ...): white free, black occupied, mid-grey unknown")
+                    ->check(CLI::ExistingFile);
+  auto* gridmap = p->add_option("--gridmap", pr.gridmap_path, "MRPT .gridmap or .gridmap.gz (its own geometry)")
+                      ->check(CLI::ExistingFile);
+  image->excludes(gridmap);
+  auto* pres = p->add_option("--resolution", pr.resolution, "--image: metres per pixel")
+                   ->capture_default_str()
+                   ->check(number(Sign::Positive));
+  auto* porigin = p->add_option("--origin", origin, "--image: map coordinates X Y [m] of its lower-left corner")->expected(2);
+  pres->needs(image);
+  porigin->needs(image);
+  p->add_option("--confidence", pr.confidence, "How far the prior is trusted, in (0.5, 1]: black starts at this P(occupied)")
+      ->capture_default_str()
+      ->check(CLI::Range(0.5, 1.0));
+  p->add_option("--out", pr.out_path, "Output map (.rtog)")->required()->check(path);
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& err) {
@@ -130,6 +149,10 @@ int main(int argc, char** argv) {
     if (f->parsed()) {
       if (!pose.empty()) std::copy(pose.begin(), pose.end(), fu.pose.begin());
       return rtog::cli::fuse(fu, std::cout);
+    }
+    if (p->parsed()) {
+      if (!origin.empty()) pr.origin = {origin[0], origin[1]};
+      return rtog::cli::prior(pr, std::cout);
     }
     if (e->parsed()) {
       if (sz->count() > 0) ex.slice_z = slice_z;

@@ -2,6 +2,7 @@
 #include "rtog/mrpt/CRTreeBackedGridMap2D.h"
 
 #include "CRTreeOccupancyGridMap_grid2d.hpp"
+#include "band_maxima.hpp"
 #include "mrpt_grid.hpp"
 #include "options_check.hpp"
 
@@ -186,21 +187,26 @@ void CRTreeBackedGridMap2D::refreshRegion(double x0, double y0, double x1, doubl
   if (!(zlo <= zhi) || !lat.tryKey(Eigen::Vector3d(0, 0, zlo), z0) || !lat.tryKey(Eigen::Vector3d(0, 0, zhi), z1))
     return;
   const Box region{Key{k0.x, k0.y, z0.z}, Key{k1.x, k1.y, z1.z}};
-  const std::int64_t nx = region.extent(0);
-  std::vector<float> best;
-  bandMaxima(m, region, best);
-  // Sample the band at each 2D cell centre (the grid's cells need not align with the lattice).
+  // Sample the band at each 2D cell centre (the grid's cells need not align with the lattice):
+  // the cells whose centre's column lies in a run. The others hold no known cell: left as they
+  // are (unknown: cells leave the R-tree map only through clear() or a load, which refreshGrid).
   const int cx0 = std::max(0, x2idx(x0)), cx1 = std::min<int>(static_cast<int>(getSizeX()) - 1, x2idx(x1));
   const int cy0 = std::max(0, y2idx(y0)), cy1 = std::min<int>(static_cast<int>(getSizeY()) - 1, y2idx(y1));
-  for (int cy = cy0; cy <= cy1; ++cy)
-    for (int cx = cx0; cx <= cx1; ++cx) {
-      Key k;
-      if (!lat.tryKey(Eigen::Vector3d(idx2x(cx), idx2y(cy), 0), k)) continue;
-      if (k.x < region.min.x || k.x > region.max.x || k.y < region.min.y || k.y > region.max.y) continue;
-      const float v = best[static_cast<std::size_t>((k.y - region.min.y) * nx + (k.x - region.min.x))];
-      // MRPT grid cells hold P(free): 0 is occupied (black), 1 free (white).
-      setCell(cx, cy, std::isnan(v) ? 0.5f : static_cast<float>(1.0 - probability(v)));
-    }
+  forEachBandRun(m, region, [&](std::int32_t ky, std::int32_t kx0, std::int32_t kx1, const float* best) {
+    const Box run{Key{kx0, ky, 0}, Key{kx1, ky, 0}};
+    const Eigen::Vector3d lo = lat.boxMin(run), hi = lat.boxMax(run);
+    const int tx0 = std::max(cx0, x2idx(lo.x()) - 1), tx1 = std::min(cx1, x2idx(hi.x()) + 1);
+    const int ty0 = std::max(cy0, y2idx(lo.y()) - 1), ty1 = std::min(cy1, y2idx(hi.y()) + 1);
+    for (int cy = ty0; cy <= ty1; ++cy)
+      for (int cx = tx0; cx <= tx1; ++cx) {
+        Key k;
+        if (!lat.tryKey(Eigen::Vector3d(idx2x(cx), idx2y(cy), 0), k)) continue;
+        if (k.y != ky || k.x < kx0 || k.x > kx1) continue;
+        const float v = best[k.x - kx0];
+        // MRPT grid cells hold P(free): 0 is occupied (black), 1 free (white).
+        setCell(cx, cy, std::isnan(v) ? 0.5f : static_cast<float>(1.0 - probability(v)));
+      }
+  });
 }
 
 void CRTreeBackedGridMap2D::refreshGrid() {

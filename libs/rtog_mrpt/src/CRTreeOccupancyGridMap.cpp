@@ -88,8 +88,13 @@ InsertStats CRTreeOccupancyGridMap::fuse(const CRTreeOccupancyGridMap& other, co
 }
 
 void CRTreeOccupancyGridMap::internal_clear() {
-  map_.clear();
-  setGridFrame(-10, 10, -10, 10);  // as COccupancyGridMap2D::clear()
+  if (prior_) {
+    map_ = prior_->map;
+    frame_ = prior_->frame;
+  } else {
+    map_.clear();
+    setGridFrame(-10, 10, -10, 10);  // as COccupancyGridMap2D::clear()
+  }
   lastInsertStats = InsertStats{};
   totalInsertStats = InsertStats{};
   invalidRangesSkipped = 0;

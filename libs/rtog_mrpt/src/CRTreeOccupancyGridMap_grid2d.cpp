@@ -1,6 +1,7 @@
 // rtog::CRTreeOccupancyGridMap: the 2D view (a COccupancyGridMap2D of a height band), the
 // likelihood of planar scans on it, and the grid queries MRPT users call on a 2D grid.
 #include "CRTreeOccupancyGridMap_grid2d.hpp"
+#include "band_maxima.hpp"
 #include "mrpt_grid.hpp"
 
 #include <cmath>
@@ -160,19 +161,6 @@ CRTreeOccupancyGridMap::GridView::GridView(const OccupancyMap& m, float lo, floa
   fillCells(m, kb, gx0, gy0);
 }
 
-void bandMaxima(const OccupancyMap& m, const Box& region, std::vector<float>& best) {
-  const std::int64_t nx = region.extent(0), ny = region.extent(1);
-  best.assign(static_cast<std::size_t>(nx * ny), std::numeric_limits<float>::quiet_NaN());
-  m.forEachLeafIn(region, [&](const Box& b, float v) {
-    const Box c = b.intersection(region);
-    for (std::int32_t y = c.min.y; y <= c.max.y; ++y)
-      for (std::int32_t x = c.min.x; x <= c.max.x; ++x) {
-        float& dst = best[static_cast<std::size_t>((y - region.min.y) * nx + (x - region.min.x))];
-        if (!(dst >= v)) dst = v;  // NaN (unknown) or lower
-      }
-  });
-}
-
 void CRTreeOccupancyGridMap::GridView::fillCells(const OccupancyMap& m, const Box& kb, double gx0, double gy0) {
   if (kb.isEmpty()) return;
   grid.setNonEmpty();
@@ -184,18 +172,18 @@ void CRTreeOccupancyGridMap::GridView::fillCells(const OccupancyMap& m, const Bo
   if (!(z0 <= z1)) return;  // band outside the map: all unknown
   const Box region{Key{kb.min.x, kb.min.y, static_cast<std::int32_t>(z0)},
                    Key{kb.max.x, kb.max.y, static_cast<std::int32_t>(z1)}};
-  const std::int64_t nx = kb.extent(0), ny = kb.extent(1);
-  std::vector<float> best;
-  bandMaxima(m, region, best);
   auto& cells = grid.cells();
-  const auto ox = static_cast<std::int64_t>(kb.min.x - gx0), oy = static_cast<std::int64_t>(kb.min.y - gy0);
   // Known cells outside the view's frame (a grid frame that 2D scans grew, cells that other
   // observations put beyond it) are not drawn: clipped on every side.
-  for (std::int64_t y = std::max<std::int64_t>(0, -oy); y < ny && y + oy < sy; ++y)
-    for (std::int64_t x = std::max<std::int64_t>(0, -ox); x < nx && x + ox < sx; ++x) {
-      const float v = best[static_cast<std::size_t>(y * nx + x)];
-      if (!std::isnan(v)) cells[static_cast<std::size_t>((y + oy) * sx + x + ox)] = toMrptCell(v);
+  forEachBandRun(m, region, [&](std::int32_t ky, std::int32_t kx0, std::int32_t kx1, const float* best) {
+    const auto y = static_cast<std::int64_t>(ky - gy0);
+    if (y < 0 || y >= sy) return;
+    const auto x0 = static_cast<std::int64_t>(kx0 - gx0);
+    for (std::int64_t x = std::max<std::int64_t>(0, x0); x <= x0 + (kx1 - kx0) && x < sx; ++x) {
+      const float v = best[x - x0];
+      if (!std::isnan(v)) cells[static_cast<std::size_t>(y * sx + x)] = toMrptCell(v);
     }
+  });
 }
 
 void CRTreeOccupancyGridMap::GridView::setOptions(const TLikelihoodOptions& o, const TInsertionOptions& io) {

@@ -30,9 +30,14 @@ void saveGridLikelihoodKeys(const CRTreeOccupancyGridMap::TLikelihoodOptions& o,
 /// -16 v when that is an MRPT value, else MRPT's own p2l of P(free).
 int8_t toMrptCell(float v);
 
-/// The highest log-odds of each (x, y) column of `region` over its z-range, row by row (x
-/// fastest), NaN where no cell is known: what a 2D view of a height band shows.
-void bandMaxima(const OccupancyMap& m, const Box& region, std::vector<float>& best);
+/// Reads a .gridmap / .gridmap.gz (a CArchive of a COccupancyGridMap2D, gzip or not) into `g`;
+/// false if the file cannot be read as one.
+bool readGridmapFile(const std::string& file, mrpt::maps::COccupancyGridMap2D& g);
+
+struct CRTreeOccupancyGridMap::Prior {
+  OccupancyMap map;
+  TGridFrame2D frame;
+};
 
 struct CRTreeOccupancyGridMap::GridView {
   /// A COccupancyGridMap2D whose cells and caches the view may set directly.

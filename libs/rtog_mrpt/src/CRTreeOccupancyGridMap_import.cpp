@@ -4,6 +4,8 @@
 #include <cmath>
 #include <cstring>
 #include <sstream>
+#include <stdexcept>
+#include <string>
 
 #include <mrpt/io/CFileGZInputStream.h>
 #include <mrpt/serialization/CArchive.h>
@@ -64,9 +66,29 @@ std::string encodeMap(const MapParams& p, const std::vector<Leaf>& leaves) {
 }  // namespace
 
 void CRTreeOccupancyGridMap::loadFromGrid(const mrpt::maps::COccupancyGridMap2D& grid) {
+  loadGridLayer(grid, 1.0);
+  prior_.reset();
+}
+
+void CRTreeOccupancyGridMap::loadPrior(const mrpt::maps::COccupancyGridMap2D& grid, double confidence) {
+  if (!(confidence > 0.5 && confidence <= 1.0))
+    throw std::invalid_argument("rtog::CRTreeOccupancyGridMap::loadPrior: the confidence must lie in (0.5, 1], got " +
+                                std::to_string(confidence));
+  loadGridLayer(grid, confidence);
+  prior_ = std::make_shared<const Prior>(Prior{map_, frame_});
+}
+
+void CRTreeOccupancyGridMap::loadGridLayer(const mrpt::maps::COccupancyGridMap2D& grid, double confidence) {
   const double res = grid.getResolution();
   const auto& cells = grid.getRawMap();
   const std::size_t sx = grid.getSizeX(), sy = grid.getSizeY();
+  // A cell's value: the grid's own (-l/16, exact) or, trusted less, its P(occupied) drawn
+  // towards 0.5 (monotone in l, so the extremes below are the extremes of the values).
+  const auto valueOf = [confidence](int l) {
+    const float v = -static_cast<float>(l) / 16.0f;
+    if (confidence == 1.0) return v;
+    return static_cast<float>(logit(0.5 + (2.0 * confidence - 1.0) * (probability(v) - 0.5)));
+  };
   int lmin = 0, lmax = 0;
   for (const auto c : cells) lmin = std::min<int>(lmin, std::max<int>(c, -127)), lmax = std::max<int>(lmax, c);
   // Widen the clamping only as far as the grid's most certain cells need, so that they keep
@@ -74,7 +96,7 @@ void CRTreeOccupancyGridMap::loadFromGrid(const mrpt::maps::COccupancyGridMap2D&
   TInsertionOptions io = insertionOptions;
   io.validate();  // before toMapParams(), which must not see a NaN (see validated())
   const LogOddsModel before(io.toMapParams(res).log_odds);
-  const float vmin = -static_cast<float>(lmax) / 16.0f, vmax = -static_cast<float>(lmin) / 16.0f;
+  const float vmin = valueOf(lmax), vmax = valueOf(lmin);
   if (vmin < before.clampMin()) io.clampingMin = boundProbability(vmin, -1);
   if (vmax > before.clampMax()) io.clampingMax = boundProbability(vmax, +1);
   io.validate();
@@ -100,7 +122,7 @@ void CRTreeOccupancyGridMap::loadFromGrid(const mrpt::maps::COccupancyGridMap2D&
         ++cx;
         continue;
       }
-      const float v = -static_cast<float>(l) / 16.0f;
+      const float v = valueOf(l);
       const auto kx = static_cast<std::int32_t>(k0.x + static_cast<std::int64_t>(cx));
       const auto ky = static_cast<std::int32_t>(k0.y + static_cast<std::int64_t>(cy));
       // Runs of equal mergeable values along x, within one brick.
@@ -134,8 +156,7 @@ bool CRTreeOccupancyGridMap::loadFromBitmapFile(const std::string& file, float r
   return true;
 }
 
-bool CRTreeOccupancyGridMap::loadFromGridmapFile(const std::string& file) {
-  mrpt::maps::COccupancyGridMap2D g;
+bool readGridmapFile(const std::string& file, mrpt::maps::COccupancyGridMap2D& g) {
   try {
     mrpt::io::CFileGZInputStream f;  // zlib reads plain files too
     if (!f.open(file)) return false;
@@ -144,6 +165,12 @@ bool CRTreeOccupancyGridMap::loadFromGridmapFile(const std::string& file) {
   } catch (const std::exception&) {
     return false;  // not a serialized COccupancyGridMap2D
   }
+  return true;
+}
+
+bool CRTreeOccupancyGridMap::loadFromGridmapFile(const std::string& file) {
+  mrpt::maps::COccupancyGridMap2D g;
+  if (!readGridmapFile(file, g)) return false;
   loadFromGrid(g);
   return true;
 }

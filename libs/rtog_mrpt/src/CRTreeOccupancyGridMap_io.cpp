@@ -142,6 +142,7 @@ void CRTreeOccupancyGridMap::serializeFrom(mrpt::serialization::CArchive& in, ui
   matchingOptions = mo;
   map_ = std::move(map);
   frame_ = frame;
+  prior_.reset();  // a loaded map clears to empty, as the stock grid does
   lastInsertStats = totalInsertStats = InsertStats{};
   invalidRangesSkipped = 0;
   notifyMapChanged();

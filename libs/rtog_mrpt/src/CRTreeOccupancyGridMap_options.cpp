@@ -2,6 +2,7 @@
 // TGridViewOptions, TMatchingOptions and TMapDefinition (read, written, validated by key).
 #include <cctype>
 #include <cmath>
+#include <memory>
 #include <sstream>
 #include <stdexcept>
 
@@ -330,10 +331,12 @@ void CRTreeOccupancyGridMap::TMapDefinition::loadFromConfigFile_map_specific(
     readGridExtent(source, sec, min_x, max_x, min_y, max_y);
     reportUnknownKeys(source, sec,
                       {"resolution", "min_x", "max_x", "min_y", "max_y", "gridView_minZ", "gridView_maxZ",
-                       "disableSaveAs3DObject"});
+                       "disableSaveAs3DObject", "priorMap", "priorConfidence", "priorResolution", "priorOriginX",
+                       "priorOriginY"});
     insertionOpts.loadFromConfigFile(source, sectionNamePrefix + "_insertOpts");
     likelihoodOpts.loadFromConfigFile(source, sectionNamePrefix + "_likelihoodOpts");
     gridViewOpts.loadFromConfigFile(source, sec);
+    priorOpts.loadFromConfigFile(source, sec);
     matchingOpts.loadFromConfigFile(source, sectionNamePrefix + "_matchingOpts");
   } catch (const std::exception& e) {
     loadError = e.what();
@@ -345,6 +348,7 @@ void CRTreeOccupancyGridMap::TMapDefinition::dumpToTextStream_map_specific(std::
   insertionOpts.dumpToTextStream(out);
   likelihoodOpts.dumpToTextStream(out);
   gridViewOpts.dumpToTextStream(out);
+  priorOpts.dumpToTextStream(out);
   matchingOpts.dumpToTextStream(out);
 }
 
@@ -352,13 +356,16 @@ mrpt::maps::CMetricMap* CRTreeOccupancyGridMap::internal_CreateFromMapDefinition
     const mrpt::maps::TMetricMapInitializer& def) {
   const auto& d = dynamic_cast<const CRTreeOccupancyGridMap::TMapDefinition&>(def);
   if (!d.loadError.empty()) throw std::invalid_argument(d.loadError);
-  auto* m = new CRTreeOccupancyGridMap(d.resolution, d.insertionOpts);
+  auto m = std::make_unique<CRTreeOccupancyGridMap>(d.resolution, d.insertionOpts);
   m->setGridFrame(d.min_x, d.max_x, d.min_y, d.max_y);
   m->likelihoodOptions = d.likelihoodOpts;
   m->gridViewOptions = d.gridViewOpts;
   m->matchingOptions = d.matchingOpts;
   m->genericMapParams = d.genericMapParams;
-  return m;
+  // The prior's own geometry and resolution replace the definition's (as a loaded grid does);
+  // its layer lies in the band of the view options.
+  if (!d.priorOpts.priorMap.empty()) m->loadPrior(d.priorOpts);
+  return m.release();
 }
 
 }  // namespace rtog

@@ -74,6 +74,16 @@ double termAt(const Grid& g, const Field& f, int cx, int cy) {
 
 }  // namespace
 
+double& LikelihoodField2D::term(std::size_t at) {
+  auto& page = pages_[at >> kPageBits];
+  if (!page) {
+    constexpr std::size_t n = std::size_t{1} << kPageBits;
+    page.reset(new double[n]);
+    std::fill(page.get(), page.get() + n, std::numeric_limits<double>::quiet_NaN());
+  }
+  return page[at & ((std::size_t{1} << kPageBits) - 1)];
+}
+
 double LikelihoodField2D::scanLogLikelihood(const Grid& g, const mrpt::obs::CObservation2DRangeScan& scan,
                                             const mrpt::poses::CPose3D& pose3d) {
   // As COccupancyGridMap2D::internal_computeObservationLikelihood and its likelihood field.
@@ -92,8 +102,10 @@ double LikelihoodField2D::scanLogLikelihood(const Grid& g, const mrpt::obs::CObs
   const bool logs = !lo.LF_alternateAverageMethod;
   const bool keep = lo.enableLikelihoodCache;
   const std::size_t cells = std::size_t{g.getSizeX()} * g.getSizeY();
-  if (keep && (terms_.size() != cells || logs_ != logs)) {
-    terms_.assign(cells, std::numeric_limits<double>::quiet_NaN());
+  if (keep && (cells_ != cells || logs_ != logs)) {
+    pages_.clear();
+    pages_.resize((cells >> kPageBits) + 1);
+    cells_ = cells;
     logs_ = logs;
   }
   const Field f = fieldOf(g);
@@ -117,11 +129,12 @@ double LikelihoodField2D::scanLogLikelihood(const Grid& g, const mrpt::obs::CObs
       continue;
     }
     const std::size_t at = static_cast<std::size_t>(cx) + static_cast<std::size_t>(cy) * g.getSizeX();
-    double v = keep ? terms_[at] : std::numeric_limits<double>::quiet_NaN();
+    double* kept = keep ? &term(at) : nullptr;
+    double v = kept ? *kept : std::numeric_limits<double>::quiet_NaN();
     if (std::isnan(v)) {
-      const double term = termAt(g, f, cx, cy);
-      v = logs ? std::log(term) : term;
-      if (keep) terms_[at] = v;
+      const double t = termAt(g, f, cx, cy);
+      v = logs ? std::log(t) : t;
+      if (kept) *kept = v;
     }
     sum += v;
   }

@@ -65,9 +65,14 @@ int cellOfValue(float v) { return static_cast<int>(std::lround(-v * 16.0f)); }
 
 namespace {
 
+/// mrpt::round, which the grid's geometry uses: to nearest, ties to even (lrint in the default
+/// rounding mode), not std::round's ties away from zero. At 0.08 m a grown edge of -25 m is
+/// -312.5 cells: the stock grid takes -312.
+float mrptRound(float v) { return std::nearbyint(v); }
+
 /// The extent and cell counts of a frame of f.resolution, as COccupancyGridMap2D computes them.
 void setCells(TGridFrame2D& f, float xmin, float xmax, float ymin, float ymax) {
-  const float sx = std::round((xmax - xmin) / f.resolution), sy = std::round((ymax - ymin) / f.resolution);
+  const float sx = mrptRound((xmax - xmin) / f.resolution), sy = mrptRound((ymax - ymin) / f.resolution);
   // (Checked before the casts, which a non-finite or huge extent would make undefined; each side
   // too, as a side of 0 cells makes any other side's product small.)
   const double cap = double(archive::kMaxGridCells);
@@ -84,10 +89,10 @@ void setCells(TGridFrame2D& f, float xmin, float xmax, float ymin, float ymax) {
 void setSize(TGridFrame2D& f, float xmin, float xmax, float ymin, float ymax, float res) {
   if (!(res > 0.0f) || !(xmax > xmin) || !(ymax > ymin))
     throw std::invalid_argument("rtog mrpt_grid: a grid needs resolution > 0, max_x > min_x and max_y > min_y");
-  xmin = res * std::round(xmin / res);
-  ymin = res * std::round(ymin / res);
-  xmax = res * std::round(xmax / res);
-  ymax = res * std::round(ymax / res);
+  xmin = res * mrptRound(xmin / res);
+  ymin = res * mrptRound(ymin / res);
+  xmax = res * mrptRound(xmax / res);
+  ymax = res * mrptRound(ymax / res);
   TGridFrame2D g = f;  // f as it was if the size is refused
   g.resolution = res;
   setCells(g, xmin, xmax, ymin, ymax);
@@ -107,7 +112,7 @@ void resize(TGridFrame2D& f, float nx0, float nx1, float ny0, float ny1) {
   ny1 = std::max(ny1, f.y_max);
   const float res = f.resolution;
   const auto snap = [res](float& v) {
-    if (std::fabs(v / res - std::round(v / res)) > 0.05f) v = res * std::round(v / res);
+    if (std::fabs(v / res - mrptRound(v / res)) > 0.05f) v = res * mrptRound(v / res);
   };
   snap(nx0), snap(ny0), snap(nx1), snap(ny1);
   setCells(f, nx0, nx1, ny0, ny1);

@@ -27,6 +27,7 @@
 #include "rtog/core/occupancy_map.hpp"
 #include "rtog/mrpt/insertion_options.h"
 #include "rtog/mrpt/map_types.h"
+#include "rtog/mrpt/prior_map_options.h"
 
 namespace mrpt::obs {
 class CObservation2DRangeScan;
@@ -265,6 +266,13 @@ class CRTreeOccupancyGridMap : public mrpt::maps::CMetricMap {
                               std::numeric_limits<double>::max(), std::numeric_limits<double>::max()));
   /// A .gridmap / .gridmap.gz (a CArchive of a COccupancyGridMap2D, gzip or not), then loadFromGrid.
   bool loadFromGridmapFile(const std::string& file);
+  /// Replaces the map with a prior (doc/priors.md): loadFromGrid's cells, each drawn towards 0.5
+  /// by `confidence` in (0.5, 1] (TPriorMapOptions::priorConfidence). Later observations update
+  /// it by the normal update; cells they do not reach keep it exactly; clear() returns to it.
+  void loadPrior(const mrpt::maps::COccupancyGridMap2D& grid, double confidence);
+  /// The prior `o` names, read from its file. Throws std::invalid_argument for bad options and
+  /// std::runtime_error naming the file if it cannot be read as the kind its name says.
+  void loadPrior(const TPriorMapOptions& o);
   /// Metres along `direction` from `origin` to the first occupied cell (native 3D); nullopt if
   /// none within maxRange.
   std::optional<double> castRay(const mrpt::math::TPoint3D& origin, const mrpt::math::TVector3D& direction,
@@ -282,6 +290,7 @@ class CRTreeOccupancyGridMap : public mrpt::maps::CMetricMap {
   rtog::CRTreeOccupancyGridMap::TLikelihoodOptions likelihoodOpts;
   rtog::CRTreeOccupancyGridMap::TGridViewOptions gridViewOpts;  ///< read from _creationOpts
   rtog::CRTreeOccupancyGridMap::TMatchingOptions matchingOpts;
+  rtog::TPriorMapOptions priorOpts;  ///< read from _creationOpts; loaded when the map is created
   /// A bad .ini value found while loading, raised when the map is created: MRPT leaks the
   /// definition if loading itself throws.
   std::string loadError;
@@ -298,6 +307,8 @@ class CRTreeOccupancyGridMap : public mrpt::maps::CMetricMap {
   /// Re-creates the (empty) core map if the insertion options changed its parameters; throws
   /// std::logic_error if they changed while the map holds cells.
   void syncParams();
+  /// loadFromGrid with the values drawn towards 0.5 by `confidence` (1: exact).
+  void loadGridLayer(const mrpt::maps::COccupancyGridMap2D& grid, double confidence);
   /// A CObservationRange's log-likelihood on the 2D view (doc/sonar.md): per echo, a Gaussian
   /// (rayTracing_stdHit, mixed by LF_zHit / LF_zRandom) about the reading expected from the pose,
   /// the shortest ray across its cone; nullopt where the view cannot score it (a non-finite pose).
@@ -378,6 +389,10 @@ class CRTreeOccupancyGridMap : public mrpt::maps::CMetricMap {
 
   OccupancyMap map_;
   TGridFrame2D frame_;
+  /// What clear() returns to (MRPT's apps clear a map before they fill it): the cells and frame
+  /// loadPrior() made, shared by copies; none otherwise. Not serialized.
+  struct Prior;
+  std::shared_ptr<const Prior> prior_;
   mutable Caches caches_;
 
   /// cos/sin of the scan's beam angles, from the cache when the geometry is the last one's.
