@@ -10,6 +10,7 @@
 #include <utility>
 
 #include "rtog/core/occupancy_map.hpp"
+#include "rtog/core/plan.hpp"
 
 namespace rtog::cli {
 
@@ -80,6 +81,11 @@ struct FuseOptions {
   std::array<double, 6> pose{};
   std::string out_path;  ///< the fused map (.rtog; never one of the inputs)
   int threads = defaultThreadCount();
+  /// Estimate map_b's pose by registration (ICP on occupied cells, rtog::registerMaps; `pose`, if
+  /// given, is its guess: x, y, yaw) and fuse with its covariance blurred in. (Default: false)
+  bool register_maps = false;
+  /// --register: the height band [m] of the occupied cells matched. (Default: all)
+  std::array<double, 2> register_band{-1000.0, 1000.0};
 };
 
 /// The pose x y z [m] yaw pitch roll [deg] as MRPT's CPose3D has it; throws
@@ -104,6 +110,19 @@ struct PriorOptions {
 /// Throws std::invalid_argument for bad options, std::runtime_error naming the file for an
 /// unreadable input or a failed write. Returns the exit code.
 int prior(const PriorOptions& opts, std::ostream& out);
+
+struct PlanCommandOptions {
+  std::string map_path;     ///< the map (.rtog)
+  Eigen::Vector2d from{0, 0}, to{0, 0};  ///< start and goal [m]
+  PlanOptions plan;         ///< Te, Ta, unknown cells' risk, radius, band
+  std::string out_path;     ///< the path as text: "x y" per line (never the input)
+  std::string png_path;     ///< the planning grid with the path; empty: none
+};
+
+/// Plans a risk-aware 2D path on a saved map (rtog::planPath2D) and writes it, all or nothing.
+/// Throws std::invalid_argument for bad options or a blocked start/goal, std::runtime_error if no
+/// path exists or a file cannot be read or written. Returns the exit code.
+int plan(const PlanCommandOptions& opts, std::ostream& out);
 
 /// Loads a map file (the core format or the MRPT map's gzip archive), from a file or a pipe;
 /// throws std::runtime_error naming the file on failure, including bytes after the map.

@@ -9,6 +9,7 @@
 
 #include "commands.hpp"
 #include "rtog/app/output_files.hpp"
+#include "rtog/mrpt/map_registration.h"
 
 namespace rtog::cli {
 
@@ -64,7 +65,30 @@ int fuse(const FuseOptions& o, std::ostream& out) {
   OccupancyMap a = loadMap(o.map_a);
   const OccupancyMap b = loadMap(o.map_b);
   const std::int64_t cells_a = a.cellCount(), cells_b = b.cellCount();
-  const InsertStats st = a.fuse(b, pose, o.threads);
+  InsertStats st;
+  if (o.register_maps) {
+    if (o.pose[2] != 0.0 || o.pose[4] != 0.0 || o.pose[5] != 0.0)
+      throw std::invalid_argument("fuse: --register estimates x, y and yaw: a --pose guess must have z, pitch and roll 0");
+    CRTreeOccupancyGridMap wa(a.resolution()), wb(b.resolution());
+    wa.map() = std::move(a);
+    wb.map() = b;
+    TMapRegistrationOptions ro;
+    ro.minZ = static_cast<float>(o.register_band[0]), ro.maxZ = static_cast<float>(o.register_band[1]);
+    ro.guessX = o.pose[0], ro.guessY = o.pose[1], ro.guessYaw = o.pose[3] * M_PI / 180.0;
+    const TMapRegistration r = registerMaps(wa, wb, ro);
+    const auto& m = r.pose.mean;
+    out << "registered " << o.map_b << " at x " << m.x() << " m, y " << m.y() << " m, yaw " << m.yaw() * 180.0 / M_PI
+        << " deg (sigma " << std::sqrt(r.pose.cov(0, 0)) << " m, " << std::sqrt(r.pose.cov(1, 1)) << " m, "
+        << std::sqrt(r.pose.cov(3, 3)) * 180.0 / M_PI << " deg; " << r.goodness * 100.0 << " % of "
+        << r.pointsB << " occupied cells matched)\n";
+    if (r.goodness < 0.3)
+      out << "warning: under 30 % of the occupied cells matched: the maps may share too little to be registered\n";
+    wa.insertionOptions.threads = o.threads;
+    st = fuseUncertain(wa, wb, r.pose);
+    a = std::move(wa.map());
+  } else {
+    st = a.fuse(b, pose, o.threads);
+  }
   a.write(dst);
   files.commit();
   out << "fused " << o.map_b << " (" << cells_b << " cells) into " << o.map_a << " (" << cells_a << " cells): "

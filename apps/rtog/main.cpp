@@ -101,6 +101,10 @@ int main(int argc, char** argv) {
   f->add_option("map_b", fu.map_b, "The map whose evidence is added (.rtog)")->required()->check(path);
   f->add_option("--pose", pose, "map_b's frame in map_a's: x y z [m] yaw pitch roll [deg]")->expected(6);
   f->add_option("--out", fu.out_path, "Output map (.rtog)")->required()->check(path);
+  f->add_flag("--register", fu.register_maps,
+              "Estimate map_b's pose by ICP on the occupied cells (--pose: its guess, x y yaw) and fuse with its covariance");
+  std::vector<double> band;
+  f->add_option("--register-band", band, "--register: match occupied cells with centres in ZMIN ZMAX [m]")->expected(2);
   f->add_option("--threads", fu.threads, "Threads applying the update")->capture_default_str()->check(rtog::app::checks::integer(1, 256));
 
   rtog::cli::PriorOptions pr;
@@ -121,6 +125,24 @@ int main(int argc, char** argv) {
       ->capture_default_str()
       ->check(CLI::Range(0.5, 1.0));
   p->add_option("--out", pr.out_path, "Output map (.rtog)")->required()->check(path);
+
+  rtog::cli::PlanCommandOptions pl;
+  std::vector<double> from, to, plan_band;
+  auto* pn = app.add_subcommand("plan", "Plan a risk-aware path: least Te * sum P(occupied) + Ta * length");
+  pn->add_option("map", pl.map_path, "Map file (.rtog)")->required()->check(path);
+  pn->add_option("--from", from, "Start X Y [m]")->required()->expected(2);
+  pn->add_option("--to", to, "Goal X Y [m]")->required()->expected(2);
+  pn->add_option("--Te", pl.plan.te, "Weight of the summed risk")->required()->check(number(Sign::NonNegative));
+  pn->add_option("--Ta", pl.plan.ta, "Weight of the length, per metre")->required()->check(number(Sign::NonNegative));
+  pn->add_option("--unknown-cost", pl.plan.unknown_risk, "Risk of an unknown cell, in [0, 1]")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 1.0));
+  pn->add_option("--radius", pl.plan.radius, "Robot radius [m]: the path keeps it from occupied cells")
+      ->capture_default_str()
+      ->check(number(Sign::NonNegative));
+  pn->add_option("--band", plan_band, "Height band ZMIN ZMAX [m] whose columns are planned on")->expected(2);
+  pn->add_option("--out", pl.out_path, "The path (text, x y per line)")->required()->check(path);
+  pn->add_option("--png", pl.png_path, "The planning grid with the path (.png)")->check(path);
 
   try {
     app.parse(argc, argv);
@@ -148,7 +170,16 @@ int main(int argc, char** argv) {
     }
     if (f->parsed()) {
       if (!pose.empty()) std::copy(pose.begin(), pose.end(), fu.pose.begin());
+      if (!band.empty()) {
+        if (!fu.register_maps) throw std::invalid_argument("--register-band: only with --register");
+        fu.register_band = {band[0], band[1]};
+      }
       return rtog::cli::fuse(fu, std::cout);
+    }
+    if (pn->parsed()) {
+      pl.from = Eigen::Vector2d(from[0], from[1]), pl.to = Eigen::Vector2d(to[0], to[1]);
+      if (!plan_band.empty()) pl.plan.min_z = plan_band[0], pl.plan.max_z = plan_band[1];
+      return rtog::cli::plan(pl, std::cout);
     }
     if (p->parsed()) {
       if (!origin.empty()) pr.origin = {origin[0], origin[1]};

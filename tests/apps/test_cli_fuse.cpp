@@ -18,6 +18,7 @@
 #include "commands.hpp"
 #include "rtog/image/tum_dataset.hpp"
 #include "map_cells.hpp"
+#include "rtog/mrpt/map_registration.h"
 
 namespace {
 
@@ -81,6 +82,38 @@ TEST_F(CliFuse, BadInputIsOneErrorLineAndNoOutput) {
   EXPECT_EQ(run("fuse " + a_ + " " + b_ + " --out " + a_, &out), 1) << out;
   EXPECT_NE(out.find("refusing to overwrite an input"), std::string::npos) << out;
   EXPECT_EQ(readAll(a_), before);
+}
+
+// `fuse --register` on Debian's Malaga simplemap (corrected poses), its two halves built apart:
+// they are found aligned (the truth: the identity) and fused as the library's registration and
+// uncertain fusion fuse them, cell for cell. A map with no occupied cell cannot be registered.
+TEST(CliFuseRegister, TheMalagaHalvesAreFoundAlignedAndFusedAsTheLibraryDoes) {
+  const std::string sm = std::string(RTOG_MRPT_DATASETS) + "/malaga-cs-fac-building.simplemap.gz";
+  const std::string a = tmp("ra.rtog"), b = tmp("rb.rtog"), c = tmp("rc.rtog");
+  std::string out;
+  ASSERT_EQ(run("build --simplemap " + sm + " --scans 0:49 --resolution 0.05 --out " + a, &out), 0) << out;
+  ASSERT_EQ(run("build --simplemap " + sm + " --scans 49: --resolution 0.05 --out " + b, &out), 0) << out;
+  ASSERT_EQ(run("fuse " + a + " " + b + " --register --register-band 0 1 --out " + c, &out), 0) << out;
+  double x = 1e9, y = 1e9, yaw = 1e9;
+  ASSERT_EQ(std::sscanf(out.c_str(), "registered %*s at x %lf m, y %lf m, yaw %lf deg", &x, &y, &yaw), 3) << out;
+  EXPECT_LT(std::hypot(x, y), 0.1) << out;
+  EXPECT_LT(std::fabs(yaw), 1.0) << out;
+  rtog::CRTreeOccupancyGridMap wa(0.05), wb(0.05);
+  wa.map() = rtog::cli::loadMap(a);
+  wb.map() = rtog::cli::loadMap(b);
+  rtog::TMapRegistrationOptions o;
+  o.minZ = 0, o.maxZ = 1;
+  const rtog::TMapRegistration r = rtog::registerMaps(wa, wb, o);
+  rtog::fuseUncertain(wa, wb, r.pose);
+  EXPECT_EQ(rtog::test::cellsOf(rtog::cli::loadMap(c)), rtog::test::cellsOf(wa.map()));
+  // Bad uses: one error line, no output.
+  for (const std::string& args : {"fuse " + a + " " + b + " --register --pose 0 0 1 0 0 0 --out " + c + "x",
+                                  "fuse " + a + " " + b + " --register-band 0 1 --out " + c + "x",
+                                  "fuse " + a + " " + b + " --register --register-band 1 0 --out " + c + "x"}) {
+    EXPECT_EQ(run(args, &out), 1) << args << "\n" << out;
+    EXPECT_EQ(std::count(out.begin(), out.end(), '\n'), 1) << out;
+    EXPECT_FALSE(exists(c + "x")) << args;
+  }
 }
 
 // `build --scans A:B`: chunks of one log, built apart, joined by `fuse`. Chunk 3:4 is frame 3 alone.

@@ -6,7 +6,9 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <map>
 
 #include <mrpt/img/CImage.h>
@@ -163,6 +165,71 @@ TEST(Prior, ClearReturnsToThePrior) {
   copy.loadFromGrid(readGrid(dataset(kMalaga)));
   copy.clear();
   EXPECT_EQ(copy.map().leafCount(), 0u);
+}
+
+// Yesterday's map as today's prior, on data whose frames agree by construction: the stock grid
+// of SENA's first half, saved as a PNG (MRPT's saveAsBitmapFile), is the prior of a map that then
+// sees only the second half. Against the stock grid of the whole loop, the map with the prior
+// classifies more cells as that grid does than the second half alone. With RTOG_PRIOR_PICTURES=DIR
+// the maps are left in DIR as .rtog files (doc/priors.md draws them with `rtog export`).
+TEST(Prior, YesterdaysMapAsTodaysPrior) {
+  const auto all = loadOdometryFrames(dataset(kSena));
+  const std::size_t half = all.size() / 2;
+  COccupancyGridMap2D yesterday(-10, 10, -10, 10, 0.05f), whole(-10, 10, -10, 10, 0.05f);
+  for (std::size_t i = 0; i < all.size(); ++i)
+    for (const auto& obs : *all[i].sf) {
+      if (i < half) yesterday.insertObservation(*obs, all[i].pose);
+      whole.insertObservation(*obs, all[i].pose);
+    }
+  const char* keep = std::getenv("RTOG_PRIOR_PICTURES");
+  const auto dir = keep ? std::filesystem::path(keep) : std::filesystem::temp_directory_path() / ("rtog_prior_y_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const std::string png = (dir / "sena_first_half.png").string();
+  ASSERT_TRUE(yesterday.saveAsBitmapFile(png));
+  char origin[160];
+  std::snprintf(origin, sizeof origin, "\npriorResolution=0.05\npriorOriginX=%.9g\npriorOriginY=%.9g\n", yesterday.getXMin(),
+                yesterday.getYMin());
+  const auto today = mapFrom("priorMap=" + png + origin + "priorConfidence=0.7\n", "");
+  const auto alone = mapFrom("resolution=0.05\n", "");
+  // The image holds the first half where the stock grid had it (P(free) as 8-bit grey).
+  {
+    std::size_t known = 0, same = 0;
+    const auto view = today->gridView();
+    for (unsigned cy = 0; cy < yesterday.getSizeY(); ++cy)
+      for (unsigned cx = 0; cx < yesterday.getSizeX(); ++cx) {
+        const float p = yesterday.getCell(cx, cy);
+        if (std::fabs(p - 0.5f) < 0.05f) continue;
+        ++known;
+        same += (view->getPos(yesterday.idx2x(cx), yesterday.idx2y(cy)) < 0.5f) == (p < 0.5f);
+      }
+    EXPECT_GT(double(same), 0.995 * double(known)) << same << " of " << known;
+  }
+  for (std::size_t i = half; i < all.size(); ++i)
+    for (const auto& obs : *all[i].sf) today->insertObservation(*obs, all[i].pose), alone->insertObservation(*obs, all[i].pose);
+  const auto agreement = [&](const rtog::CRTreeOccupancyGridMap& m) {
+    const auto view = m.gridView();
+    std::size_t known = 0, same = 0;
+    for (unsigned cy = 0; cy < whole.getSizeY(); ++cy)
+      for (unsigned cx = 0; cx < whole.getSizeX(); ++cx) {
+        const float p = whole.getCell(cx, cy);
+        if (p == 0.5f) continue;
+        ++known;
+        const float q = view->getPos(whole.idx2x(cx), whole.idx2y(cy));
+        same += q != 0.5f && (q < 0.5f) == (p < 0.5f);
+      }
+    return double(same) / double(known);
+  };
+  const double with_prior = agreement(*today), without = agreement(*alone);
+  std::printf("SENA: the whole loop's stock grid classified alike by the second half alone %.4f, by it on the "
+              "first half's PNG as prior %.4f\n", without, with_prior);
+  EXPECT_GT(with_prior, without + 0.1);
+  if (keep) {
+    std::ofstream a(dir / "sena_prior_and_second_half.rtog", std::ios::binary), b(dir / "sena_second_half.rtog", std::ios::binary);
+    today->map().write(a);
+    alone->map().write(b);
+  } else {
+    std::filesystem::remove_all(dir);
+  }
 }
 
 // A blueprint image: its lower-left corner at priorOrigin, a pixel of priorResolution, black

@@ -1,7 +1,8 @@
 // OccupancyMap::fuse, the independent opinion pool (l = l1 + l2 - l0, clamped), on the bundled
 // TUM frames: without clamping two halves of the sequence fuse into the map of the whole, with
 // clamping each cell is exactly the clamped sum of the halves' values; placed by a shift or a
-// quarter turn by whole cells it is cell for cell; bad poses change nothing.
+// quarter turn by whole cells it is cell for cell; placed by uncertain poses it is the mixture of
+// the shifted maps; bad poses change nothing.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -161,6 +162,63 @@ TEST(Fusion, ABadPoseOrItselfIsRefusedAndChangesNothing) {
   OccupancyMap c(a.params());
   EXPECT_GT(c.fuse(b, far).skipped_out_of_range, 0u);
   EXPECT_EQ(c.leafCount(), 0u);
+}
+
+// Placed by uncertain poses (a registration's sigma points), each cell takes the mixture over the
+// poses of the other map's P(occupied) there, the prior where a pose leaves it outside the other
+// map's cells: checked cell by cell against that sum over shifts by whole cells.
+TEST(Fusion, UncertainPosesFuseTheMixtureOfTheOtherMapsProbabilities) {
+  const auto& s = tum();
+  const OccupancyMap b = build(s, 0, 2, true);
+  const double r = b.resolution();
+  std::vector<OccupancyMap::WeightedPose> poses;
+  const std::pair<int, double> shifts[] = {{-1, 0.25}, {0, 0.5}, {2, 0.25}};
+  for (const auto& [dx, w] : shifts) {
+    Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
+    t.translate(Eigen::Vector3d(dx * r, 0, 0));
+    poses.push_back({t, w});
+  }
+  OccupancyMap a(b.params());
+  a.fuse(b, poses);
+  EXPECT_EQ(a.checkInvariants(), "");
+  const auto src = asMap(cellsOf(b));
+  const auto got = asMap(cellsOf(a));
+  const double p0 = probability(b.logOddsModel().prior());
+  std::unordered_map<std::uint64_t, double> expected, known;
+  for (const auto& [packed, v] : src) {
+    const Key k = unpackKey(packed);
+    for (const auto& [dx, w] : shifts) {
+      const std::uint64_t to = packKey(Key{k.x + dx, k.y, k.z});
+      expected[to] += w * probability(v);
+      known[to] += w;
+    }
+  }
+  ASSERT_EQ(got.size(), expected.size());
+  double worst = 0;
+  for (const auto& [packed, m] : expected) {
+    const double p = m + (1.0 - known[packed]) * p0;
+    const auto it = got.find(packed);
+    ASSERT_TRUE(it != got.end());
+    // The map's clamps bound the result as any update.
+    const float want = a.logOddsModel().update(a.logOddsModel().prior(), static_cast<float>(logit(p)) - a.logOddsModel().prior());
+    worst = std::max(worst, double(std::fabs(it->second - want)));
+  }
+  EXPECT_LT(worst, 1e-5);
+  // One pose of weight 1 is the plain fusion; bad weights change nothing.
+  OccupancyMap one(b.params()), plain(b.params());
+  one.fuse(b, std::vector<OccupancyMap::WeightedPose>{{Eigen::Isometry3d::Identity(), 1.0}});
+  plain.fuse(b);
+  EXPECT_EQ(cellsOf(one), cellsOf(plain));
+  std::ostringstream before;
+  a.write(before);
+  EXPECT_THROW(a.fuse(b, std::vector<OccupancyMap::WeightedPose>{}), std::invalid_argument);
+  EXPECT_THROW(a.fuse(b, std::vector<OccupancyMap::WeightedPose>{{Eigen::Isometry3d::Identity(), 0.5}}), std::invalid_argument);
+  EXPECT_THROW(a.fuse(b, std::vector<OccupancyMap::WeightedPose>{{Eigen::Isometry3d::Identity(), -1.0},
+                                                                  {Eigen::Isometry3d::Identity(), 2.0}}),
+               std::invalid_argument);
+  std::ostringstream after;
+  a.write(after);
+  EXPECT_EQ(before.str(), after.str());
 }
 
 }  // namespace

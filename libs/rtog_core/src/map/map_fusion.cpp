@@ -3,6 +3,7 @@
 // log-odds is l = l1 + l2 - l0, clamped. The other map's evidence enters as one update whose
 // change in a cell is l2 - l0 of the other map's cell there, through the graded path that
 // range-noise scans take: each cell once, brick by brick, the map independent of the threads.
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -13,6 +14,7 @@
 #include "integrate/batch_apply.hpp"
 #include "integrate/graded_scan.hpp"
 #include "map/map_engine.hpp"
+#include "util/flat_hash_map.hpp"
 #include "rtog/core/occupancy_map.hpp"
 
 namespace rtog {
@@ -28,10 +30,11 @@ void checkRigid(const Eigen::Isometry3d& pose) {
 }
 
 /// The cells of `dst` whose centres, taken back by `inv` into the other map, fall in `box` of
-/// `src`: each gets `delta`. Identity or a shift by whole cells of equal lattices maps centres to
-/// centres, so each cell of the box lands on exactly one cell.
-void markBox(const Lattice& dst, const Lattice& src, const Eigen::Isometry3d& pose, const Eigen::Isometry3d& inv,
-             const Box& box, float delta, GradedScan& out, InsertStats& stats) {
+/// `src`: each given to `emit`. Identity or a shift by whole cells of equal lattices maps centres
+/// to centres, so each cell of the box lands on exactly one cell.
+template <class Emit>
+void forEachCellOfBox(const Lattice& dst, const Lattice& src, const Eigen::Isometry3d& pose,
+                      const Eigen::Isometry3d& inv, const Box& box, InsertStats& stats, Emit&& emit) {
   const Eigen::Vector3d lo = src.boxMin(box), hi = src.boxMax(box);
   Eigen::Vector3d a = Eigen::Vector3d::Constant(HUGE_VAL), b = Eigen::Vector3d::Constant(-HUGE_VAL);
   for (int c = 0; c < 8; ++c) {
@@ -55,7 +58,7 @@ void markBox(const Lattice& dst, const Lattice& src, const Eigen::Isometry3d& po
       for (std::int64_t x = from[0]; x <= to[0]; ++x) {
         const Key k{static_cast<std::int32_t>(x), static_cast<std::int32_t>(y), static_cast<std::int32_t>(z)};
         Key back;
-        if (src.tryKey(inv * dst.cellCenter(k), back) && box.contains(back)) out.mark(k, delta);
+        if (src.tryKey(inv * dst.cellCenter(k), back) && box.contains(back)) emit(k);
       }
 }
 
@@ -74,8 +77,57 @@ InsertStats OccupancyMap::fuse(const OccupancyMap& other, const Eigen::Isometry3
   InsertStats stats;
   GradedScan graded;
   other.forEachLeaf([&](const Box& box, float v) {
-    markBox(e.store.lattice, other.lattice(), pose, inv, box, v - l0, graded, stats);
+    forEachCellOfBox(e.store.lattice, other.lattice(), pose, inv, box, stats, [&](const Key& k) { graded.mark(k, v - l0); });
   });
+  graded.finalize();
+  std::vector<ApplyContext> contexts;
+  applyGraded(e.store, {&graded}, stats, threads, contexts);
+  return stats;
+}
+
+InsertStats OccupancyMap::fuse(const OccupancyMap& other, const std::vector<WeightedPose>& poses, int threads) {
+  if (&other == this)
+    throw std::invalid_argument("rtog::OccupancyMap::fuse: a map fused with itself would count its evidence twice");
+  if (threads < 1) throw std::invalid_argument("rtog::OccupancyMap::fuse: threads must be at least 1");
+  double total = 0.0;
+  for (const WeightedPose& w : poses) {
+    checkRigid(w.pose);
+    if (!(std::isfinite(w.weight) && w.weight > 0.0))
+      throw std::invalid_argument("rtog::OccupancyMap::fuse: each pose's weight must be finite and positive");
+    total += w.weight;
+  }
+  if (poses.empty() || !(std::fabs(total - 1.0) < 1e-9))
+    throw std::invalid_argument("rtog::OccupancyMap::fuse: the poses' weights must sum to 1");
+  if (poses.size() == 1) return fuse(other, poses[0].pose, threads);
+  other.engine_->ensureCovered();
+  MapEngine& e = *engine_;
+  e.ensureCovered();
+  // Per cell of this map: the mixture over the poses of the other map's P(occupied) there, a pose
+  // that leaves the cell outside the other map's known cells adding the prior (it says nothing).
+  const float l0 = other.logOddsModel().prior();
+  const double p0 = probability(l0);
+  detail::FlatHashMap64 index;
+  std::vector<Key> keys;
+  std::vector<double> mass, weight;  // sum of w P over the poses that know the cell, and of w
+  InsertStats stats;
+  for (const WeightedPose& w : poses) {
+    const Eigen::Isometry3d inv = w.pose.inverse();
+    other.forEachLeaf([&](const Box& box, float v) {
+      const double p = probability(v);
+      forEachCellOfBox(e.store.lattice, other.lattice(), w.pose, inv, box, stats, [&](const Key& k) {
+        const auto i = static_cast<std::uint32_t>(keys.size());
+        const std::uint32_t at = index.findOrInsert(packKey(k), i);
+        if (at == i) keys.push_back(k), mass.push_back(0.0), weight.push_back(0.0);
+        mass[at] += w.weight * p;
+        weight[at] += w.weight;
+      });
+    });
+  }
+  GradedScan graded;
+  for (std::size_t i = 0; i < keys.size(); ++i) {
+    const double p = std::min(std::max(mass[i] + (1.0 - weight[i]) * p0, 1e-12), 1.0 - 1e-12);
+    graded.mark(keys[i], static_cast<float>(logit(p)) - l0);
+  }
   graded.finalize();
   std::vector<ApplyContext> contexts;
   applyGraded(e.store, {&graded}, stats, threads, contexts);

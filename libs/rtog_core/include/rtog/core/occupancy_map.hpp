@@ -115,6 +115,18 @@ class OccupancyMap {
   /// nothing, for a pose that is not rigid, threads < 1, or `other` being this map.
   InsertStats fuse(const OccupancyMap& other, const Eigen::Isometry3d& pose = Eigen::Isometry3d::Identity(),
                    int threads = defaultThreadCount());
+  /// One pose of an uncertain placement (e.g. the sigma points of a registration's covariance).
+  struct WeightedPose {
+    Eigen::Isometry3d pose;
+    double weight;
+  };
+  /// fuse() with `other` placed by a pose that is uncertain (the seed's "additional covariance for
+  /// registration uncertainty"): each cell takes the change of the mixture over `poses` of the
+  /// other map's P(occupied) there, a pose that puts the cell outside the other map's known cells
+  /// adding the prior. Its blurring is the pose-uncertainty insertion's. One pose of weight 1 is
+  /// fuse(other, pose). Throws std::invalid_argument, changing nothing, for a pose that is not
+  /// rigid, weights that are not positive or do not sum to 1, threads < 1, or `other` being this map.
+  InsertStats fuse(const OccupancyMap& other, const std::vector<WeightedPose>& poses, int threads = defaultThreadCount());
 
   /// Insertion works in buffers that all maps of the process share through a pool: an idle one
   /// keeps the size of the largest insertion it served, and up to four are kept (one for each

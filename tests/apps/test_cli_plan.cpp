@@ -1,0 +1,99 @@
+// `rtog plan` as a user runs it, on a map `rtog build` makes from Debian's Malaga simplemap: the
+// path written is the library's (rtog::planPath2D on the loaded map) point for point, the picture
+// decodes, and bad requests are one error line, a non-zero exit and no output.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include <mrpt/io/CFileGZInputStream.h>
+#include <mrpt/maps/CSimpleMap.h>
+#include <mrpt/serialization/CArchive.h>
+#include <opencv2/imgcodecs.hpp>
+
+#include "cli_helpers.hpp"
+#include "commands.hpp"
+
+namespace {
+using rtog_cli_test::entries;
+using rtog_cli_test::run;
+using rtog_cli_test::scratch;
+
+const std::string kMalaga = std::string(RTOG_MRPT_DATASETS) + "/malaga-cs-fac-building.simplemap.gz";
+
+std::vector<Eigen::Vector2d> robotPositions() {
+  mrpt::maps::CSimpleMap sm;
+  mrpt::io::CFileGZInputStream f(kMalaga);
+  auto ar = mrpt::serialization::archiveFrom(f);
+  ar >> sm;
+  std::vector<Eigen::Vector2d> out;
+  for (const auto& pair : sm) out.emplace_back(pair.pose->getMeanVal().x(), pair.pose->getMeanVal().y());
+  return out;
+}
+
+std::string xy(const Eigen::Vector2d& p) { return std::to_string(p.x()) + " " + std::to_string(p.y()); }
+}  // namespace
+
+TEST(CliPlan, ThePathIsTheLibrarysAndThePictureDecodes) {
+  const std::string d = scratch("plan");
+  std::string out;
+  ASSERT_EQ(run("build --simplemap " + kMalaga + " --resolution 0.1 --out " + d + "/m.rtog", &out), 0) << out;
+  const auto robot = robotPositions();
+  const Eigen::Vector2d from = robot.front(), to = robot[robot.size() / 2];
+  ASSERT_EQ(run("plan " + d + "/m.rtog --from " + xy(from) + " --to " + xy(to) +
+                    " --Te 2 --Ta 1 --radius 0.3 --unknown-cost 0.9 --out " + d + "/p.txt --png " + d + "/p.png",
+                &out),
+            0)
+      << out;
+  EXPECT_NE(out.find("path of "), std::string::npos) << out;
+  rtog::PlanOptions o;
+  o.te = 2, o.ta = 1, o.radius = 0.3, o.unknown_risk = 0.9;
+  // The tool parses the decimal text it was given: so does the library call.
+  const Eigen::Vector2d f2(std::stod(std::to_string(from.x())), std::stod(std::to_string(from.y())));
+  const Eigen::Vector2d t2(std::stod(std::to_string(to.x())), std::stod(std::to_string(to.y())));
+  const rtog::PlanResult want = rtog::planPath2D(rtog::cli::loadMap(d + "/m.rtog"), f2, t2, o);
+  ASSERT_TRUE(want.found);
+  std::ifstream in(d + "/p.txt");
+  std::string line;
+  std::getline(in, line);
+  EXPECT_EQ(line.rfind("# x y", 0), 0u) << line;
+  std::size_t i = 0;
+  double x, y;
+  while (in >> x >> y) {
+    ASSERT_LT(i, want.path.size());
+    EXPECT_NEAR(x, want.path[i].x(), 1e-6);
+    EXPECT_NEAR(y, want.path[i].y(), 1e-6);
+    ++i;
+  }
+  EXPECT_EQ(i, want.path.size());
+  const cv::Mat img = cv::imread(d + "/p.png");
+  EXPECT_FALSE(img.empty());
+  EXPECT_GE(std::max(img.cols, img.rows), 700);
+}
+
+TEST(CliPlan, BadRequestsAreOneErrorLineAndNoOutput) {
+  const std::string d = scratch("plan_bad");
+  std::string out;
+  ASSERT_EQ(run("build --simplemap " + kMalaga + " --resolution 0.2 --scans 0:10 --out " + d + "/m.rtog", &out), 0) << out;
+  const auto before = entries(d);
+  const auto robot = robotPositions();
+  const std::string a = xy(robot.front());
+  const std::string outs = " --out " + d + "/p.txt --png " + d + "/p.png";
+  for (const auto& [args, code] : std::vector<std::pair<std::string, int>>{
+           {"plan " + d + "/m.rtog --from " + a + " --to 5000 5000 --Te 1 --Ta 1" + outs, 1},   // too far: 2^26 cells
+           {"plan " + d + "/m.rtog --from " + a + " --to nan 0 --Te 1 --Ta 1" + outs, 1},
+           {"plan " + d + "/m.rtog --from " + a + " --to " + a + " --Te 0 --Ta 0" + outs, 1},
+           {"plan " + d + "/m.rtog --from " + a + " --to " + a + " --Te 1 --Ta 1 --band 1 0" + outs, 1},
+           {"plan " + d + "/m.rtog --from " + a + " --to " + a + " --Te -1 --Ta 1" + outs, 2},
+           {"plan " + d + "/m.rtog --from " + a + " --Te 1 --Ta 1" + outs, 2},
+           {"plan " + d + "/missing.rtog --from " + a + " --to " + a + " --Te 1 --Ta 1" + outs, 1},
+           {"plan " + d + "/m.rtog --from " + a + " --to " + a + " --Te 1 --Ta 1 --out " + d + "/m.rtog", 1}}) {
+    EXPECT_EQ(run(args, &out), code) << args << "\n" << out;
+    EXPECT_EQ(std::count(out.begin(), out.end(), '\n'), 1) << args << "\n" << out;
+    EXPECT_EQ(out.rfind("rtog: error: ", 0), 0u) << out;
+  }
+  EXPECT_EQ(entries(d), before);
+}
