@@ -124,6 +124,24 @@ struct PlanCommandOptions {
 /// path exists or a file cannot be read or written. Returns the exit code.
 int plan(const PlanCommandOptions& opts, std::ostream& out);
 
+struct ImageOptions {
+  std::string map_path;                 ///< the map (.rtog)
+  double zmin = -1000.0, zmax = 1000.0; ///< the band [m] (--slice-z Z: Z Z)
+  double threshold = 0.5;               ///< occupied at P >= this (Default: 0.5)
+  double blur_sigma = 0.0;              ///< Gaussian blur [m] before the threshold; 0: none
+  int open_k = 0, close_k = 0;          ///< morphological opening / closing of the occupied mask; 0: none
+  bool hough = false;                   ///< wall segments (Hough) into the JSON and the picture
+  double hough_min_length = 1.0, hough_max_gap = 0.3;  ///< [m]
+  bool segment = false;                 ///< connected free regions
+  std::string out_path;                 ///< JSON: geometry, segments [[x0, y0, x1, y1], ...], regions
+  std::string png_path;                 ///< the band with segments and regions drawn; empty: none
+  std::string prior_png_path;           ///< the (blurred) band as a prior image; empty: none
+};
+
+/// Image operations on a map's band (rtog/image/grid_ops.hpp), written all or nothing. Throws
+/// std::invalid_argument for bad options, std::runtime_error for unreadable maps or failed writes.
+int imageOps(const ImageOptions& opts, std::ostream& out);
+
 /// Loads a map file (the core format or the MRPT map's gzip archive), from a file or a pipe;
 /// throws std::runtime_error naming the file on failure, including bytes after the map.
 OccupancyMap loadMap(const std::string& path);

@@ -144,6 +144,26 @@ int main(int argc, char** argv) {
   pn->add_option("--out", pl.out_path, "The path (text, x y per line)")->required()->check(path);
   pn->add_option("--png", pl.png_path, "The planning grid with the path (.png)")->check(path);
 
+  rtog::cli::ImageOptions im;
+  std::vector<double> im_band;
+  double im_slice = 0.0;
+  auto* ig = app.add_subcommand("image", "Image operations on a height band: threshold, blur, open/close, Hough walls, regions");
+  ig->add_option("map", im.map_path, "Map file (.rtog)")->required()->check(path);
+  auto* isz = ig->add_option("--slice-z", im_slice, "The layer at height Z [m]")->check(number(Sign::Any));
+  auto* iband = ig->add_option("--band", im_band, "The columns of ZMIN ZMAX [m] (their highest log-odds)")->expected(2);
+  isz->excludes(iband);
+  ig->add_option("--threshold", im.threshold, "Occupied at P >= this")->capture_default_str();
+  ig->add_option("--blur", im.blur_sigma, "Gaussian blur of the probabilities, sigma [m]")->check(number(Sign::Positive));
+  ig->add_option("--open", im.open_k, "Morphological opening of the occupied cells, K x K (odd)")->check(rtog::app::checks::integer(1, 1001));
+  ig->add_option("--close", im.close_k, "Morphological closing of the occupied cells, K x K (odd)")->check(rtog::app::checks::integer(1, 1001));
+  ig->add_flag("--hough", im.hough, "Wall segments (Hough transform) in metres");
+  ig->add_option("--hough-min-length", im.hough_min_length, "Shortest segment [m]")->capture_default_str()->check(number(Sign::Positive));
+  ig->add_option("--hough-max-gap", im.hough_max_gap, "Longest gap a segment bridges [m]")->capture_default_str()->check(number(Sign::NonNegative));
+  ig->add_flag("--segment", im.segment, "Connected free regions (rooms)");
+  ig->add_option("--out", im.out_path, "Results (.json)")->required()->check(path);
+  ig->add_option("--png", im.png_path, "The band with walls and regions drawn (.png)")->check(path);
+  ig->add_option("--prior-png", im.prior_png_path, "The processed band as an image `rtog prior --image` reads")->check(path);
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& err) {
@@ -175,6 +195,11 @@ int main(int argc, char** argv) {
         fu.register_band = {band[0], band[1]};
       }
       return rtog::cli::fuse(fu, std::cout);
+    }
+    if (ig->parsed()) {
+      if (isz->count() > 0) im.zmin = im.zmax = im_slice;
+      if (!im_band.empty()) im.zmin = im_band[0], im.zmax = im_band[1];
+      return rtog::cli::imageOps(im, std::cout);
     }
     if (pn->parsed()) {
       pl.from = Eigen::Vector2d(from[0], from[1]), pl.to = Eigen::Vector2d(to[0], to[1]);

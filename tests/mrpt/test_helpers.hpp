@@ -18,18 +18,22 @@
 namespace rtog_test {
 
 inline std::string dataset(const std::string& name) { return std::string(RTOG_MRPT_DATASETS) + "/" + name; }
-/// A CRTreeOccupancyGridMap at 5 cm made by MRPT's map loader from an `.ini` whose
-/// `_insertOpts` section holds `insert_opts`.
-inline rtog::CRTreeOccupancyGridMap::Ptr mapFromIni(const std::string& insert_opts) {
+/// A CRTreeOccupancyGridMap made by MRPT's map loader (as MRPT's apps create maps) from an `.ini`
+/// whose `_creationOpts` section holds `creation` and whose `_insertOpts` section holds `insert_opts`.
+inline rtog::CRTreeOccupancyGridMap::Ptr mapFromSections(const std::string& creation, const std::string& insert_opts) {
   const std::string ini = "[MappingApplication]\nrtreeOccupancyGrid_count=1\n"
-                          "[MappingApplication_rtreeOccupancyGrid_00_creationOpts]\nresolution=0.05\n"
-                          "[MappingApplication_rtreeOccupancyGrid_00_insertOpts]\n" + insert_opts;
+                          "[MappingApplication_rtreeOccupancyGrid_00_creationOpts]\n" + creation +
+                          "\n[MappingApplication_rtreeOccupancyGrid_00_insertOpts]\n" + insert_opts + "\n";
   mrpt::config::CConfigFileMemory cfg(ini);
   mrpt::maps::TSetOfMetricMapInitializers inits;
   inits.loadFromConfigFile(cfg, "MappingApplication");
   mrpt::maps::CMultiMetricMap mm;
   mm.setListOfMaps(inits);
   return std::dynamic_pointer_cast<rtog::CRTreeOccupancyGridMap>(mm.maps.at(0));
+}
+/// The same at 5 cm.
+inline rtog::CRTreeOccupancyGridMap::Ptr mapFromIni(const std::string& insert_opts) {
+  return mapFromSections("resolution=0.05", insert_opts);
 }
 
 inline const std::string kSena = "2006-01ENE-21-SENA_Telecom Faculty_one_loop_only.rawlog";

@@ -25,18 +25,6 @@ namespace {
 
 const std::string kMalaga = "2006-MalagaCampus.gridmap.gz";
 
-/// A map made by MRPT's loader from a _creationOpts section and an _insertOpts section.
-rtog::CRTreeOccupancyGridMap::Ptr mapFrom(const std::string& creation, const std::string& insert) {
-  const std::string ini = "[M]\nrtreeOccupancyGrid_count=1\n[M_rtreeOccupancyGrid_00_creationOpts]\n" + creation +
-                          "\n[M_rtreeOccupancyGrid_00_insertOpts]\n" + insert + "\n";
-  mrpt::config::CConfigFileMemory cfg(ini);
-  mrpt::maps::TSetOfMetricMapInitializers inits;
-  inits.loadFromConfigFile(cfg, "M");
-  mrpt::maps::CMultiMetricMap mm;
-  mm.setListOfMaps(inits);
-  return std::dynamic_pointer_cast<rtog::CRTreeOccupancyGridMap>(mm.maps.at(0));
-}
-
 COccupancyGridMap2D readGrid(const std::string& file) {
   COccupancyGridMap2D g;
   mrpt::io::CFileGZInputStream f(file);
@@ -66,7 +54,7 @@ TEST(Prior, MalagaGridmapThenSenaScans) {
                                "\npriorConfidence=0.8\n"
                                // the prior's layer at the laser's height (0.3 m), the band the 2D view shows
                                "gridView_minZ=0.3\ngridView_maxZ=0.3\n";
-  const auto m = mapFrom(creation, kUnclamped);
+  const auto m = mapFromSections(creation, kUnclamped);
   const COccupancyGridMap2D grid = readGrid(dataset(kMalaga));
   ASSERT_EQ(m->resolution(), grid.getResolution());
   const auto prior = rtog::test::cellsOf(m->map());
@@ -87,7 +75,7 @@ TEST(Prior, MalagaGridmapThenSenaScans) {
   }
   const auto frames = senaFrames();
   // On the prior's lattice exactly: MRPT's float 0.08 (0.0799999982 as a double), not 0.08.
-  rtog::CRTreeOccupancyGridMap alone(m->resolution(), mapFrom("", kUnclamped)->insertionOptions);
+  rtog::CRTreeOccupancyGridMap alone(m->resolution(), mapFromSections("", kUnclamped)->insertionOptions);
   for (const auto& f : frames)
     for (const auto& obs : *f.sf) m->insertObservation(*obs, f.pose), alone.insertObservation(*obs, f.pose);
   EXPECT_EQ(m->map().checkInvariants(), "");
@@ -123,7 +111,7 @@ TEST(Prior, MalagaGridmapThenSenaScans) {
 // With full confidence, in the mrpt_grid preset, the prior and SENA's scans give the stock grid
 // loaded from the same file and given the same scans, cell for cell (the drop-in claim).
 TEST(Prior, FullConfidenceIsTheStockGridLoadedFromTheFile) {
-  const auto m = mapFrom("priorMap=" + dataset(kMalaga) + "\npriorConfidence=1\n", "");
+  const auto m = mapFromSections("priorMap=" + dataset(kMalaga) + "\npriorConfidence=1\n", "");
   COccupancyGridMap2D stock = readGrid(dataset(kMalaga));
   // The file holds the options it was built with (maxDistanceInsertion 25 m, ...); the prior
   // map inserts by the .ini's, here the defaults, and so must the stock grid.
@@ -148,7 +136,7 @@ TEST(Prior, FullConfidenceIsTheStockGridLoadedFromTheFile) {
 // MRPT's apps clear a map before they fill it (observations2map: loadFromSimpleMap; the SLAM
 // apps at start): clear() returns to the prior, in copies too; a loaded grid clears to empty.
 TEST(Prior, ClearReturnsToThePrior) {
-  const auto m = mapFrom("priorMap=" + dataset(kMalaga) + "\npriorConfidence=0.9\n", "");
+  const auto m = mapFromSections("priorMap=" + dataset(kMalaga) + "\npriorConfidence=0.9\n", "");
   const auto prior = rtog::test::cellsOf(m->map());
   const auto frame = m->gridFrame();
   const auto frames = senaFrames();
@@ -189,8 +177,8 @@ TEST(Prior, YesterdaysMapAsTodaysPrior) {
   char origin[160];
   std::snprintf(origin, sizeof origin, "\npriorResolution=0.05\npriorOriginX=%.9g\npriorOriginY=%.9g\n", yesterday.getXMin(),
                 yesterday.getYMin());
-  const auto today = mapFrom("priorMap=" + png + origin + "priorConfidence=0.7\n", "");
-  const auto alone = mapFrom("resolution=0.05\n", "");
+  const auto today = mapFromSections("priorMap=" + png + origin + "priorConfidence=0.7\n", "");
+  const auto alone = mapFromSections("resolution=0.05\n", "");
   // The image holds the first half where the stock grid had it (P(free) as 8-bit grey).
   {
     std::size_t known = 0, same = 0;
@@ -244,7 +232,7 @@ TEST(Prior, ABlueprintImageIsPlacedAndTrustedAsStated) {
       for (int x = 0; x < 20; ++x) *img(x, y) = x < 5 ? 0 : (x < 10 ? 255 : 128);  // black, white, grey columns
     ASSERT_TRUE(img.saveToFile(png));
   }
-  const auto m = mapFrom("priorMap=" + png +
+  const auto m = mapFromSections("priorMap=" + png +
                              "\npriorResolution=0.1\npriorOriginX=2\npriorOriginY=-3\npriorConfidence=0.75\n",
                          "sensorModelPreset=octomap\n");
   EXPECT_EQ(m->resolution(), 0.1f);
@@ -264,7 +252,7 @@ TEST(Prior, ABlueprintImageIsPlacedAndTrustedAsStated) {
 TEST(Prior, BadPriorsAreRefusedClearly) {
   const auto message = [](const std::string& creation) -> std::string {
     try {
-      (void)mapFrom(creation, "");
+      (void)mapFromSections(creation, "");
     } catch (const std::exception& e) {
       return e.what();
     }

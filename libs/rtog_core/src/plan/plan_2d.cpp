@@ -148,7 +148,6 @@ PlanResult planOnGrid(const PlanGrid& g, const Eigen::Vector2d& from, const Eige
       }
     }
   }
-  (void)kInf;
   if (!closed[goal]) return r;
   r.found = true;
   r.cost = cost[goal];

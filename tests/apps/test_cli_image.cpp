@@ -1,0 +1,78 @@
+// `rtog image` as a user runs it, on a map `rtog build` makes from Debian's SENA rawlog: the JSON's
+// wall segments are the library's (houghSegments on the loaded map's band, after the same
+// threshold and closing), the pictures decode, the prior image is read back by `rtog prior`, and
+// bad requests are one error line, a non-zero exit and no output.
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <string>
+
+#include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+#include "cli_helpers.hpp"
+#include "commands.hpp"
+#include "rtog/image/grid_ops.hpp"
+
+namespace {
+using rtog_cli_test::entries;
+using rtog_cli_test::run;
+using rtog_cli_test::scratch;
+const std::string kSena = std::string(RTOG_MRPT_DATASETS) + "/2006-01ENE-21-SENA_Telecom Faculty_one_loop_only.rawlog";
+}  // namespace
+
+TEST(CliImage, WallsAreTheLibrarysAndThePicturesDecode) {
+  const std::string d = scratch("image");
+  std::string out;
+  ASSERT_EQ(run("build --rawlog '" + kSena + "' --resolution 0.05 --out " + d + "/m.rtog", &out), 0) << out;
+  ASSERT_EQ(run("image " + d + "/m.rtog --band -1 2 --close 3 --hough --hough-min-length 2 --segment --out " + d +
+                    "/r.json --png " + d + "/r.png --prior-png " + d + "/prior.png",
+                &out),
+            0)
+      << out;
+  nlohmann::json j;
+  std::ifstream(d + "/r.json") >> j;
+  const rtog::OccupancyMap m = rtog::cli::loadMap(d + "/m.rtog");
+  const auto g = rtog::image::bandImage(m, -1, 2);
+  const auto want = rtog::image::houghSegments(rtog::image::close(rtog::image::threshold(g, 0.5), 3), g, 2.0, 0.3);
+  ASSERT_EQ(j["segments"].size(), want.size());
+  ASSERT_GT(want.size(), 5u);
+  for (std::size_t i = 0; i < want.size(); ++i) {
+    EXPECT_DOUBLE_EQ(j["segments"][i][0].get<double>(), want[i].a.x());
+    EXPECT_DOUBLE_EQ(j["segments"][i][3].get<double>(), want[i].b.y());
+  }
+  EXPECT_GT(j["regions"].size(), 0u);
+  EXPECT_FALSE(cv::imread(d + "/r.png").empty());
+  // The prior image goes back in through `rtog prior` at the origin the tool printed.
+  const cv::Mat prior = cv::imread(d + "/prior.png", cv::IMREAD_GRAYSCALE);
+  ASSERT_EQ(prior.cols, g.p.cols);
+  const std::string origin = std::to_string(g.x0 * g.resolution) + " " + std::to_string(g.y0 * g.resolution);
+  ASSERT_EQ(run("prior --image " + d + "/prior.png --resolution 0.05 --origin " + origin + " --confidence 1 --out " + d +
+                    "/p.rtog",
+                &out),
+            0)
+      << out;
+  EXPECT_GT(rtog::cli::loadMap(d + "/p.rtog").cellCount(), m.cellCount() / 50);  // a layer of the 3D-ish map's columns
+}
+
+TEST(CliImage, BadRequestsAreOneErrorLineAndNoOutput) {
+  const std::string d = scratch("image_bad");
+  std::string out;
+  ASSERT_EQ(run("build --rawlog '" + kSena + "' --resolution 0.2 --scans 0:20 --out " + d + "/m.rtog", &out), 0) << out;
+  const auto before = entries(d);
+  const std::string o = " --out " + d + "/r.json --png " + d + "/r.png";
+  for (const auto& [args, code] : std::vector<std::pair<std::string, int>>{
+           {"image " + d + "/m.rtog --band 2 1" + o, 1},
+           {"image " + d + "/m.rtog --threshold 1.5" + o, 1},
+           {"image " + d + "/m.rtog --open 2" + o, 1},
+           {"image " + d + "/m.rtog --blur 0" + o, 2},
+           {"image " + d + "/m.rtog --slice-z 0 --band 0 1" + o, 2},
+           {"image " + d + "/missing.rtog" + o, 1},
+           {"image " + d + "/m.rtog --out " + d + "/m.rtog", 1},
+           {"image " + d + "/m.rtog", 2}}) {
+    EXPECT_EQ(run(args, &out), code) << args << "\n" << out;
+    EXPECT_EQ(std::count(out.begin(), out.end(), '\n'), 1) << args << "\n" << out;
+    EXPECT_EQ(out.rfind("rtog: error: ", 0), 0u) << out;
+  }
+  EXPECT_EQ(entries(d), before);
+}

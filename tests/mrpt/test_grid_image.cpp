@@ -1,0 +1,145 @@
+// Image operations on the grid (rtog/image/grid_ops.hpp) on SENA's loop: the Hough walls of rtog's
+// map (the octomap preset: not the stock grid's update) are the corridor's long walls that the
+// stock COccupancyGridMap2D of the same log shows; free regions, blur and polar <-> Cartesian
+// resampling of a real scan.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <limits>
+
+#include <mrpt/obs/CObservation2DRangeScan.h>
+
+#include <opencv2/core.hpp>
+
+#include "rtog/image/grid_ops.hpp"
+#include "test_helpers.hpp"
+
+using namespace rtog_test;
+using rtog::image::GridImage;
+using rtog::image::Segment;
+
+namespace {
+
+/// The stock grid as a GridImage: P(occupied) = 1 - P(free), NaN where the cell was never observed.
+GridImage fromStockGrid(const mrpt::maps::COccupancyGridMap2D& g) {
+  GridImage out;
+  out.resolution = g.getResolution();
+  out.x0 = static_cast<std::int32_t>(std::lround(g.getXMin() / g.getResolution()));
+  out.y0 = static_cast<std::int32_t>(std::lround(g.getYMin() / g.getResolution()));
+  const int w = static_cast<int>(g.getSizeX()), h = static_cast<int>(g.getSizeY());
+  out.p = cv::Mat(h, w, CV_32F);
+  for (int cy = 0; cy < h; ++cy)
+    for (int cx = 0; cx < w; ++cx)
+      out.p.at<float>(h - 1 - cy, cx) = g.getRawMap()[std::size_t(cy) * w + cx] == 0
+                                            ? std::numeric_limits<float>::quiet_NaN()
+                                            : 1.0f - g.getCell(cx, cy);
+  return out;
+}
+
+std::vector<Segment> walls(const GridImage& g) {
+  return rtog::image::houghSegments(rtog::image::close(rtog::image::threshold(g, 0.5), 3), g, 2.0, 0.3);
+}
+
+/// Whether `s` lies along `t`: within 3 degrees, its midpoint within 0.25 m of t's line and
+/// within t's extent (plus 0.5 m).
+bool along(const Segment& s, const Segment& t) {
+  const Eigen::Vector2d ds = (s.b - s.a).normalized(), dt = (t.b - t.a).normalized();
+  const double angle = std::acos(std::min(1.0, std::fabs(ds.dot(dt)))) * 180.0 / M_PI;
+  const Eigen::Vector2d mid = 0.5 * (s.a + s.b);
+  const double along_t = (mid - t.a).dot(dt), off = std::fabs((mid - t.a).x() * dt.y() - (mid - t.a).y() * dt.x());
+  return angle < 3.0 && off < 0.25 && along_t > -0.5 && along_t < t.length() + 0.5;
+}
+
+}  // namespace
+
+TEST(GridImage, HoughWallsAreTheStockGridsLongWalls) {
+  const auto frames = loadOdometryFrames(dataset(kSena));
+  auto ours = mapFromIni("sensorModelPreset=octomap\n");
+  mrpt::maps::COccupancyGridMap2D stock(-10, 10, -10, 10, 0.05f);
+  for (const auto& f : frames)
+    for (const auto& obs : *f.sf) ours->insertObservation(*obs, f.pose), stock.insertObservation(*obs, f.pose);
+  const auto mine = walls(rtog::image::bandImage(ours->map(), -1000, 1000));
+  const auto theirs = walls(fromStockGrid(stock));
+  ASSERT_GE(theirs.size(), 6u);
+  ASSERT_FALSE(mine.empty());
+  std::printf("SENA Hough walls: rtog %zu segments (longest %.2f m), stock grid %zu (longest %.2f m)\n", mine.size(),
+              mine.front().length(), theirs.size(), theirs.front().length());
+  // The stock grid's six longest walls are corridor walls, and rtog's map has each of them.
+  for (std::size_t i = 0; i < 6; ++i) {
+    EXPECT_GT(theirs[i].length(), 4.0) << i;
+    bool found = false;
+    for (const auto& s : mine) found = found || along(theirs[i], s) || along(s, theirs[i]);
+    EXPECT_TRUE(found) << "stock wall " << i << " (" << theirs[i].a.transpose() << ") - (" << theirs[i].b.transpose()
+                       << "), " << theirs[i].length() << " m";
+  }
+}
+
+TEST(GridImage, FreeRegionsBlurAndThresholdOnSena) {
+  const auto frames = loadOdometryFrames(dataset(kSena));
+  auto m = mapFromIni("");
+  for (std::size_t i = 0; i < frames.size(); i += 2)
+    for (const auto& obs : *frames[i].sf) m->insertObservation(*obs, frames[i].pose);
+  const GridImage g = rtog::image::bandImage(m->map(), -1000, 1000);
+  // Free space, the walls closed: one region holds the loop's corridor, far larger than the rest.
+  const cv::Mat occ = rtog::image::close(rtog::image::threshold(g, 0.5), 3);
+  cv::Mat free(g.p.size(), CV_8U, cv::Scalar(0));
+  std::size_t known = 0;
+  for (int r = 0; r < g.p.rows; ++r)
+    for (int c = 0; c < g.p.cols; ++c) {
+      const float p = g.p.at<float>(r, c);
+      known += !std::isnan(p);
+      free.at<std::uint8_t>(r, c) = p < 0.5f && !occ.at<std::uint8_t>(r, c) ? 255 : 0;
+    }
+  cv::Mat labels;
+  std::vector<int> areas;
+  const int n = rtog::image::connectedRegions(free, labels, areas);
+  ASSERT_GT(n, 0);
+  const int largest = *std::max_element(areas.begin() + 1, areas.end());
+  std::printf("SENA free regions: %d, the largest %.1f m^2 of %.1f m^2 known\n", n, largest * 0.0025, known * 0.0025);
+  EXPECT_GT(largest, 0.5 * cv::countNonZero(free));
+  // Blur keeps the known cells known and the others unknown, probabilities within [0, 1], and
+  // moves a wall's certainty into its neighbours.
+  const GridImage b = rtog::image::blur(g, 0.1);
+  double before = 0, after = 0;
+  for (int r = 0; r < g.p.rows; ++r)
+    for (int c = 0; c < g.p.cols; ++c) {
+      const float p = g.p.at<float>(r, c), q = b.p.at<float>(r, c);
+      ASSERT_EQ(std::isnan(p), std::isnan(q));
+      if (std::isnan(p)) continue;
+      ASSERT_GE(q, 0.0f);
+      ASSERT_LE(q, 1.0f + 1e-6f);
+      before += p >= 0.5f, after += q >= 0.5f;
+    }
+  EXPECT_NE(before, after);
+  EXPECT_THROW(rtog::image::blur(g, 0.0), std::invalid_argument);
+  EXPECT_THROW(rtog::image::open(occ, 2), std::invalid_argument);
+  EXPECT_THROW(rtog::image::bandImage(m->map(), 1, 0), std::invalid_argument);
+}
+
+// A real scan of SENA to a Cartesian image and back: every return within a cell and a half.
+TEST(GridImage, PolarCartesianRoundTripOfARealScan) {
+  const auto frames = loadOdometryFrames(dataset(kSena), 1);
+  const auto scan = frames.at(0).sf->getObservationByClass<mrpt::obs::CObservation2DRangeScan>();
+  ASSERT_TRUE(scan);
+  std::vector<float> ranges(scan->getScanSize());
+  for (std::size_t i = 0; i < ranges.size(); ++i) ranges[i] = scan->getScanRangeValidity(i) ? scan->getScanRange(i) : 0.0f;
+  const double res = 0.05, max_range = 30.0;
+  const cv::Mat img = rtog::image::polarToCartesian(ranges, scan->aperture, max_range, res);
+  const auto back = rtog::image::cartesianToPolar(img, ranges.size(), scan->aperture, max_range, res);
+  std::size_t returns = 0;
+  double worst = 0;
+  for (std::size_t i = 0; i < ranges.size(); ++i) {
+    if (!(ranges[i] > 0 && ranges[i] <= max_range)) continue;
+    ++returns;
+    // Another beam's end pixel may lie nearer on this beam's line: never farther.
+    EXPECT_LE(back[i], ranges[i] + 1.5 * res) << i;
+    worst = std::max(worst, double(std::fabs(back[i] - ranges[i])));
+  }
+  std::size_t exact = 0;
+  for (std::size_t i = 0; i < ranges.size(); ++i)
+    exact += ranges[i] > 0 && ranges[i] <= max_range && std::fabs(back[i] - ranges[i]) <= 1.5 * res;
+  std::printf("SENA scan: %zu returns, %zu back within 1.5 cells\n", returns, exact);
+  EXPECT_GT(returns, 100u);
+  EXPECT_GT(double(exact), 0.95 * double(returns));
+}
