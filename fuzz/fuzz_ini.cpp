@@ -40,9 +40,14 @@ constexpr std::size_t kMaxMaps = 4;
 // per second (and a 1 mm grid to far fewer). The size limits themselves are fuzzed by
 // rtog_fuzz_insert and tested in tests/mrpt.
 constexpr float kMaxHalfWidth = 3.0f;
+// And a valid resolution finer than this is raised to it: a 1 mm map makes 36 M cells of a 6 m grid
+// and a view 15 m across for its scan, both zero-filled (p99 of a grown corpus: 0.1 s). Bad values (zero,
+// negative, NaN) still reach the map's checks.
+constexpr double kMinResolution = 0.05;
 
 template <class Def>
 void cutExtent(Def& d) {
+  if (d.resolution > 0.0 && d.resolution < kMinResolution) d.resolution = kMinResolution;
   // Only a valid extent: a bad one (NaN, reversed) must still reach the map's own checks.
   if (!(d.min_x < d.max_x && d.min_y < d.max_y)) return;
   d.min_x = std::max(d.min_x, -kMaxHalfWidth), d.max_x = std::min(d.max_x, kMaxHalfWidth);
