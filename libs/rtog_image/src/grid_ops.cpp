@@ -1,5 +1,7 @@
 #include "rtog/image/grid_ops.hpp"
 
+#include "rtog/core/band.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -20,20 +22,9 @@ GridImage bandImage(const OccupancyMap& map, double zmin, double zmax) {
   GridImage g;
   g.x0 = kb.min.x, g.y0 = kb.min.y, g.resolution = map.resolution();
   g.p = cv::Mat(static_cast<int>(h), static_cast<int>(w), CV_32F, cv::Scalar(std::numeric_limits<float>::quiet_NaN()));
-  const double res = map.resolution();
-  const double z0 = std::max<double>(std::floor(zmin / res), kb.min.z), z1 = std::min<double>(std::floor(zmax / res), kb.max.z);
-  if (!(z0 <= z1)) return g;  // the band holds no cell: all unknown
-  const Box region{Key{kb.min.x, kb.min.y, static_cast<std::int32_t>(z0)}, Key{kb.max.x, kb.max.y, static_cast<std::int32_t>(z1)}};
-  // The highest log-odds of each column, then its probability.
-  map.forEachLeafIn(region, [&](const Box& b, float v) {
-    const Box c = b.intersection(region);
-    for (std::int32_t y = c.min.y; y <= c.max.y; ++y) {
-      float* row = g.p.ptr<float>(static_cast<int>(kb.max.y - y));
-      for (std::int32_t x = c.min.x; x <= c.max.x; ++x) {
-        float& d = row[x - kb.min.x];
-        if (!(d >= v)) d = v;
-      }
-    }
+  // The band's highest log-odds per column (unknown: NaN), then its probability.
+  forEachBandRun(map, bandRegion(map, kb, zmin, zmax), [&](std::int32_t ky, std::int32_t kx0, std::int32_t kx1, const float* run) {
+    std::copy(run, run + (kx1 - kx0 + 1), g.p.ptr<float>(static_cast<int>(kb.max.y - ky)) + (kx0 - kb.min.x));
   });
   for (int r = 0; r < g.p.rows; ++r) {
     float* row = g.p.ptr<float>(r);

@@ -2,7 +2,7 @@
 #include "rtog/mrpt/CRTreeBackedGridMap2D.h"
 
 #include "CRTreeOccupancyGridMap_grid2d.hpp"
-#include "band_maxima.hpp"
+#include "rtog/core/band.hpp"
 #include "mrpt_grid.hpp"
 #include "options_check.hpp"
 

@@ -1,7 +1,7 @@
 // rtog::CRTreeOccupancyGridMap: the 2D view (a COccupancyGridMap2D of a height band), the
 // likelihood of planar scans on it, and the grid queries MRPT users call on a 2D grid.
 #include "CRTreeOccupancyGridMap_grid2d.hpp"
-#include "band_maxima.hpp"
+#include "rtog/core/band.hpp"
 #include "mrpt_grid.hpp"
 
 #include <cmath>
@@ -164,14 +164,9 @@ CRTreeOccupancyGridMap::GridView::GridView(const OccupancyMap& m, float lo, floa
 void CRTreeOccupancyGridMap::GridView::fillCells(const OccupancyMap& m, const Box& kb, double gx0, double gy0) {
   if (kb.isEmpty()) return;
   grid.setNonEmpty();
-  const double res = m.resolution();
   const auto sx = static_cast<std::int64_t>(grid.getSizeX()), sy = static_cast<std::int64_t>(grid.getSizeY());
-  // z-layers whose interval [k*res, (k+1)*res) meets the band.
-  const double z0 = std::max<double>(kb.min.z, std::floor(double(minZ) / res));
-  const double z1 = std::min<double>(kb.max.z, std::floor(double(maxZ) / res));
-  if (!(z0 <= z1)) return;  // band outside the map: all unknown
-  const Box region{Key{kb.min.x, kb.min.y, static_cast<std::int32_t>(z0)},
-                   Key{kb.max.x, kb.max.y, static_cast<std::int32_t>(z1)}};
+  const Box region = bandRegion(m, kb, minZ, maxZ);
+  if (region.isEmpty()) return;  // band outside the map: all unknown
   auto& cells = grid.cells();
   // Known cells outside the view's frame (a grid frame that 2D scans grew, cells that other
   // observations put beyond it) are not drawn: clipped on every side.

@@ -7,6 +7,7 @@
 #include <string>
 #include <tuple>
 
+#include "rtog/core/band.hpp"
 #include "rtog/core/log_odds.hpp"
 #include "rtog/core/plan.hpp"
 
@@ -63,20 +64,11 @@ PlanGrid buildPlanGrid(const OccupancyMap& map, const Eigen::Vector2d& from, con
   const std::size_t n = std::size_t(nx) * std::size_t(ny);
   std::vector<float> best(n, std::numeric_limits<float>::quiet_NaN());
   // The band's highest log-odds per column, as the 2D view shows it.
-  const double z0 = std::floor(o.min_z / res), z1 = std::floor(o.max_z / res);
-  if (!kb.isEmpty() && z0 <= kb.max.z && z1 >= kb.min.z) {
-    const Box region{Key{g.x0, g.y0, static_cast<std::int32_t>(std::max<double>(z0, kb.min.z))},
-                     Key{static_cast<std::int32_t>(x1), static_cast<std::int32_t>(y1),
-                         static_cast<std::int32_t>(std::min<double>(z1, kb.max.z))}};
-    map.forEachLeafIn(region, [&](const Box& b, float v) {
-      const Box c = b.intersection(region);
-      for (std::int32_t y = c.min.y; y <= c.max.y; ++y)
-        for (std::int32_t x = c.min.x; x <= c.max.x; ++x) {
-          float& d = best[g.index(x - g.x0, y - g.y0)];
-          if (!(d >= v)) d = v;
-        }
-    });
-  }
+  const Box columns{Key{g.x0, g.y0, 0}, Key{static_cast<std::int32_t>(x1), static_cast<std::int32_t>(y1), 0}};
+  forEachBandRun(map, bandRegion(map, columns, o.min_z, o.max_z),
+                 [&](std::int32_t ky, std::int32_t kx0, std::int32_t kx1, const float* run) {
+                   std::copy(run, run + (kx1 - kx0 + 1), best.begin() + std::ptrdiff_t(g.index(kx0 - g.x0, ky - g.y0)));
+                 });
   const float occ = map.logOddsModel().occupiedThreshold();
   g.risk.assign(n, static_cast<float>(o.unknown_risk));
   g.blocked.assign(n, 0);

@@ -1,11 +1,22 @@
-#include "band_maxima.hpp"
+#include "rtog/core/band.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
 #include <utility>
 #include <vector>
 
 namespace rtog {
+
+Box bandRegion(const OccupancyMap& m, const Box& columns, double zmin, double zmax) {
+  const Box kb = m.keyBounds();
+  if (kb.isEmpty() || columns.isEmpty() || !(zmin <= zmax)) return Box::empty();
+  const double res = m.resolution();
+  const double z0 = std::max<double>(kb.min.z, std::floor(zmin / res)), z1 = std::min<double>(kb.max.z, std::floor(zmax / res));
+  if (!(z0 <= z1)) return Box::empty();
+  return Box{Key{columns.min.x, columns.min.y, static_cast<std::int32_t>(z0)},
+             Key{columns.max.x, columns.max.y, static_cast<std::int32_t>(z1)}};
+}
 
 void forEachBandRun(const OccupancyMap& m, const Box& region,
                     const std::function<void(std::int32_t y, std::int32_t x0, std::int32_t x1, const float* best)>& f) {
