@@ -25,6 +25,7 @@
 
 #include "rtog/core/mesh_export.hpp"
 #include "rtog/core/octomap_export.hpp"
+#include "rtog/image/picture.hpp"
 #include "rtog/image/slice.hpp"
 #include "rtog/image/tum_dataset.hpp"
 
@@ -159,12 +160,13 @@ int exportMap(const ExportOptions& opts, std::ostream& out) {
     if (!(z >= zlo && z < zhi))
       throw std::invalid_argument("export: --slice-z " + metres(z) + " m is outside the map's height range [" +
                                   metres(zlo) + ", " + metres(zhi) + ") m");
-    const cv::Mat img = opts.png_probability ? image::rasterizeSliceProbabilityZ(map, z) : image::rasterizeSliceZ(map, z);
-    std::vector<unsigned char> png;
-    if (!cv::imencode(".png", img, png)) throw std::runtime_error("'" + opts.png_path + "': PNG encoding failed");
-    png_out->write(reinterpret_cast<const char*>(png.data()), static_cast<std::streamsize>(png.size()));
+    const cv::Mat img = !opts.png_cells          ? image::slicePicture(map, z, opts.png_probability)
+                        : opts.png_probability ? image::rasterizeSliceProbabilityZ(map, z)
+                                               : image::rasterizeSliceZ(map, z);
+    *png_out << image::encodePng(img);
     messages.push_back("wrote " + opts.png_path + ": slice at z = " + metres(z) + " m, " + std::to_string(img.cols) +
-                       " x " + std::to_string(img.rows) + " pixels (one per cell; " +
+                       " x " + std::to_string(img.rows) + " pixels (" +
+                       (opts.png_cells ? "one per cell; " : "a picture: cells scaled up, axes, scale bar, legend; ") +
                        (opts.png_probability ? "grey 255 * (1 - P(occupied)), unknown light blue)"
                                              : "occupied black, free white, unknown grey)"));
   }

@@ -64,6 +64,9 @@ struct ExportOptions {
   /// The PNG shows each cell's probability (grey, unknown light blue) instead of its class.
   /// (Default: false)
   bool png_probability = false;
+  /// The PNG is one pixel a cell with nothing around it (data for scripts), not the picture
+  /// (cells scaled up, axes in metres, scale bar, legend). (Default: false)
+  bool png_cells = false;
   std::string scene_path;        ///< MRPT .3Dscene (SceneViewer3D) of the occupied cuboids; empty: none
 };
 

@@ -1,6 +1,7 @@
 // rtog image: image operations on a map's height band (rtog/image/grid_ops.hpp), as JSON and PNG.
 #include <cmath>
 #include <ostream>
+#include <sstream>
 #include <stdexcept>
 
 #include <nlohmann/json.hpp>
@@ -10,13 +11,14 @@
 #include "commands.hpp"
 #include "rtog/app/output_files.hpp"
 #include "rtog/image/grid_ops.hpp"
+#include "rtog/image/picture.hpp"
 
 namespace rtog::cli {
 
 namespace {
 
-/// Grey 255 (1 - P), unknown light blue, y up; scaled up to some 700 pixels across.
-cv::Mat drawBand(const image::GridImage& g, int& scale) {
+/// Grey 255 (1 - P), unknown light blue, one pixel a cell, row 0 the highest y.
+cv::Mat bandCells(const image::GridImage& g) {
   cv::Mat img(g.p.size(), CV_8UC3);
   for (int r = 0; r < g.p.rows; ++r)
     for (int c = 0; c < g.p.cols; ++c) {
@@ -24,17 +26,7 @@ cv::Mat drawBand(const image::GridImage& g, int& scale) {
       const auto grey = std::isnan(p) ? 0 : static_cast<int>(std::lround(255.0 * (1.0 - p)));
       img.at<cv::Vec3b>(r, c) = std::isnan(p) ? cv::Vec3b(235, 206, 135) : cv::Vec3b(grey, grey, grey);
     }
-  const int side = std::max(g.p.cols, g.p.rows);
-  scale = std::max(1, std::min(8, (700 + side - 1) / side));
-  cv::Mat big;
-  cv::resize(img, big, cv::Size(), scale, scale, cv::INTER_NEAREST);
-  return big;
-}
-
-std::string encodePng(const cv::Mat& m) {
-  std::vector<uchar> bytes;
-  if (!cv::imencode(".png", m, bytes)) throw std::runtime_error("image: cannot encode a PNG");
-  return std::string(bytes.begin(), bytes.end());
+  return img;
 }
 
 }  // namespace
@@ -78,29 +70,28 @@ int imageOps(const ImageOptions& o, std::ostream& out) {
   }
   json_out << j.dump(1) << "\n";
   if (png) {
-    int scale = 1;
-    cv::Mat img = drawBand(g, scale);
+    image::PictureOptions po;
+    std::ostringstream title;
+    title << "band z in [" << o.zmin << ", " << o.zmax << "] m";
+    po.title = title.str();
+    po.legend = {{cv::Vec3b(235, 206, 135), "unknown"}};
+    if (o.hough) po.legend.push_back({cv::Vec3b(0, 0, 230), "Hough walls"});
+    if (o.segment) po.legend.push_back({cv::Vec3b(120, 180, 90), "free regions (tinted)"});
+    po.probability_ramp = true;
+    image::Picture pic(bandCells(g), g.x0 * g.resolution, g.y0 * g.resolution, g.resolution, po);
+    cv::Mat& img = pic.canvas();
     if (o.segment)
       for (int r = 0; r < labels.rows; ++r)
         for (int c = 0; c < labels.cols; ++c) {
           const int l = labels.at<int>(r, c);
           if (l <= 0 || areas[std::size_t(l)] < 100) continue;  // tint the regions of 100 cells and more
           const cv::Vec3b tint((l * 67) % 200 + 55, (l * 131) % 200 + 55, (l * 29) % 200 + 55);
-          cv::Mat roi = img(cv::Rect(c * scale, r * scale, scale, scale));
-          roi = 0.5 * roi + 0.5 * cv::Mat(scale, scale, CV_8UC3, cv::Scalar(tint[0], tint[1], tint[2]));
+          const cv::Rect cell = pic.cellRect(c, r);
+          cv::Mat roi = img(cell);
+          roi = 0.5 * roi + 0.5 * cv::Mat(cell.size(), CV_8UC3, cv::Scalar(tint[0], tint[1], tint[2]));
         }
-    for (const auto& s : segments) {
-      const auto px = [&](const Eigen::Vector2d& m) {
-        return cv::Point(static_cast<int>((m.x() / g.resolution - g.x0) * scale),
-                         static_cast<int>((g.p.rows - (m.y() / g.resolution - g.y0)) * scale));
-      };
-      cv::line(img, px(s.a), px(s.b), cv::Scalar(0, 0, 230), 2);
-    }
-    const double bar_m = g.p.cols * g.resolution > 12.0 ? 5.0 : 1.0;
-    const int bar = static_cast<int>(bar_m / g.resolution * scale), y0 = img.rows - 12;
-    cv::line(img, cv::Point(10, y0), cv::Point(10 + bar, y0), cv::Scalar(0, 0, 0), 3);
-    cv::putText(img, std::to_string(static_cast<int>(bar_m)) + " m", cv::Point(10, y0 - 6), cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(0, 0, 0), 1);
-    *png << encodePng(img);
+    for (const auto& s : segments) cv::line(img, pic.toPixel(s.a), pic.toPixel(s.b), cv::Scalar(0, 0, 230), 2, cv::LINE_AA);
+    *png << image::encodePng(pic.finish());
   }
   if (prior) {
     // One pixel a cell, white free, black occupied, mid-grey unknown: `rtog prior --image` reads it.
@@ -110,7 +101,7 @@ int imageOps(const ImageOptions& o, std::ostream& out) {
         const float p = g.p.at<float>(r, c);
         grey.at<std::uint8_t>(r, c) = std::isnan(p) ? 128 : static_cast<std::uint8_t>(std::lround(255.0 * (1.0 - p)));
       }
-    *prior << encodePng(grey);
+    *prior << image::encodePng(grey);
   }
   files.commit();
   out << "band " << g.p.cols << " x " << g.p.rows << " cells at " << g.resolution << " m: " << cv::countNonZero(occupied)

@@ -89,6 +89,9 @@ int main(int argc, char** argv) {
   auto* prob = e->add_flag("--png-probability", ex.png_probability,
                            "The slice shows each cell's P(occupied) as grey (unknown light blue), not its class");
   prob->needs(png);
+  e->add_flag("--png-cells", ex.png_cells,
+              "The PNG is one pixel a cell, nothing around it (for scripts), not the picture to look at")
+      ->needs(png);
   png->needs(sz);
   sz->needs(png);
 

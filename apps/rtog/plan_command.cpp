@@ -2,6 +2,7 @@
 #include <cmath>
 #include <iomanip>
 #include <ostream>
+#include <sstream>
 #include <stdexcept>
 
 #include <opencv2/imgcodecs.hpp>
@@ -9,16 +10,16 @@
 
 #include "commands.hpp"
 #include "rtog/app/output_files.hpp"
+#include "rtog/image/picture.hpp"
 
 namespace rtog::cli {
 
 namespace {
 
-/// The planning grid around the path (4 m of margin) as an image scaled up to some 700 pixels
-/// across: grey 255 (1 - T(C)) for known cells, light blue unknown, pink the free cells the radius
-/// keeps off, the path in blue from a green start to a red goal, a scale bar; y up, as MRPT draws
-/// grids.
-cv::Mat drawPlan(const PlanGrid& g, const PlanResult& r) {
+/// The planning grid around the path (4 m of margin) as a picture (rtog/image/picture.hpp):
+/// grey 255 (1 - T(C)) for known cells, light blue unknown, pink the free cells the radius keeps
+/// off, the path in blue from a green start to a red goal.
+cv::Mat drawPlan(const PlanGrid& g, const PlanResult& r, const PlanCommandOptions& o) {
   const auto cell = [&](const Eigen::Vector2d& p) {
     return Eigen::Vector2i(static_cast<int>(std::floor(p.x() / g.resolution)) - g.x0,
                            static_cast<int>(std::floor(p.y() / g.resolution)) - g.y0);
@@ -29,34 +30,35 @@ cv::Mat drawPlan(const PlanGrid& g, const PlanResult& r) {
   lo = (lo - Eigen::Vector2i::Constant(margin)).cwiseMax(Eigen::Vector2i::Zero());
   hi = (hi + Eigen::Vector2i::Constant(margin)).cwiseMin(Eigen::Vector2i(g.nx - 1, g.ny - 1));
   const int w = hi.x() - lo.x() + 1, h = hi.y() - lo.y() + 1;
-  const int scale = std::max(1, std::min(8, (700 + std::max(w, h) - 1) / std::max(w, h)));
-  cv::Mat img(h, w, CV_8UC3);
+  const cv::Vec3b unknown(235, 206, 135), kept_off(190, 190, 255);
+  cv::Mat cells(h, w, CV_8UC3);
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x) {
       const std::size_t i = g.index(lo.x() + x, lo.y() + y);
-      cv::Vec3b& px = img.at<cv::Vec3b>(h - 1 - y, x);
+      cv::Vec3b& px = cells.at<cv::Vec3b>(h - 1 - y, x);
       const auto grey = static_cast<std::uint8_t>(std::lround(255.0 * (1.0 - g.risk[i])));
-      if (!g.known[i]) px = cv::Vec3b(235, 206, 135);
-      else if (g.blocked[i] && g.risk[i] < 0.5f) px = cv::Vec3b(190, 190, 255);  // kept off by the radius
+      if (!g.known[i]) px = unknown;
+      else if (g.blocked[i] && g.risk[i] < 0.5f) px = kept_off;
       else px = cv::Vec3b(grey, grey, grey);
     }
-  cv::Mat big;
-  cv::resize(img, big, cv::Size(), scale, scale, cv::INTER_NEAREST);
-  const auto at = [&](const Eigen::Vector2d& p) {
-    const double cx = p.x() / g.resolution - g.x0 - lo.x(), cy = p.y() / g.resolution - g.y0 - lo.y();
-    return cv::Point(static_cast<int>(cx * scale), static_cast<int>((h - cy) * scale));
-  };
-  for (std::size_t i = 1; i < r.path.size(); ++i) cv::line(big, at(r.path[i - 1]), at(r.path[i]), cv::Scalar(200, 60, 0), 2);
+  image::PictureOptions po;
+  std::ostringstream title;
+  title << "path: Te " << o.plan.te << ", Ta " << o.plan.ta << "; " << std::setprecision(3) << r.length << " m, risk "
+        << r.risk;
+  po.title = title.str();
+  po.legend = {{unknown, "unknown"}, {kept_off, "within the radius"}, {cv::Vec3b(200, 60, 0), "path"},
+               {cv::Vec3b(0, 160, 0), "start"}, {cv::Vec3b(0, 0, 220), "goal"}};
+  po.probability_ramp = true;
+  po.ramp_label = "T(C) = P(occupied)";
+  image::Picture pic(cells, (g.x0 + lo.x()) * g.resolution, (g.y0 + lo.y()) * g.resolution, g.resolution, po);
+  cv::Mat& img = pic.canvas();
+  for (std::size_t i = 1; i < r.path.size(); ++i)
+    cv::line(img, pic.toPixel(r.path[i - 1]), pic.toPixel(r.path[i]), cv::Scalar(200, 60, 0), 2, cv::LINE_AA);
   if (!r.path.empty()) {
-    cv::circle(big, at(r.path.front()), 6, cv::Scalar(0, 160, 0), cv::FILLED);
-    cv::circle(big, at(r.path.back()), 6, cv::Scalar(0, 0, 220), cv::FILLED);
+    cv::circle(img, pic.toPixel(r.path.front()), 6, cv::Scalar(0, 160, 0), cv::FILLED);
+    cv::circle(img, pic.toPixel(r.path.back()), 6, cv::Scalar(0, 0, 220), cv::FILLED);
   }
-  const double bar_m = w * g.resolution > 12.0 ? 5.0 : 1.0;
-  const int bar = static_cast<int>(bar_m / g.resolution * scale), y0 = big.rows - 12;
-  cv::line(big, cv::Point(10, y0), cv::Point(10 + bar, y0), cv::Scalar(0, 0, 0), 3);
-  cv::putText(big, std::to_string(static_cast<int>(bar_m)) + " m", cv::Point(10, y0 - 6), cv::FONT_HERSHEY_SIMPLEX, 0.5,
-              cv::Scalar(0, 0, 0), 1);
-  return big;
+  return pic.finish().clone();
 }
 
 }  // namespace
@@ -74,11 +76,7 @@ int plan(const PlanCommandOptions& o, std::ostream& out) {
       << r.cost << "\n"
       << std::setprecision(10);
   for (const auto& p : r.path) dst << p.x() << " " << p.y() << "\n";
-  if (png) {
-    std::vector<uchar> bytes;
-    if (!cv::imencode(".png", drawPlan(g, r), bytes)) throw std::runtime_error("plan: cannot encode the PNG");
-    png->write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
-  }
+  if (png) *png << image::encodePng(drawPlan(g, r, o));
   files.commit();
   out << "path of " << r.path.size() << " cells, " << r.length << " m, summed risk " << r.risk << ", cost " << r.cost
       << " (Te " << o.plan.te << ", Ta " << o.plan.ta << "; " << r.expanded << " nodes expanded of " << g.risk.size()

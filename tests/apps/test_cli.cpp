@@ -189,7 +189,7 @@ TEST(Cli, ExportsEveryFormatInOneCall) {
   const std::string ply = dir + "m.ply", bt = dir + "m.bt", png = dir + "slice.png", ascii = dir + "a.ply";
   for (const auto& f : {ply, bt, png, ascii}) std::remove(f.c_str());
   std::string out;
-  ASSERT_EQ(run("export " + builtMap() + " --ply " + ply + " --bt " + bt + " --png " + png + " --slice-z 0.3", &out), 0)
+  ASSERT_EQ(run("export " + builtMap() + " --ply " + ply + " --bt " + bt + " --png " + png + " --slice-z 0.3 --png-cells", &out), 0)
       << out;
   EXPECT_NE(out.find("wrote " + ply), std::string::npos) << out;
   EXPECT_NE(out.find("wrote " + bt), std::string::npos) << out;
@@ -210,6 +210,13 @@ TEST(Cli, ExportsEveryFormatInOneCall) {
   ASSERT_EQ(img.type(), CV_8UC1);
   ASSERT_EQ(img.size(), want_img.size());
   EXPECT_EQ(cv::norm(img, want_img, cv::NORM_INF), 0.0);
+  // Without --png-cells: the picture to look at (rtog/image/picture.hpp), as the library draws it.
+  ASSERT_EQ(run("export " + builtMap() + " --png " + png + " --slice-z 0.3", &out), 0) << out;
+  const cv::Mat pic = cv::imread(png, cv::IMREAD_UNCHANGED), want_pic = rtog::image::slicePicture(map, 0.3, false);
+  ASSERT_EQ(pic.type(), CV_8UC3);
+  ASSERT_EQ(pic.size(), want_pic.size());
+  EXPECT_EQ(cv::norm(pic, want_pic, cv::NORM_INF), 0.0);
+  EXPECT_GT(pic.cols, img.cols);
 
   // The SceneViewer3D scene: MRPT loads it back and finds the drawn cuboids.
   const std::string scene = dir + "m.3Dscene";

@@ -1,6 +1,9 @@
 #include "rtog/image/slice.hpp"
 
+#include "rtog/image/picture.hpp"
+
 #include <cmath>
+#include <cstdio>
 #include <stdexcept>
 #include <string>
 
@@ -56,6 +59,26 @@ cv::Mat rasterizeSliceProbabilityZ(const OccupancyMap& map, double z) {
     px[0] = px[1] = px[2] = g;
   });
   return img;
+}
+
+cv::Mat slicePicture(const OccupancyMap& map, double z, bool probability) {
+  const cv::Mat cells = probability ? rasterizeSliceProbabilityZ(map, z) : rasterizeSliceZ(map, z);
+  const Box b = map.keyBounds();
+  const Eigen::Vector3d lo = map.lattice().boxMin(b);
+  PictureOptions o;
+  char title[64];
+  std::snprintf(title, sizeof title, "slice at z = %g m", z);
+  o.title = title;
+  const auto grey = [](std::uint8_t g) { return cv::Vec3b(g, g, g); };
+  const cv::Vec3b unknown(kSliceUnknownColour[0], kSliceUnknownColour[1], kSliceUnknownColour[2]);
+  if (probability) {
+    o.legend = {{unknown, "unknown"}};
+    o.probability_ramp = true;
+  } else {
+    o.legend = {{grey(kSliceOccupied), "occupied"}, {grey(kSliceFree), "free"}, {grey(kSliceUnknown), "unknown"}};
+  }
+  Picture pic(cells, lo.x(), lo.y(), map.resolution(), o);
+  return pic.finish().clone();
 }
 
 }  // namespace rtog::image

@@ -174,7 +174,7 @@ std::shared_ptr<CRTreeOccupancyGridMap> CRTreeOccupancyGridMap::loadFromStream(s
 }
 
 // <prefix>.rtog (gzip CArchive), <prefix>.3Dscene (SceneViewer3D) and <prefix>_slice.png (the
-// horizontal layer through the middle of the map's height range).
+// horizontal layer through the middle of the map's height range, as a picture to look at).
 void CRTreeOccupancyGridMap::saveMetricMapRepresentationToFile(const std::string& prefix) const {
   saveToFile(prefix + ".rtog");
   mrpt::opengl::COpenGLScene scene;
@@ -186,7 +186,7 @@ void CRTreeOccupancyGridMap::saveMetricMapRepresentationToFile(const std::string
     const Box b = map_.keyBounds();
     const double z = (0.5 * (double(b.min.z) + double(b.max.z)) + 0.5) * map_.resolution();
     try {
-      cv::imwrite(prefix + "_slice.png", image::rasterizeSliceZ(map_, z));
+      cv::imwrite(prefix + "_slice.png", image::slicePicture(map_, z, false));
     } catch (const std::exception&) {
       // A slice too large for an image is not an error of the map file itself.
     }

@@ -29,4 +29,8 @@ cv::Mat rasterizeSliceProbabilityZ(const OccupancyMap& map, double z);
 /// Unknown cells of rasterizeSliceProbabilityZ() (BGR: a light blue).
 constexpr std::uint8_t kSliceUnknownColour[3] = {235, 206, 135};
 
+/// One of the slices above (by probability or by class) as a picture to look at (picture.hpp):
+/// cells scaled up, axes in metres, a scale bar, a legend. Same errors as rasterizeSliceZ().
+cv::Mat slicePicture(const OccupancyMap& map, double z, bool probability);
+
 }  // namespace rtog::image
