@@ -146,7 +146,7 @@ const cv::Mat& Picture::finish() {
 
 std::string encodePng(const cv::Mat& image) {
   std::vector<uchar> bytes;
-  if (!cv::imencode(".png", image, bytes)) throw std::runtime_error("cannot encode a PNG");
+  if (!cv::imencode(".png", image, bytes, {cv::IMWRITE_PNG_COMPRESSION, 9})) throw std::runtime_error("cannot encode a PNG");
   return std::string(bytes.begin(), bytes.end());
 }
 
