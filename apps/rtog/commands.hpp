@@ -116,13 +116,14 @@ int prior(const PriorOptions& opts, std::ostream& out);
 
 struct PlanCommandOptions {
   std::string map_path;     ///< the map (.rtog)
-  Eigen::Vector2d from{0, 0}, to{0, 0};  ///< start and goal [m]
-  PlanOptions plan;         ///< Te, Ta, unknown cells' risk, radius, band
+  Eigen::Vector3d from{0, 0, 0}, to{0, 0, 0};  ///< start and goal [m]
+  bool three_d = false;     ///< plan through the cells in 3D (from/to given with Z), not a band's columns
+  PlanOptions plan;         ///< Te, Ta, unknown cells' risk, radius, band, cuboids crossed whole
   std::string out_path;     ///< the path as text: "x y" per line (never the input)
   std::string png_path;     ///< the planning grid with the path; empty: none
 };
 
-/// Plans a risk-aware 2D path on a saved map (rtog::planPath2D) and writes it, all or nothing.
+/// Plans a risk-aware path on a saved map (rtog::planPath2D, or planPath3D) and writes it, all or nothing.
 /// Throws std::invalid_argument for bad options or a blocked start/goal, std::runtime_error if no
 /// path exists or a file cannot be read or written. Returns the exit code.
 int plan(const PlanCommandOptions& opts, std::ostream& out);

@@ -133,8 +133,8 @@ int main(int argc, char** argv) {
   std::vector<double> from, to, plan_band;
   auto* pn = app.add_subcommand("plan", "Plan a risk-aware path: least Te * sum P(occupied) + Ta * length");
   pn->add_option("map", pl.map_path, "Map file (.rtog)")->required()->check(path);
-  pn->add_option("--from", from, "Start X Y [m]")->required()->expected(2);
-  pn->add_option("--to", to, "Goal X Y [m]")->required()->expected(2);
+  pn->add_option("--from", from, "Start X Y [Z] [m] (with Z: a 3D plan through the cells)")->required()->expected(2, 3);
+  pn->add_option("--to", to, "Goal X Y [Z] [m]")->required()->expected(2, 3);
   pn->add_option("--Te", pl.plan.te, "Weight of the summed risk")->required()->check(number(Sign::NonNegative));
   pn->add_option("--Ta", pl.plan.ta, "Weight of the length, per metre")->required()->check(number(Sign::NonNegative));
   pn->add_option("--unknown-cost", pl.plan.unknown_risk, "Risk of an unknown cell, in [0, 1]")
@@ -145,7 +145,9 @@ int main(int argc, char** argv) {
       ->check(number(Sign::NonNegative));
   pn->add_option("--band", plan_band, "Height band ZMIN ZMAX [m] whose columns are planned on")->expected(2);
   pn->add_option("--out", pl.out_path, "The path (text, x y per line)")->required()->check(path);
-  pn->add_option("--png", pl.png_path, "The planning grid with the path (.png)")->check(path);
+  pn->add_option("--png", pl.png_path, "The planning grid with the path (.png; a 3D path seen from above)")->check(path);
+  bool plan_cells = false;
+  pn->add_flag("--cells", plan_cells, "2D: search every cell, not crossing the map's alike free cuboids whole (same path cost)");
 
   rtog::cli::ImageOptions im;
   std::vector<double> im_band;
@@ -205,8 +207,13 @@ int main(int argc, char** argv) {
       return rtog::cli::imageOps(im, std::cout);
     }
     if (pn->parsed()) {
-      pl.from = Eigen::Vector2d(from[0], from[1]), pl.to = Eigen::Vector2d(to[0], to[1]);
+      if (from.size() != to.size()) throw std::invalid_argument("plan: --from and --to need as many coordinates (X Y, or X Y Z)");
+      pl.three_d = from.size() == 3;
+      if (pl.three_d && !plan_band.empty()) throw std::invalid_argument("plan: --band is for 2D plans (X Y), not 3D ones");
+      pl.from = Eigen::Vector3d(from[0], from[1], pl.three_d ? from[2] : 0.0);
+      pl.to = Eigen::Vector3d(to[0], to[1], pl.three_d ? to[2] : 0.0);
       if (!plan_band.empty()) pl.plan.min_z = plan_band[0], pl.plan.max_z = plan_band[1];
+      pl.plan.cross_free_cuboids = !plan_cells;
       return rtog::cli::plan(pl, std::cout);
     }
     if (p->parsed()) {

@@ -69,18 +69,42 @@ int plan(const PlanCommandOptions& o, std::ostream& out) {
   std::ostream& dst = files.add("--out", o.out_path);
   std::ostream* png = o.png_path.empty() ? nullptr : &files.add("--png", o.png_path);
   const OccupancyMap map = loadMap(o.map_path);
-  const PlanGrid g = buildPlanGrid(map, o.from, o.to, o.plan);
-  const PlanResult r = planOnGrid(g, o.from, o.to, o.plan);
-  if (!r.found) throw std::runtime_error("plan: no path from the start to the goal (every way is blocked)");
-  dst << "# x y [m], cell centres from start to goal; length " << r.length << " m, risk " << r.risk << ", cost "
-      << r.cost << "\n"
+  PlanResult r;                  // the 2D plan, or the 3D one seen from above (for the picture)
+  std::size_t nodes = 0, rects = 0;
+  std::vector<Eigen::Vector3d> path3;
+  if (o.three_d) {
+    const PlanResult3D r3 = planPath3D(map, o.from, o.to, o.plan);
+    if (!r3.found) throw std::runtime_error("plan: no path from the start to the goal (every way is blocked)");
+    path3 = r3.path;
+    r.found = true, r.length = r3.length, r.risk = r3.risk, r.cost = r3.cost, r.expanded = r3.expanded, nodes = r3.nodes;
+    for (const auto& p : r3.path) r.path.emplace_back(p.x(), p.y());
+  }
+  const Eigen::Vector2d from2 = o.from.head<2>(), to2 = o.to.head<2>();
+  PlanGrid g;
+  if (!o.three_d || png) {
+    PlanOptions view = o.plan;
+    if (o.three_d) view.radius = 0.0, view.cross_free_cuboids = false;  // the background only: every column
+    g = buildPlanGrid(map, from2, to2, view);
+  }
+  if (!o.three_d) {
+    r = planOnGrid(g, from2, to2, o.plan);
+    if (!r.found) throw std::runtime_error("plan: no path from the start to the goal (every way is blocked)");
+    nodes = g.risk.size(), rects = g.rects.size();
+  }
+  dst << "# " << (o.three_d ? "x y z" : "x y") << " [m], cell centres from start to goal; length " << r.length
+      << " m, risk " << r.risk << ", cost " << r.cost << "\n"
       << std::setprecision(10);
-  for (const auto& p : r.path) dst << p.x() << " " << p.y() << "\n";
+  if (o.three_d)
+    for (const auto& p : path3) dst << p.x() << " " << p.y() << " " << p.z() << "\n";
+  else
+    for (const auto& p : r.path) dst << p.x() << " " << p.y() << "\n";
   if (png) *png << image::encodePng(drawPlan(g, r, o));
   files.commit();
-  out << "path of " << r.path.size() << " cells, " << r.length << " m, summed risk " << r.risk << ", cost " << r.cost
-      << " (Te " << o.plan.te << ", Ta " << o.plan.ta << "; " << r.expanded << " nodes expanded of " << g.risk.size()
-      << ")\nwrote " << o.out_path << (png ? " and " + o.png_path : std::string()) << "\n";
+  out << (o.three_d ? "3D path of " : "path of ") << r.path.size() << " cells, " << r.length << " m, summed risk "
+      << r.risk << ", cost " << r.cost << " (Te " << o.plan.te << ", Ta " << o.plan.ta << "; " << r.expanded
+      << " nodes expanded of " << nodes;
+  if (!o.three_d) out << ", " << rects << " free cuboids crossed whole";
+  out << ")\nwrote " << o.out_path << (png ? " and " + o.png_path : std::string()) << "\n";
   return 0;
 }
 

@@ -16,6 +16,7 @@
 
 #include "cli_helpers.hpp"
 #include "commands.hpp"
+#include "rtog/image/tum_dataset.hpp"
 
 namespace {
 using rtog_cli_test::entries;
@@ -74,6 +75,71 @@ TEST(CliPlan, ThePathIsTheLibrarysAndThePictureDecodes) {
   EXPECT_GE(std::max(img.cols, img.rows), 700);
 }
 
+// --cells searches every cell instead of crossing the alike free cuboids whole: the same cost,
+// more nodes expanded.
+TEST(CliPlan, CrossingFreeCuboidsWholeGivesTheCellSearchsCost) {
+  const std::string d = scratch("plan_cells");
+  std::string out;
+  ASSERT_EQ(run("build --simplemap " + kMalaga + " --resolution 0.1 --out " + d + "/m.rtog", &out), 0) << out;
+  const auto robot = robotPositions();
+  const std::string args = "plan " + d + "/m.rtog --from " + xy(robot.front()) + " --to " + xy(robot[robot.size() / 3]) +
+                           " --Te 5 --Ta 1 --radius 0.2 --out " + d + "/p.txt";
+  std::string whole, cells;
+  ASSERT_EQ(run(args, &whole), 0) << whole;
+  ASSERT_EQ(run(args + " --cells", &cells), 0) << cells;
+  const auto field = [](const std::string& s, const std::string& key) {
+    const auto at = s.find(key);
+    return at == std::string::npos ? std::nan("") : std::stod(s.substr(at + key.size()));
+  };
+  EXPECT_NEAR(field(whole, "cost "), field(cells, "cost "), 1e-4) << whole << cells;
+  EXPECT_LT(field(whole, "; "), field(cells, "; ")) << whole << cells;  // nodes expanded
+  EXPECT_NE(whole.find("free cuboids crossed whole"), std::string::npos) << whole;
+  EXPECT_EQ(whole.find(", 0 free cuboids"), std::string::npos) << whole;
+  EXPECT_NE(cells.find(", 0 free cuboids"), std::string::npos) << cells;
+}
+
+// With X Y Z: a 3D plan through the cells of a map of the TUM frames, the library's point for point.
+TEST(CliPlan, ThreeDimensionalPlanIsTheLibrarys) {
+  const std::string d = scratch("plan_3d");
+  std::string out;
+  ASSERT_EQ(run(std::string("build --tum ") + RTOG_TEST_TUM_DIR + " --resolution 0.1 --stride 4 --out " + d + "/m.rtog", &out), 0)
+      << out;
+  const rtog::image::DepthSequence seq = rtog::image::readTumSequence(RTOG_TEST_TUM_DIR);
+  // The camera's first and last positions, as the command line gives them (six decimals).
+  const auto asGiven = [](const Eigen::Vector3d& p) {
+    return Eigen::Vector3d(std::stod(std::to_string(p.x())), std::stod(std::to_string(p.y())), std::stod(std::to_string(p.z())));
+  };
+  const Eigen::Vector3d from = asGiven(seq.frames.front().camera_to_world.translation());
+  const Eigen::Vector3d to = asGiven(seq.frames.back().camera_to_world.translation());
+  const auto xyz = [](const Eigen::Vector3d& p) {
+    return std::to_string(p.x()) + " " + std::to_string(p.y()) + " " + std::to_string(p.z());
+  };
+  ASSERT_EQ(run("plan " + d + "/m.rtog --from " + xyz(from) + " --to " + xyz(to) + " --Te 2 --Ta 1 --radius 0.2 --out " + d +
+                    "/p.txt --png " + d + "/p.png",
+                &out),
+            0)
+      << out;
+  EXPECT_EQ(out.rfind("3D path of ", 0), 0u) << out;
+  rtog::PlanOptions o;
+  o.te = 2, o.ta = 1, o.radius = 0.2;
+  const rtog::PlanResult3D want = rtog::planPath3D(rtog::cli::loadMap(d + "/m.rtog"), from, to, o);
+  ASSERT_TRUE(want.found);
+  std::ifstream f(d + "/p.txt");
+  std::string line;
+  std::getline(f, line);
+  EXPECT_EQ(line.rfind("# x y z [m]", 0), 0u) << line;
+  std::size_t i = 0;
+  for (double x, y, z; f >> x >> y >> z; ++i) {
+    ASSERT_LT(i, want.path.size());
+    EXPECT_NEAR(x, want.path[i].x(), 1e-6);
+    EXPECT_NEAR(y, want.path[i].y(), 1e-6);
+    EXPECT_NEAR(z, want.path[i].z(), 1e-6);
+  }
+  EXPECT_EQ(i, want.path.size());
+  EXPECT_GT(i, 5u);
+  EXPECT_FALSE(cv::imread(d + "/p.png").empty());
+}
+
 TEST(CliPlan, BadRequestsAreOneErrorLineAndNoOutput) {
   const std::string d = scratch("plan_bad");
   std::string out;
@@ -89,6 +155,8 @@ TEST(CliPlan, BadRequestsAreOneErrorLineAndNoOutput) {
            {"plan " + d + "/m.rtog --from " + a + " --to " + a + " --Te 1 --Ta 1 --band 1 0" + outs, 1},
            {"plan " + d + "/m.rtog --from " + a + " --to " + a + " --Te -1 --Ta 1" + outs, 2},
            {"plan " + d + "/m.rtog --from " + a + " --Te 1 --Ta 1" + outs, 2},
+           {"plan " + d + "/m.rtog --from " + a + " --to " + a + " 0.1 --Te 1 --Ta 1" + outs, 1},  // 2D to 3D
+           {"plan " + d + "/m.rtog --from " + a + " 0.1 --to " + a + " 0.1 --Te 1 --Ta 1 --band 0 1" + outs, 1},
            {"plan " + d + "/missing.rtog --from " + a + " --to " + a + " --Te 1 --Ta 1" + outs, 1},
            {"plan " + d + "/m.rtog --from " + a + " --to " + a + " --Te 1 --Ta 1 --out " + d + "/m.rtog", 1}}) {
     EXPECT_EQ(run(args, &out), code) << args << "\n" << out;

@@ -143,7 +143,45 @@ TEST(Planning, MalagaPathsKeepTheRadiusFromEveryOccupiedCell) { pathsKeepClear(m
 TEST(Planning, SenaRiskFallsAndLengthGrowsAsTeOverTaRises) { tradeOffIsMonotone(sena(), "SENA"); }
 TEST(Planning, MalagaRiskFallsAndLengthGrowsAsTeOverTaRises) { tradeOffIsMonotone(malaga(), "Malaga"); }
 
-// A small map (SENA's first frames): A* gives Dijkstra's cost for 40 random pairs of free cells.
+// Crossing the map's alike free cuboids whole (the default) against searching every cell: the same
+// cost for every Te (it is exact), a path of 8-neighbour steps through unblocked cells whose summed
+// cost is the reported one, and fewer nodes expanded.
+void cuboidsKeepTheCost(const RealMap& r, const char* name) {
+  const Eigen::Vector2d from = r.robot.front(), to = r.robot[r.robot.size() / 2];
+  rtog::PlanOptions whole;
+  whole.radius = 0.3, whole.ta = 1.0;
+  rtog::PlanOptions cells = whole;
+  cells.cross_free_cuboids = false;
+  std::size_t expanded_whole = 0, expanded_cells = 0;
+  for (const double te : {0.0, 1.0, 10.0}) {
+    whole.te = cells.te = te;
+    const rtog::PlanGrid gw = rtog::buildPlanGrid(r.map->map(), from, to, whole);
+    const rtog::PlanGrid gc = rtog::buildPlanGrid(r.map->map(), from, to, cells);
+    ASSERT_GT(gw.rects.size(), 100u) << name;
+    ASSERT_TRUE(gc.rects.empty());
+    const rtog::PlanResult a = rtog::planOnGrid(gw, from, to, whole), b = rtog::planOnGrid(gc, from, to, cells);
+    ASSERT_TRUE(a.found && b.found) << name;
+    EXPECT_NEAR(a.cost, b.cost, 1e-9 * std::max(1.0, b.cost)) << name << " Te " << te;
+    EXPECT_NEAR(a.cost, te * a.risk + a.length, 1e-9 * std::max(1.0, b.cost)) << name << " Te " << te;
+    for (std::size_t i = 1; i < a.path.size(); ++i) {
+      const Eigen::Vector2d step = (a.path[i] - a.path[i - 1]) / gw.resolution;
+      EXPECT_LE(step.cwiseAbs().maxCoeff(), 1.0 + 1e-9) << name << " step " << i;
+      const auto x = static_cast<std::int32_t>(std::floor(a.path[i].x() / gw.resolution)) - gw.x0;
+      const auto y = static_cast<std::int32_t>(std::floor(a.path[i].y() / gw.resolution)) - gw.y0;
+      EXPECT_FALSE(gw.blocked[gw.index(x, y)]) << name << " cell " << i;
+    }
+    std::printf("%s, Te %.0f: cost %.4f both ways; %zu free cuboids crossed whole: %zu nodes expanded, cell by cell %zu\n",
+                name, te, a.cost, gw.rects.size(), a.expanded, b.expanded);
+    expanded_whole += a.expanded, expanded_cells += b.expanded;
+  }
+  EXPECT_LT(expanded_whole, expanded_cells) << name;
+}
+
+TEST(Planning, SenaCrossingFreeCuboidsWholeKeepsTheCost) { cuboidsKeepTheCost(sena(), "SENA"); }
+TEST(Planning, MalagaCrossingFreeCuboidsWholeKeepsTheCost) { cuboidsKeepTheCost(malaga(), "Malaga"); }
+
+// A small map (SENA's first frames): A* gives Dijkstra's cost for 40 random pairs of free cells
+// (with the free cuboids crossed whole, the default: the brute force goes cell by cell).
 TEST(Planning, AStarCostIsDijkstrasOnASmallMap) {
   const RealMap r = sena(1, 4);
   std::mt19937 rng(18);

@@ -1,0 +1,69 @@
+// Private to the planners: A* over nodes 0..n-1, the one search both planning grids use, and the
+// options' checks.
+#pragma once
+
+#include <algorithm>
+#include <cstddef>
+#include <cstdint>
+#include <limits>
+#include <queue>
+#include <tuple>
+#include <vector>
+
+#include "rtog/core/plan.hpp"
+
+namespace rtog::plan_detail {
+
+/// Throws std::invalid_argument for options no plan can use (both planners check them first).
+void validate(const PlanOptions& o);
+
+struct Search {
+  bool found = false;
+  std::vector<std::uint32_t> nodes;  ///< start .. goal, as the edges were taken
+  double cost = 0.0;
+  std::size_t expanded = 0;  ///< nodes taken from the open set
+};
+
+/// Least-cost path from `start` to `goal`. `h(v)`: an admissible, consistent estimate of v's cost
+/// to the goal. `edges(u, relax)`: calls relax(v, cost of the edge u -> v) for each edge out of u.
+/// Ties are broken towards deeper nodes, the same way on every run.
+template <class Heuristic, class Edges>
+Search aStar(std::size_t n, std::uint32_t start, std::uint32_t goal, Heuristic&& h, Edges&& edges) {
+  constexpr double kInf = std::numeric_limits<double>::infinity();
+  constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
+  std::vector<double> cost(n, kInf);
+  std::vector<std::uint32_t> parent(n, kNone);
+  std::vector<std::uint8_t> closed(n, 0);
+  using Entry = std::tuple<double, double, std::uint32_t>;  // (f, -g, node)
+  std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> open;
+  cost[start] = 0.0;
+  open.emplace(h(start), -0.0, start);
+  Search s;
+  while (!open.empty()) {
+    const std::uint32_t u = std::get<2>(open.top());
+    open.pop();
+    if (closed[u]) continue;
+    closed[u] = 1;
+    ++s.expanded;
+    if (u == goal) break;
+    const double cu = cost[u];
+    edges(u, [&](std::uint32_t v, double w) {
+      if (closed[v]) return;
+      const double c = cu + w;
+      if (c < cost[v]) {
+        cost[v] = c;
+        parent[v] = u;
+        open.emplace(c + h(v), -c, v);
+      }
+    });
+  }
+  if (!closed[goal]) return s;
+  s.found = true;
+  s.cost = cost[goal];
+  for (std::uint32_t v = goal; v != start; v = parent[v]) s.nodes.push_back(v);
+  s.nodes.push_back(start);
+  std::reverse(s.nodes.begin(), s.nodes.end());
+  return s;
+}
+
+}  // namespace rtog::plan_detail
