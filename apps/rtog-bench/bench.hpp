@@ -83,6 +83,26 @@ Dataset loadRawlog3D(const std::string& path, const std::string& name);
 /// the same decimation, 5). Appends to `out`.
 void run2D(const std::string& rawlog, const Options& opts, std::vector<Result>& out, std::ostream& log);
 
+/// Risk-aware planning on SENA's and Malaga's maps (the MRPT map at 0.05 m) side by side with
+/// MRPT's PlannerSimple2D on the map's 2D view, radius 0.3 m, from where the robot stood first to
+/// where it stood half-way: path length, least clearance, planning time, and rtog's nodes
+/// expanded crossing free cuboids whole and cell by cell. Appends to `out`.
+void runPlanning(const std::string& mrpt_datasets_dir, const Options& opts, std::vector<Result>& out, std::ostream& log);
+
+/// A log for the chunked-build row: `rtog build` arguments that read it, and where to split it.
+struct ChunkedLog {
+  std::string name;
+  std::vector<std::string> input;  ///< e.g. {"--tum", DIR, "--resolution", "0.05"}
+  std::size_t split = 0;           ///< the chunks are --scans 0:split and split:
+  double resolution = 0;
+};
+/// The logs of the chunked-build row: the TUM frames and SENA's rawlog, each split in halves.
+std::vector<ChunkedLog> chunkedLogs(const std::string& tum_dir, const std::string& sena_rawlog);
+/// Wall times (medians of opts.repeats rounds) of one `rtog build` process over the whole log
+/// against two `rtog build --scans` processes at once and `rtog fuse` of their maps.
+void runChunkedBuilds(const std::string& rtog_cli, const std::vector<ChunkedLog>& logs, const Options& opts,
+                      std::vector<Result>& out, std::ostream& log);
+
 /// Runs every method on `data`; appends to `out`. Progress lines go to `log`.
 void runDataset(const Dataset& data, const Options& opts, std::vector<Result>& out, std::ostream& log);
 
@@ -104,6 +124,11 @@ void writeJson(const std::vector<Result>& results, const RunInfo& run, std::ostr
 /// before the rounds were recorded gets the default rounds. Throws std::runtime_error naming
 /// what is missing or malformed.
 std::vector<Result> readJson(const std::string& path, RunInfo& run);
+/// The planning and chunked-build sections of the report (their rows only).
+void writeTaskSections(const std::vector<Result>& results, std::ostream& md);
+/// Whether a row belongs to those sections (not to the insertion tables).
+bool isTaskRow(const Result& r);
+
 /// The Markdown report with target ratios and PASS/FAIL; its bar charts are added to `files`
 /// as PNGs in `img_dir` (the report links them as img/NAME.png).
 void writeMarkdown(const std::vector<Result>& results, const RunInfo& run, std::ostream& md,
@@ -114,10 +139,14 @@ struct Command {
   Options opts;
   std::string tum_dir;            ///< TUM depth sequence
   std::string mrpt_datasets_dir;  ///< Debian mrpt-common's datasets
-  std::vector<std::string> only;  ///< datasets: tum, vlp16, rotscan, sena (none: all)
+  std::vector<std::string> only;  ///< datasets: tum, vlp16, rotscan, sena, plan, chunks (none: all)
   std::string json, markdown, img_dir = ".";
   std::string from_json;          ///< render the report from this JSON, measure nothing
   std::string first_scan_helper;  ///< the rtog-first-scan executable
+  std::string rtog_cli;           ///< the rtog executable (chunked builds)
+  /// Rows of datasets not measured in this run are taken from this JSON (a partial run merged
+  /// into a full report). (Default: none)
+  std::string merge_json;
 };
 /// Measures (or reads --from-json), then writes the report's files all or none. Progress goes
 /// to `out`. Returns the exit code.

@@ -3,6 +3,7 @@
 // a bad path fails at once; the JSON, the Markdown and the charts are written all or none).
 #include <algorithm>
 #include <ostream>
+#include <set>
 #include <stdexcept>
 
 #include "bench.hpp"
@@ -15,6 +16,7 @@ int runCommand(const Command& cmd, std::ostream& out, std::ostream& err) {
   try {
     std::vector<app::InputFile> inputs;
     if (!cmd.from_json.empty()) inputs.push_back({"--from-json", cmd.from_json});
+    if (!cmd.merge_json.empty()) inputs.push_back({"--merge-json", cmd.merge_json});
     app::OutputSet files(std::move(inputs));
     std::ostream* json = cmd.from_json.empty() ? &files.add("--json", cmd.json) : nullptr;
     std::ostream& markdown = files.add("--markdown", cmd.markdown);
@@ -47,6 +49,18 @@ int runCommand(const Command& cmd, std::ostream& out, std::ostream& err) {
       if (wanted("sena")) first.push_back({"rawlog2d", sena, "SENA 2D laser, first scan"});
       if (!first.empty()) out << "first scans, each in a fresh process (" << cmd.first_scan_helper << ")\n";
       runFirstScans(cmd.first_scan_helper, first, cmd.opts, results, out);
+      if (wanted("plan")) runPlanning(cmd.mrpt_datasets_dir, cmd.opts, results, out);
+      if (wanted("chunks")) runChunkedBuilds(cmd.rtog_cli, chunkedLogs(cmd.tum_dir, sena), cmd.opts, results, out);
+      if (!cmd.merge_json.empty()) {
+        // The rows of the datasets this run did not measure, from the earlier report.
+        RunInfo earlier;
+        std::set<std::string> measured;
+        for (const auto& r : results) measured.insert(r.dataset);
+        for (auto& r : readJson(cmd.merge_json, earlier))
+          if (!measured.count(r.dataset)) results.push_back(std::move(r));
+        const auto when = earlier.machine.find("date");
+        run.machine["merged_rows_date"] = when == earlier.machine.end() ? "?" : when->second;
+      }
     }
     if (json) writeJson(results, run, *json);
     writeMarkdown(results, run, markdown, cmd.img_dir, files);

@@ -1,10 +1,7 @@
 // The first-scan rows: the helper run as a fresh process per sample, medians, report.
 #include "first_scan.hpp"
 
-#include <fcntl.h>
-#include <spawn.h>
-#include <sys/wait.h>
-#include <unistd.h>
+#include "process.hpp"
 
 #include <algorithm>
 #include <cerrno>
@@ -17,8 +14,6 @@
 
 #include <nlohmann/json.hpp>
 
-extern char** environ;
-
 namespace rtog::bench {
 namespace {
 
@@ -28,44 +23,6 @@ std::string methodName(const FirstScanMap& m) {
                           : m.type == "octoMap"           ? "MRPT COctoMap"
                                                           : "MRPT COccupancyGridMap2D";
   return "first scan: " + m.type + " (" + cls + ")" + (m.as_recorded ? ", observation as recorded" : "");
-}
-
-/// Runs argv[0] with its stdout into a pipe; returns what it printed. Throws if it cannot start
-/// or does not exit with 0 (its stderr goes to ours, where it says why).
-std::string runCapturingStdout(const std::vector<std::string>& args, const std::string& what) {
-  int fds[2];
-  if (::pipe2(fds, O_CLOEXEC) != 0) throw std::runtime_error(std::string("pipe: ") + std::strerror(errno));
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  posix_spawn_file_actions_adddup2(&actions, fds[1], STDOUT_FILENO);  // dup2 clears O_CLOEXEC
-  std::vector<char*> argv;
-  for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
-  argv.push_back(nullptr);
-  pid_t pid = 0;
-  const int rc = posix_spawn(&pid, args[0].c_str(), &actions, nullptr, argv.data(), environ);
-  posix_spawn_file_actions_destroy(&actions);
-  ::close(fds[1]);
-  if (rc != 0) {
-    ::close(fds[0]);
-    throw std::runtime_error("cannot run " + args[0] + ": " + std::strerror(rc));
-  }
-  std::string text;
-  char buf[4096];
-  for (ssize_t n; (n = ::read(fds[0], buf, sizeof buf)) != 0;) {
-    if (n < 0 && errno == EINTR) continue;
-    if (n < 0) break;
-    text.append(buf, static_cast<std::size_t>(n));
-  }
-  ::close(fds[0]);
-  int status = 0;
-  while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
-  }
-  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0)
-    throw std::runtime_error(what + " failed (" +
-                             (WIFEXITED(status) ? "exit " + std::to_string(WEXITSTATUS(status))
-                                                : "signal " + std::to_string(WTERMSIG(status))) +
-                             ")");
-  return text;
 }
 
 }  // namespace

@@ -15,6 +15,15 @@ std::string helperBesideThisExecutable() {
   const auto self = std::filesystem::read_symlink("/proc/self/exe", ec);
   return ec ? std::string("rtog-first-scan") : (self.parent_path() / "rtog-first-scan").string();
 }
+/// The rtog tool: beside this executable when installed, in ../rtog/ in the build tree.
+std::string rtogCliNearThisExecutable() {
+  std::error_code ec;
+  const auto self = std::filesystem::read_symlink("/proc/self/exe", ec);
+  if (ec) return "rtog";
+  for (const auto& p : {self.parent_path() / "rtog", self.parent_path().parent_path() / "rtog" / "rtog"})
+    if (std::filesystem::is_regular_file(p)) return p.string();
+  return "rtog";
+}
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -26,9 +35,13 @@ int main(int argc, char** argv) {
   cmd.json = "benchmarks.json";
   cmd.markdown = "benchmarks.md";
   cmd.first_scan_helper = helperBesideThisExecutable();
+  cmd.rtog_cli = rtogCliNearThisExecutable();
   app.add_option("--tum", cmd.tum_dir, "TUM depth sequence directory")->capture_default_str();
   app.add_option("--mrpt-datasets", cmd.mrpt_datasets_dir, "Debian mrpt-common datasets directory")->capture_default_str();
-  app.add_option("--only", cmd.only, "Run only these datasets: tum, vlp16, rotscan, sena");
+  app.add_option("--only", cmd.only, "Run only these datasets: tum, vlp16, rotscan, sena, plan, chunks");
+  app.add_option("--merge-json", cmd.merge_json,
+                 "Rows of the datasets this run does not measure are taken from this earlier JSON (with --only)");
+  app.add_option("--rtog", cmd.rtog_cli, "The rtog executable (the chunked-build rows)")->capture_default_str();
   app.add_option("--methods", opts.methods,
                  "Run only methods whose name contains one of these (profiling; \"first scan\": the fresh-process rows)");
   app.add_option("--repeats", opts.repeats, "Rounds of builds, every method in each (median reported)")

@@ -61,7 +61,7 @@ void barChart(const std::vector<std::pair<std::string, double>>& bars, const std
 std::set<std::pair<std::string, double>> benchGroups(const std::vector<Result>& results) {
   std::set<std::pair<std::string, double>> groups;
   for (const auto& r : results)
-    if (!r.extra.count("first_scan")) groups.insert({r.dataset, r.resolution});
+    if (!r.extra.count("first_scan") && !isTaskRow(r)) groups.insert({r.dataset, r.resolution});
   return groups;
 }
 
@@ -163,6 +163,10 @@ void writeMarkdown(const std::vector<Result>& results, const RunInfo& run, std::
      << "Machine: " << field("cpu") << ", " << field("cores") << " cores, " << field("memory") << " RAM"
      << (run.machine.count("os") ? ", " + field("os") : std::string()) << "; " << field("compiler") << "; OctoMap " << field("octomap") << ", MRPT " << field("mrpt") << "; "
      << field("date") << ".\n\n"
+     << (run.machine.count("merged_rows_date")
+             ? "This run measured some datasets only (`--only`); the rows of the others are those of the run of " +
+                   field("merged_rows_date") + " on the same machine (`--merge-json`).\n\n"
+             : std::string())
      << "Reproduce: `./build/apps/rtog-bench/rtog-bench"
      << (run.repeats != Options{}.repeats ? " --repeats " + std::to_string(run.repeats) : std::string())
      << (run.min_seconds != Options{}.min_seconds ? " --min-seconds " + [&] {
@@ -302,6 +306,7 @@ void writeMarkdown(const std::vector<Result>& results, const RunInfo& run, std::
     md << "\n![insertion time](img/" << img << ")\n";
   }
   writeFirstScanSection(results, md);
+  writeTaskSections(results, md);
   md << "\n## Accuracy against ground truth\n\n"
      << "Speed and memory say nothing about how good a map is: `rtog-accuracy` builds rtog, OctoMap and\n"
      << "MRPT's dense grids from simulated LiDAR and 2D scans of a seeded synthetic world whose occupancy is\n"

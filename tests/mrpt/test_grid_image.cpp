@@ -12,6 +12,7 @@
 
 #include <opencv2/core.hpp>
 
+#include "rtog/core/pose_blur.hpp"
 #include "rtog/image/grid_ops.hpp"
 #include "test_helpers.hpp"
 
@@ -142,4 +143,85 @@ TEST(GridImage, PolarCartesianRoundTripOfARealScan) {
   std::printf("SENA scan: %zu returns, %zu back within 1.5 cells\n", returns, exact);
   EXPECT_GT(returns, 100u);
   EXPECT_GT(double(exact), 0.95 * double(returns));
+}
+
+// The seed's check: blurring a 2D view by sigma equals inserting with isotropic position covariance
+// sigma^2, within the discretisation. One real SENA scan into an empty map (beam model, 0.05 m):
+// (a) from the mean pose, its view blurred by sigma = 0.1 m with unknown cells at the prior;
+// (b) from a dense set of poses about the mean (offsets every sigma/4 over +-3 sigma in x and y,
+// Gaussian weights), as the pose-uncertainty insertion enters a scan (the mixture of the poses'
+// probabilities). The two agree cell by cell far better than the unblurred view agrees with (b).
+TEST(GridImage, BlurBySigmaIsInsertionWithPositionCovarianceSigmaSquared) {
+  const auto frames = loadOdometryFrames(dataset(kSena), 40);
+  const mrpt::obs::CObservation2DRangeScan* scan = nullptr;
+  mrpt::poses::CPose3D robot;
+  for (const auto& f : frames)
+    for (const auto& o : *f.sf)
+      if (!scan) {
+        scan = dynamic_cast<const mrpt::obs::CObservation2DRangeScan*>(o.get());
+        robot = f.pose;
+      }
+  ASSERT_NE(scan, nullptr);
+  const mrpt::poses::CPose3D sensor = robot + scan->sensorPose;
+  std::vector<Eigen::Vector3f> points;
+  for (std::size_t i = 0; i < scan->getScanSize(); ++i) {
+    if (!scan->getScanRangeValidity(i)) continue;
+    const double r = scan->getScanRange(i), a = scan->getScanAngle(i);
+    double x, y, z;
+    sensor.composePoint(r * std::cos(a), r * std::sin(a), 0.0, x, y, z);
+    points.emplace_back(static_cast<float>(x), static_cast<float>(y), static_cast<float>(z));
+  }
+  ASSERT_GT(points.size(), 100u);
+  const Eigen::Vector3d origin(sensor.x(), sensor.y(), sensor.z());
+  rtog::MapParams mp;
+  mp.resolution = 0.05;
+  rtog::InsertParams ip;
+  ip.max_range = 15.0;
+  rtog::OccupancyMap mean(mp), mixture(mp);
+  mean.insertPointCloud(origin, points.data(), points.size(), ip);
+  const double sigma = 0.1;
+  std::vector<std::vector<Eigen::Vector3f>> moved;
+  std::vector<rtog::WeightedScan> poses;
+  double total = 0;
+  for (int i = -12; i <= 12; ++i)
+    for (int j = -12; j <= 12; ++j) total += std::exp(-0.5 * (i * i + j * j) / 16.0);
+  moved.reserve(625);
+  for (int i = -12; i <= 12; ++i)
+    for (int j = -12; j <= 12; ++j) {
+      const Eigen::Vector3f shift(static_cast<float>(i * sigma / 4), static_cast<float>(j * sigma / 4), 0.0f);
+      moved.emplace_back();
+      for (const auto& p : points) moved.back().push_back(p + shift);
+      poses.push_back({std::exp(-0.5 * (i * i + j * j) / 16.0) / total, origin + shift.cast<double>(), moved.back().data(),
+                       points.size(), nullptr});
+    }
+  mixture.insertBlurred(poses, ip);
+  const GridImage view = rtog::image::bandImage(mean, -1000, 1000);
+  const GridImage blurred = rtog::image::blurWithPrior(view, sigma, 0.5);
+  const GridImage want = rtog::image::bandImage(mixture, -1000, 1000);
+  // Over the cells the mixture knows: P there against the blurred view's and the plain view's.
+  const auto at = [](const GridImage& g, std::int32_t kx, std::int32_t ky) {
+    const int c = kx - g.x0, r = g.p.rows - 1 - (ky - g.y0);
+    if (c < 0 || r < 0 || c >= g.p.cols || r >= g.p.rows) return 0.5f;
+    const float v = g.p.at<float>(r, c);
+    return std::isnan(v) ? 0.5f : v;
+  };
+  double d_blur = 0, d_plain = 0, worst_blur = 0;
+  std::size_t n = 0;
+  for (int r = 0; r < want.p.rows; ++r)
+    for (int c = 0; c < want.p.cols; ++c) {
+      const float w = want.p.at<float>(r, c);
+      if (std::isnan(w)) continue;
+      const std::int32_t kx = want.x0 + c, ky = want.y0 + (want.p.rows - 1 - r);
+      const double db = std::fabs(at(blurred, kx, ky) - w), dp = std::fabs(at(view, kx, ky) - w);
+      d_blur += db, d_plain += dp, worst_blur = std::max(worst_blur, db);
+      ++n;
+    }
+  ASSERT_GT(n, 10000u);
+  d_blur /= double(n), d_plain /= double(n);
+  std::printf("SENA scan, sigma %.2f m: mean |P| difference from the pose mixture over %zu cells: blurred view %.4f "
+              "(largest %.3f), unblurred view %.4f\n",
+              sigma, n, d_blur, worst_blur, d_plain);
+  EXPECT_LT(d_blur, 0.005);
+  EXPECT_LT(worst_blur, 0.05);
+  EXPECT_LT(d_blur, 0.1 * d_plain);
 }

@@ -63,6 +63,23 @@ GridImage blur(const GridImage& g, double sigma) {
   return out;
 }
 
+GridImage blurWithPrior(const GridImage& g, double sigma, double prior) {
+  if (!(std::isfinite(sigma) && sigma > 0.0)) throw std::invalid_argument("the blur's sigma must be a positive number of metres");
+  if (!(prior > 0.0 && prior < 1.0)) throw std::invalid_argument("the prior must lie in (0, 1)");
+  const double s = sigma / g.resolution;
+  const int pad = static_cast<int>(std::ceil(3.0 * s));
+  cv::Mat value(g.p.rows + 2 * pad, g.p.cols + 2 * pad, CV_32F, cv::Scalar(prior));
+  for (int r = 0; r < g.p.rows; ++r)
+    for (int c = 0; c < g.p.cols; ++c) {
+      const float v = g.p.at<float>(r, c);
+      if (!std::isnan(v)) value.at<float>(r + pad, c + pad) = v;
+    }
+  GridImage out;
+  out.x0 = g.x0 - pad, out.y0 = g.y0 - pad, out.resolution = g.resolution;
+  cv::GaussianBlur(value, out.p, cv::Size(2 * pad + 1, 2 * pad + 1), s, s, cv::BORDER_REPLICATE);
+  return out;
+}
+
 namespace {
 cv::Mat morphology(const cv::Mat& mask, int k, int op) {
   if (k < 1 || k % 2 == 0 || k > 1001) throw std::invalid_argument("the structuring element's size must be odd, 1 to 1001, got " + std::to_string(k));

@@ -35,6 +35,13 @@ cv::Mat threshold(const GridImage& g, double p);
 /// The image blurred by a Gaussian of sigma [m], unknown pixels left out of the weights
 /// (normalized convolution) and unknown again after; throws std::invalid_argument for sigma <= 0.
 GridImage blur(const GridImage& g, double sigma);
+/// The blur the estimator seed relates to pose uncertainty: a cell unseen from a pose keeps the
+/// prior there, so unknown pixels count as `prior` (P), and the image is first widened by 3 sigma
+/// of prior on every side (what poses within 3 sigma see). Every pixel of the result is known.
+/// Blurring a scan's view by sigma this way is inserting the scan with isotropic position
+/// covariance sigma^2 (tests/mrpt/test_grid_image.cpp). Throws std::invalid_argument for
+/// sigma <= 0 or a prior outside (0, 1).
+GridImage blurWithPrior(const GridImage& g, double sigma, double prior);
 /// Morphological opening / closing of a mask by a k x k square (k odd, >= 1).
 cv::Mat open(const cv::Mat& mask, int k);
 cv::Mat close(const cv::Mat& mask, int k);
