@@ -2,6 +2,8 @@
 // was written, and the Markdown's insertion-speed verdicts follow from the raw build times. And
 // the machine facts a report states, read from the system.
 #include <gtest/gtest.h>
+
+#include <iomanip>
 #include <unistd.h>
 
 #include <algorithm>
@@ -46,12 +48,20 @@ TEST(BenchReport, JsonReadsBackAsWritten) {
   RunInfo run;
   const std::vector<Result> results = readJson(kRun, run);
   ASSERT_GT(results.size(), 40u);
-  // The bench's four datasets, and the first scans of three of them (rot_scan has none).
-  std::set<std::string> datasets, first_scans;
-  for (const auto& r : results)
+  // The bench's four datasets, the first scans of three of them (rot_scan has none), planning on
+  // two maps and chunked builds of three logs.
+  std::set<std::string> datasets, first_scans, plans;
+  std::size_t chunks = 0;
+  for (const auto& r : results) {
+    if (r.extra.count("plan")) plans.insert(r.dataset);
+    chunks += r.extra.count("chunks");
+    if (rtog::bench::isTaskRow(r)) continue;
     (r.dataset.find(", first ") != std::string::npos ? first_scans : datasets).insert(r.dataset);
+  }
   EXPECT_EQ(datasets.size(), 4u);
   EXPECT_EQ(first_scans.size(), 3u);
+  EXPECT_EQ(plans.size(), 2u);
+  EXPECT_EQ(chunks, 3u);
   EXPECT_FALSE(run.machine.at("cpu").empty());
 
   const std::string copy = ::testing::TempDir() + "/bench_copy.json";
@@ -111,6 +121,29 @@ TEST(BenchReport, SpeedVerdictsFollowFromTheBuildTimes) {
     EXPECT_EQ(cells[4], want) << line;
   }
   EXPECT_EQ(rows, 6);  // three 3D datasets at two resolutions
+}
+
+// The planning and chunked-build sections: one table row per result, its figures the JSON's.
+TEST(BenchReport, PlanningAndChunkedBuildRowsAreTheJsons) {
+  RunInfo run;
+  const std::vector<Result> results = readJson(kRun, run);
+  const std::string md = markdownOf(results, run, ::testing::TempDir());
+  ASSERT_NE(md.find("## Risk-aware planning beside MRPT's PlannerSimple2D"), std::string::npos);
+  ASSERT_NE(md.find("## Building in chunks"), std::string::npos);
+  std::size_t rows = 0;
+  for (const auto& r : results) {
+    if (!isTaskRow(r)) continue;
+    std::ostringstream want;
+    want << std::fixed << std::setprecision(r.extra.count("plan") ? 2 : 3)
+         << (r.extra.count("plan") ? r.extra.at("length_m") : r.extra.at("one_process_s"));
+    const std::string head = "| " + (r.extra.count("plan") ? r.method : r.dataset) + " | ";
+    bool found = false;
+    for (std::size_t at = md.find(head); at != std::string::npos && !found; at = md.find(head, at + 1))
+      found = md.substr(at, md.find('\n', at) - at).find("| " + want.str() + " |") != std::string::npos;
+    EXPECT_TRUE(found) << head << want.str();
+    ++rows;
+  }
+  EXPECT_EQ(rows, 13u);  // 2 maps x (PlannerSimple2D + 4 rtog rows), 3 chunked logs
 }
 
 TEST(BenchReport, MachineFactsComeFromTheSystem) {
