@@ -164,3 +164,40 @@ TEST(FuzzRegressions, GridScanWithANaNAperture) {
   EXPECT_THROW(m.insertObservation(scan, mrpt::poses::CPose3D(0.3, 0.2, 0.0, 0, 0, 0)), std::invalid_argument);
   EXPECT_TRUE(m.isEmpty());
 }
+
+// rtog_fuzz_insert (long run of 2026-12-04, after 333,998 executions): scored by mean information
+// on the 2D view, a scan is "inserted" by MRPT into a copy of the view, which MRPT does not grow
+// for that insertion (it only counts information): end points beyond the view were read out of
+// bounds (SEGV in COccupancyGridMap2D::internal_insertObservation, any build). The map's cells
+// here lie 1 m above the second scan's, so the view is small, and the scan reaches past it.
+TEST(FuzzRegressions, MeanInformationOfAScanReachingBeyondTheView) {
+  CRTreeOccupancyGridMap::TInsertionOptions io;
+  io.sensorModelPreset = "octomap";
+  io.maxDistanceInsertion = 3.99f;
+  CRTreeOccupancyGridMap m(0.05, io);
+  m.likelihoodOptions.likelihoodMethod = CRTreeOccupancyGridMap::lmMeanInformation;
+  ASSERT_TRUE(m.likelihoodOptions.scanLikelihoodOnGridView);
+  const auto scanOf = [](std::vector<float> ranges, float aperture, float max_range, const mrpt::poses::CPose3D& sensor) {
+    mrpt::obs::CObservation2DRangeScan s;
+    s.aperture = aperture, s.maxRange = max_range, s.rightToLeft = true, s.sensorPose = sensor;
+    s.resizeScan(ranges.size());
+    for (std::size_t i = 0; i < ranges.size(); ++i) s.setScanRange(i, ranges[i]), s.setScanRangeValidity(i, true);
+    return s;
+  };
+  const auto first = scanOf({4, 2.16f, 2.16f, 2.16f, 2.16f, 0.094f, 3.59f, 1.58f, 1.54f}, 6.26f, 0.505f,
+                            mrpt::poses::CPose3D(-0.104, -0.104, 1.0, M_PI, 0, 0));
+  const mrpt::poses::CPose3D at1(-2.75, 4.0, 1.0, M_PI, 0, 0);
+  (void)m.insertObservation(first, at1);
+  (void)m.computeObservationLikelihood(first, at1);
+  const auto second = scanOf({4, 4, 4, 4, 4, 4, 4, 3.99f, 2.16f, 2.16f}, 5.64f, 3.64f,
+                             mrpt::poses::CPose3D(0.398, 0.5, -1e9, 87.15 * M_PI / 180, 0, 0));
+  const mrpt::poses::CPose3D at2(0.329, 0.329, 1.0, 143.29 * M_PI / 180, 0, 0);
+  EXPECT_THROW(m.insertObservation(second, at2), std::out_of_range);  // the sensor 1e9 m down has no key
+  (void)m.computeObservationLikelihood(second, at2);
+  // The same scan from the map's own height, and from poses about it: every end point read is
+  // inside the view.
+  auto level = second;
+  level.sensorPose = mrpt::poses::CPose3D(0.398, 0.5, 0.0, 87.15 * M_PI / 180, 0, 0);
+  for (const double dx : {-3.0, 0.0, 3.0}) (void)m.computeObservationLikelihood(level, mrpt::poses::CPose3D(dx, 0.3, 1.0, 2.5, 0, 0));
+  EXPECT_EQ(m.map().checkInvariants(), "");
+}

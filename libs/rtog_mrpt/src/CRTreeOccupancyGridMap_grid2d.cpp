@@ -302,10 +302,14 @@ std::optional<double> CRTreeOccupancyGridMap::gridViewLikelihood(const mrpt::obs
       scored = &*trimmed;
     }
   }
-  if (method == lmConsensus) {
+  if (method == lmConsensus || method == lmMeanInformation) {
+    // Consensus reads the cell of every valid end point, and MI "inserts" the scan into a copy of
+    // the view that MRPT does not grow for it: the view must hold all the scan reaches.
     double r = 0;
     for (std::size_t i = 0; i < scored->getScanSize(); ++i)
       if (scored->getScanRangeValidity(i)) r = std::max<double>(r, scored->getScanRange(i));
+    if (method == lmMeanInformation && insertionOptions.considerInvalidRangesAsFreeSpace)
+      r = std::max<double>(r, std::min<double>(scored->maxRange > 0.0f ? scored->maxRange : 0.0, insertionOptions.maxDistanceInsertion));
     r += std::hypot(scan->sensorPose.x(), scan->sensorPose.y()) + 1.0;
     need = std::array<double, 4>{pose.x() - r, pose.y() - r, pose.x() + r, pose.y() + r};
     // A pose whose scan cannot reach the map's cells is left to the native path: growing the
