@@ -32,6 +32,17 @@ class GradedScan {
       deltas_[at] = delta;
     }
   }
+  /// Room for n marks.
+  void reserve(std::size_t n) {
+    keys_.reserve(n);
+    deltas_.reserve(n);
+  }
+  /// mark() of a cell the caller knows is not marked yet (e.g. the cells of disjoint boxes moved
+  /// one-to-one): no lookup.
+  void markDistinct(const Key& k, float delta) {
+    keys_.push_back(k);
+    deltas_.push_back(delta);
+  }
   /// Groups the marked cells by brick, bricks in Morton order, cells by local index. Ends marking.
   void finalize();
   /// Builds the finalized set directly, brick by brick, instead of mark() and finalize(): after

@@ -4,7 +4,9 @@
 // change in a cell is l2 - l0 of the other map's cell there, through the graded path that
 // range-noise scans take: each cell once, brick by brick, the map independent of the threads.
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -29,12 +31,43 @@ void checkRigid(const Eigen::Isometry3d& pose) {
         "rtog::OccupancyMap::fuse: the pose must be rigid (finite, a rotation and a translation)");
 }
 
+/// The shift in cells that `pose` is, if the lattices are equal, the pose has no rotation and its
+/// translation is a whole number of cells (exactly); none otherwise.
+std::optional<std::array<std::int64_t, 3>> wholeCellShift(const Lattice& dst, const Lattice& src, const Eigen::Isometry3d& pose) {
+  if (dst.resolution() != src.resolution() || !pose.linear().isIdentity(0.0)) return std::nullopt;
+  std::array<std::int64_t, 3> shift{};
+  for (int a = 0; a < 3; ++a) {
+    const double c = pose.translation()[a] / dst.resolution();
+    if (!(std::fabs(c) < 1e9) || c != std::round(c) || std::round(c) * dst.resolution() != pose.translation()[a])
+      return std::nullopt;
+    shift[std::size_t(a)] = static_cast<std::int64_t>(std::round(c));
+  }
+  return shift;
+}
+
 /// The cells of `dst` whose centres, taken back by `inv` into the other map, fall in `box` of
 /// `src`: each given to `emit`. Identity or a shift by whole cells of equal lattices maps centres
 /// to centres, so each cell of the box lands on exactly one cell.
 template <class Emit>
 void forEachCellOfBox(const Lattice& dst, const Lattice& src, const Eigen::Isometry3d& pose,
                       const Eigen::Isometry3d& inv, const Box& box, InsertStats& stats, Emit&& emit) {
+  // Equal lattices and a shift by whole cells (the identity included: chunks of one log, maps of
+  // one frame): each cell of the box is the cell moved by the shift, with no transform per cell.
+  if (const auto shift = wholeCellShift(dst, src, pose)) {
+    bool beyond = false;
+    for (std::int64_t z = box.min.z; z <= box.max.z; ++z)
+      for (std::int64_t y = box.min.y; y <= box.max.y; ++y)
+        for (std::int64_t x = box.min.x; x <= box.max.x; ++x) {
+          const std::int64_t kx = x + (*shift)[0], ky = y + (*shift)[1], kz = z + (*shift)[2];
+          if (kx < kKeyMin || ky < kKeyMin || kz < kKeyMin || kx > kKeyMax || ky > kKeyMax || kz > kKeyMax) {
+            beyond = true;
+            continue;
+          }
+          emit(Key{static_cast<std::int32_t>(kx), static_cast<std::int32_t>(ky), static_cast<std::int32_t>(kz)});
+        }
+    if (beyond) ++stats.skipped_out_of_range;
+    return;
+  }
   const Eigen::Vector3d lo = src.boxMin(box), hi = src.boxMax(box);
   Eigen::Vector3d a = Eigen::Vector3d::Constant(HUGE_VAL), b = Eigen::Vector3d::Constant(-HUGE_VAL);
   for (int c = 0; c < 8; ++c) {
@@ -76,8 +109,20 @@ InsertStats OccupancyMap::fuse(const OccupancyMap& other, const Eigen::Isometry3
   const Eigen::Isometry3d inv = pose.inverse();
   InsertStats stats;
   GradedScan graded;
+  // The other map's leaves are disjoint: moved by a whole-cell shift, no cell is reached twice.
+  const bool distinct = wholeCellShift(e.store.lattice, other.lattice(), pose).has_value();
+  if (distinct) {
+    std::size_t cells = 0;
+    other.forEachLeaf([&](const Box& box, float) { cells += static_cast<std::size_t>(box.volume()); });
+    graded.reserve(cells);
+  }
   other.forEachLeaf([&](const Box& box, float v) {
-    forEachCellOfBox(e.store.lattice, other.lattice(), pose, inv, box, stats, [&](const Key& k) { graded.mark(k, v - l0); });
+    forEachCellOfBox(e.store.lattice, other.lattice(), pose, inv, box, stats, [&](const Key& k) {
+      if (distinct)
+        graded.markDistinct(k, v - l0);
+      else
+        graded.mark(k, v - l0);
+    });
   });
   graded.finalize();
   std::vector<ApplyContext> contexts;
