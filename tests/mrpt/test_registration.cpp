@@ -3,6 +3,8 @@
 // registered back to it, and fused with the registration's covariance blurred in.
 #include <gtest/gtest.h>
 
+#include <Eigen/Eigenvalues>
+
 #include <cmath>
 #include <cstdio>
 
@@ -60,9 +62,15 @@ void registersBack(const std::vector<PosedFrame>& first, const std::vector<Posed
   EXPECT_LT(err_t, 0.1) << name;
   EXPECT_LT(err_yaw, 1.0) << name;
   EXPECT_GT(r.goodness, 0.4) << name;
-  EXPECT_EQ(got.z(), 0.0);
   EXPECT_GT(r.pose.cov(0, 0), 0.0);
   EXPECT_GT(r.pose.cov(3, 3), 0.0);
+  // A planar registration: a covariance of x, y and yaw only, symmetric and positive semi-definite.
+  const Eigen::Matrix<double, 6, 6> cov = r.pose.cov.asEigen();
+  EXPECT_LT((cov - cov.transpose()).cwiseAbs().maxCoeff(), 1e-15);
+  using Cov = Eigen::Matrix<double, 6, 6>;
+  const double least = Eigen::SelfAdjointEigenSolver<Cov>(cov).eigenvalues().minCoeff();
+  EXPECT_GE(least, -1e-15);
+  for (const int d : {2, 4, 5}) EXPECT_EQ(cov.row(d).cwiseAbs().maxCoeff(), 0.0) << "z, pitch, roll";
 }
 
 }  // namespace
