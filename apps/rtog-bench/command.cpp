@@ -58,8 +58,11 @@ int runCommand(const Command& cmd, std::ostream& out, std::ostream& err) {
         for (const auto& r : results) measured.insert(r.dataset);
         for (auto& r : readJson(cmd.merge_json, earlier))
           if (!measured.count(r.dataset)) results.push_back(std::move(r));
+        // The dates of the runs the kept rows come from (an earlier report may itself be merged).
         const auto when = earlier.machine.find("date");
-        run.machine["merged_rows_date"] = when == earlier.machine.end() ? "?" : when->second;
+        const auto before = earlier.machine.find("merged_rows_date");
+        run.machine["merged_rows_date"] = (before == earlier.machine.end() ? std::string() : before->second + ", ") +
+                                          (when == earlier.machine.end() ? std::string("?") : when->second);
       }
     }
     if (json) writeJson(results, run, *json);

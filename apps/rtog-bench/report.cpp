@@ -164,7 +164,7 @@ void writeMarkdown(const std::vector<Result>& results, const RunInfo& run, std::
      << (run.machine.count("os") ? ", " + field("os") : std::string()) << "; " << field("compiler") << "; OctoMap " << field("octomap") << ", MRPT " << field("mrpt") << "; "
      << field("date") << ".\n\n"
      << (run.machine.count("merged_rows_date")
-             ? "This run measured some datasets only (`--only`); the rows of the others are those of the run of " +
+             ? "This run measured some datasets only (`--only`); the rows of the others are those of the runs of " +
                    field("merged_rows_date") + " on the same machine (`--merge-json`).\n\n"
              : std::string())
      << "Reproduce: `./build/apps/rtog-bench/rtog-bench"
