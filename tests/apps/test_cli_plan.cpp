@@ -36,6 +36,23 @@ std::vector<Eigen::Vector2d> robotPositions() {
 }
 
 std::string xy(const Eigen::Vector2d& p) { return std::to_string(p.x()) + " " + std::to_string(p.y()); }
+
+/// A path file as `rtog plan` writes it: the comment line, then `dims` numbers a line.
+std::pair<std::string, std::vector<std::vector<double>>> readPath(const std::string& file, int dims) {
+  std::ifstream in(file);
+  std::pair<std::string, std::vector<std::vector<double>>> r;
+  std::getline(in, r.first);
+  for (std::vector<double> p(static_cast<std::size_t>(dims)); in >> p[0] >> p[1] && (dims == 2 || in >> p[2]);) r.second.push_back(p);
+  return r;
+}
+
+/// Whether `got` is `want` point for point (to the text's precision).
+template <class Points>
+void expectSamePath(const std::vector<std::vector<double>>& got, const Points& want) {
+  ASSERT_EQ(got.size(), want.size());
+  for (std::size_t i = 0; i < got.size(); ++i)
+    for (std::size_t a = 0; a < got[i].size(); ++a) EXPECT_NEAR(got[i][a], want[i][int(a)], 1e-6) << "point " << i;
+}
 }  // namespace
 
 TEST(CliPlan, ThePathIsTheLibrarysAndThePictureDecodes) {
@@ -57,19 +74,9 @@ TEST(CliPlan, ThePathIsTheLibrarysAndThePictureDecodes) {
   const Eigen::Vector2d t2(std::stod(std::to_string(to.x())), std::stod(std::to_string(to.y())));
   const rtog::PlanResult want = rtog::planPath2D(rtog::cli::loadMap(d + "/m.rtog"), f2, t2, o);
   ASSERT_TRUE(want.found);
-  std::ifstream in(d + "/p.txt");
-  std::string line;
-  std::getline(in, line);
-  EXPECT_EQ(line.rfind("# x y", 0), 0u) << line;
-  std::size_t i = 0;
-  double x, y;
-  while (in >> x >> y) {
-    ASSERT_LT(i, want.path.size());
-    EXPECT_NEAR(x, want.path[i].x(), 1e-6);
-    EXPECT_NEAR(y, want.path[i].y(), 1e-6);
-    ++i;
-  }
-  EXPECT_EQ(i, want.path.size());
+  const auto [head, got] = readPath(d + "/p.txt", 2);
+  EXPECT_EQ(head.rfind("# x y [m]", 0), 0u) << head;
+  expectSamePath(got, want.path);
   const cv::Mat img = cv::imread(d + "/p.png");
   EXPECT_FALSE(img.empty());
   EXPECT_GE(std::max(img.cols, img.rows), 700);
@@ -124,19 +131,10 @@ TEST(CliPlan, ThreeDimensionalPlanIsTheLibrarys) {
   o.te = 2, o.ta = 1, o.radius = 0.2;
   const rtog::PlanResult3D want = rtog::planPath3D(rtog::cli::loadMap(d + "/m.rtog"), from, to, o);
   ASSERT_TRUE(want.found);
-  std::ifstream f(d + "/p.txt");
-  std::string line;
-  std::getline(f, line);
-  EXPECT_EQ(line.rfind("# x y z [m]", 0), 0u) << line;
-  std::size_t i = 0;
-  for (double x, y, z; f >> x >> y >> z; ++i) {
-    ASSERT_LT(i, want.path.size());
-    EXPECT_NEAR(x, want.path[i].x(), 1e-6);
-    EXPECT_NEAR(y, want.path[i].y(), 1e-6);
-    EXPECT_NEAR(z, want.path[i].z(), 1e-6);
-  }
-  EXPECT_EQ(i, want.path.size());
-  EXPECT_GT(i, 5u);
+  const auto [head, got] = readPath(d + "/p.txt", 3);
+  EXPECT_EQ(head.rfind("# x y z [m]", 0), 0u) << head;
+  expectSamePath(got, want.path);
+  EXPECT_GT(got.size(), 5u);
   EXPECT_FALSE(cv::imread(d + "/p.png").empty());
 }
 
