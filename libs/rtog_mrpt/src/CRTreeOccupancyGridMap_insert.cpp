@@ -13,6 +13,7 @@
 #include <mrpt/obs/CObservationVelodyneScan.h>
 
 #include "rtog/mrpt/CRTreeOccupancyGridMap.h"
+#include "depth_unprojection.hpp"
 #include "fingerprint.hpp"
 #include "rotating_scan.hpp"
 
@@ -260,6 +261,7 @@ bool CRTreeOccupancyGridMap::extractBeams(const mrpt::obs::CObservation& obs, co
                        depth->points3D_z.size());
       // Only the point cloud was stored (sensor frame).
       setOrigin(sensor, out);
+      reserveMore(out, depth->points3D_x.size() / dec + 1);
       for (std::size_t i = 0; i < depth->points3D_x.size(); i += dec) {
         const float x = depth->points3D_x[i], y = depth->points3D_y[i], z = depth->points3D_z[i];
         if (!std::isfinite(x) || !std::isfinite(y) || !std::isfinite(z) || (x == 0 && y == 0 && z == 0)) {
@@ -271,22 +273,27 @@ bool CRTreeOccupancyGridMap::extractBeams(const mrpt::obs::CObservation& obs, co
       return true;
     }
     setOrigin(sensor, out);
-    // MRPT's own unprojection through the camera model, into the sensor frame (x forward), once
-    // per observation; then the sensor pose on the robot and the robot pose.
+    // MRPT's unprojection through the camera model, into the sensor frame (x forward), once
+    // per observation; then the sensor pose on the robot and the robot pose. Decimated, the
+    // same points without the table of every pixel MRPT would keep (depth_unprojection.hpp).
     const std::size_t ddec = forInsertion ? insertionOptions.decimation_3d_range : std::min<std::size_t>(dec, 255);
     localPointsCached(
         keyDepth(*depth, ddec),
         [&](std::vector<Eigen::Vector3f>& pts, std::size_t& invalid) {
+          if (ddec > 1) {
+            detail::unprojectDecimated(*depth, ddec, pts, invalid);
+            return;
+          }
           mrpt::maps::CSimplePointsMap pm;
           mrpt::obs::T3DPointsProjectionParams pp;
           pp.takeIntoAccountSensorPoseOnRobot = false;
-          pp.decimation = static_cast<uint8_t>(ddec);
           const_cast<CObservation3DRangeScan*>(depth)->unprojectInto(pm, pp);
-          const std::size_t pixels = static_cast<std::size_t>(depth->rangeImage.rows() / ddec) *
-                                     static_cast<std::size_t>(depth->rangeImage.cols() / ddec);
+          const std::size_t pixels =
+              static_cast<std::size_t>(depth->rangeImage.rows()) * static_cast<std::size_t>(depth->rangeImage.cols());
           const auto& xs = pm.getPointsBufferRef_x();
           const auto& ys = pm.getPointsBufferRef_y();
           const auto& zs = pm.getPointsBufferRef_z();
+          pts.reserve(xs.size());
           for (std::size_t i = 0; i < xs.size(); ++i) {
             if (!std::isfinite(xs[i]) || !std::isfinite(ys[i]) || !std::isfinite(zs[i])) {
               ++invalid;
