@@ -214,6 +214,45 @@ def case_observations2map(r):
     r.mapcheck(m, 1000)
 
 
+def case_observations2map_prior(r):
+    """observations2map with `priorMap` in the map's _creationOpts (Debian's Malaga campus
+    .gridmap at confidence 0.8), beside the same run without it, both in the drop-in preset
+    (mrpt_grid: 2D scans fill the prior's grid, as the stock grid's): MRPT's app creates the map
+    from the .ini and clears it before inserting (loadFromSimpleMap); the prior must survive that,
+    every cell the scans never reach keeping it bit for bit."""
+    prior = os.path.join(r.a.datasets, "2006-MalagaCampus.gridmap.gz")
+    simplemap = os.path.join(r.a.datasets, "malaga-cs-fac-building.simplemap.gz")
+    # The scans alone on the prior's lattice (its resolution, extent and cell origin): a prior of
+    # the same geometry whose cells are all unknown.
+    blank = os.path.join(r.run_dir(os.path.join("observations2map_prior", "blank")), "blank.gridmap.gz")
+    if subprocess.run([r.a.mapcheck, "--blank-gridmap", prior, blank]).returncode != 0:
+        fail("could not write the blank prior")
+    runs = {}
+    for tag, file in (("scans", blank), ("prior", prior)):
+        d = r.run_dir(os.path.join("observations2map_prior", tag))
+        os.makedirs(os.path.join(d, "out"))
+        extra = "priorMap = %s\npriorConfidence = 0.8\n" % file
+        cfg = os.path.join(d, "observations2map.ini")
+        with open(cfg, "w") as f:
+            f.write("[MappingApplication]\nrtreeOccupancyGrid_count = 1\n"
+                    "[MappingApplication_rtreeOccupancyGrid_00_creationOpts]\n%s"
+                    "[MappingApplication_rtreeOccupancyGrid_00_insertOpts]\nsensorModelPreset = mrpt_grid\n"
+                    % extra)
+        rc, out = r.app(["observations2map", cfg, simplemap, "out/malaga"], d)
+        if rc != 0 or "exception" in out.lower():
+            fail("observations2map (%s) exited %d:\n%s" % (tag, rc, out[-3000:]))
+        runs[tag] = r.one_file(os.path.join(d, "out", "malaga_rtog__CRTreeOccupancyGridMap_00.rtog"))
+    p = subprocess.run([r.a.mapcheck, "--prior-kept", runs["prior"], runs["scans"], prior, "0.8"],
+                       stdout=subprocess.PIPE, stderr=subprocess.STDOUT)
+    out = p.stdout.decode()
+    print(out.strip())
+    if p.returncode != 0:
+        fail("the prior did not survive observations2map (see the counts above)")
+    counts = dict(l.split(" ", 1) for l in out.strip().splitlines())
+    if int(counts["prior_updated"]) < 1000:
+        fail("the scans reach too few of the prior's cells for the test to say anything")
+
+
 PDF_RE = re.compile(r"PDF estimation: \(([-\d.]+),([-\d.]+),([-\d.]+)deg\)")
 
 
