@@ -1,6 +1,6 @@
 // libFuzzer target: insertion from structured input. The bytes are decoded (FuzzedDataProvider)
 // into a resolution, insertion options, a robot pose and a few observations (2D scans, point
-// clouds, rotating scans; a pose PDF with poseUncertainty) for CRTreeOccupancyGridMap /
+// clouds, rotating scans, depth images up to 16 x 16; a pose PDF with poseUncertainty) for CRTreeOccupancyGridMap /
 // CRTreeBackedGridMap2D, or into an origin, points and InsertParams for the core OccupancyMap
 // (plain or blurred over a few shifted poses). After every insertion the map must be sound;
 // each observation is also scored, and a few queries run.
@@ -22,6 +22,7 @@
 #include <fuzzer/FuzzedDataProvider.h>
 #include <mrpt/maps/CSimplePointsMap.h>
 #include <mrpt/obs/CObservation2DRangeScan.h>
+#include <mrpt/obs/CObservation3DRangeScan.h>
 #include <mrpt/obs/CObservationPointCloud.h>
 #include <mrpt/obs/CObservationRotatingScan.h>
 #include <mrpt/poses/CPose3D.h>
@@ -92,6 +93,7 @@ CRTreeOccupancyGridMap::TInsertionOptions insertionOptions(Fdp& in) {
   // Always a range limit: unlimited rays are a known slow path, not a new finding.
   io.maxDistanceInsertion = static_cast<float>(in.ConsumeFloatingPointInRange<double>(0.1, kMaxRange));
   io.decimation = in.ConsumeIntegralInRange<std::uint16_t>(0, 4);
+  io.decimation_3d_range = in.ConsumeIntegralInRange<std::uint16_t>(0, 9);
   io.discretize = in.ConsumeBool();
   io.planarCache = in.ConsumeBool();
   io.useMapAltitude = in.ConsumeBool();
@@ -109,7 +111,7 @@ CRTreeOccupancyGridMap::TInsertionOptions insertionOptions(Fdp& in) {
 float range(Fdp& in) { return static_cast<float>(value(in, 0.0, kMaxRange)); }
 
 std::shared_ptr<mrpt::obs::CObservation> observation(Fdp& in) {
-  switch (in.ConsumeIntegralInRange<int>(0, 2)) {
+  switch (in.ConsumeIntegralInRange<int>(0, 3)) {
     case 0: {
       auto s = std::make_shared<mrpt::obs::CObservation2DRangeScan>();
       const std::size_t n = in.ConsumeIntegralInRange<std::size_t>(0, kMaxBeams);
@@ -135,6 +137,39 @@ std::shared_ptr<mrpt::obs::CObservation> observation(Fdp& in) {
       pc->pointcloud = pts;
       pc->sensorPose = pose(in, 0.5);
       return pc;
+    }
+    case 3: {
+      // A depth (or range) camera: a small image, read through its camera model, decimated by
+      // decimation_3d_range (sizes not a multiple of it, or not the model's, must be refused).
+      auto d = std::make_shared<mrpt::obs::CObservation3DRangeScan>();
+      const int rows = in.ConsumeIntegralInRange<int>(0, 16), cols = in.ConsumeIntegralInRange<int>(0, 16);
+      d->hasRangeImage = in.ConsumeIntegralInRange<int>(0, 7) != 0;
+      d->rangeImage.resize(rows, cols);
+      for (int i = 0; i < rows; ++i)
+        for (int j = 0; j < cols; ++j) d->rangeImage(i, j) = in.ConsumeIntegralInRange<std::uint16_t>(0, 8000);
+      d->rangeUnits = static_cast<float>(value(in, 1e-4, 0.01));
+      d->range_is_depth = in.ConsumeBool();
+      const bool model_fits = in.ConsumeIntegralInRange<int>(0, 7) != 0;
+      d->cameraParams.ncols = static_cast<uint32_t>(model_fits ? cols : in.ConsumeIntegralInRange<int>(0, 16));
+      d->cameraParams.nrows = static_cast<uint32_t>(model_fits ? rows : in.ConsumeIntegralInRange<int>(0, 16));
+      d->cameraParams.setIntrinsicParamsFromValues(value(in, 1.0, 50.0), value(in, 1.0, 50.0), value(in, -2.0, 18.0),
+                                                   value(in, -2.0, 18.0));
+      if (in.ConsumeBool()) {
+        d->cameraParams.distortion = mrpt::img::DistortionModel::plumb_bob;
+        for (int k = 0; k < 5; ++k) d->cameraParams.dist[static_cast<std::size_t>(k)] = value(in, -0.5, 0.5);
+      }
+      if (!d->hasRangeImage || in.ConsumeIntegralInRange<int>(0, 7) == 0) {
+        // Only points (or both): the stored point cloud, in the sensor frame.
+        d->hasPoints3D = true;
+        const std::size_t n = in.ConsumeIntegralInRange<std::size_t>(0, kMaxPoints);
+        for (std::size_t i = 0; i < n; ++i) {
+          d->points3D_x.push_back(range(in));
+          d->points3D_y.push_back(range(in) - 4.0f);
+          d->points3D_z.push_back(static_cast<float>(value(in, -2.0, 2.0)));
+        }
+      }
+      d->sensorPose = pose(in, 0.5);
+      return d;
     }
     default: {
       auto r = std::make_shared<mrpt::obs::CObservationRotatingScan>();
