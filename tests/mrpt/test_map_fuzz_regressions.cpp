@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
 #include <vector>
 #include <stdexcept>
@@ -199,5 +200,43 @@ TEST(FuzzRegressions, MeanInformationOfAScanReachingBeyondTheView) {
   auto level = second;
   level.sensorPose = mrpt::poses::CPose3D(0.398, 0.5, 0.0, 87.15 * M_PI / 180, 0, 0);
   for (const double dx : {-3.0, 0.0, 3.0}) (void)m.computeObservationLikelihood(level, mrpt::poses::CPose3D(dx, 0.3, 1.0, 2.5, 0, 0));
+  EXPECT_EQ(m.map().checkInvariants(), "");
+}
+
+// rtog_fuzz_insert (long run of 2026-12-04, after about 1,029,000 executions of its third run):
+// scored by consensus on the 2D view, a scan with a NaN aperture has NaN beam angles, and MRPT
+// read the grid cells of its NaN end points at an undefined index (SEGV in
+// COccupancyGridMap2D::computeObservationLikelihood_Consensus, any build); a scan of one beam
+// (its angle 0 / 0) likewise. Such scans are scored by the native path, as with the view off.
+TEST(FuzzRegressions, EndPointMethodsOnTheViewWithNaNBeamAngles) {
+  CRTreeOccupancyGridMap m(0.5);
+  mrpt::obs::CObservation2DRangeScan good;
+  good.aperture = static_cast<float>(M_PI), good.maxRange = 8.0f;
+  good.resizeScan(11);
+  for (std::size_t i = 0; i < 11; ++i) good.setScanRange(i, 3.0f), good.setScanRangeValidity(i, true);
+  ASSERT_TRUE(m.insertObservation(good, mrpt::poses::CPose3D(4, 4, 0, -0.28, 0, 0)));
+  const auto before = m.map().statistics();
+  const auto scanOf = [](float aperture, std::vector<float> ranges) {
+    mrpt::obs::CObservation2DRangeScan s;
+    s.aperture = aperture, s.maxRange = 8.0f;
+    s.sensorPose = mrpt::poses::CPose3D(0.5, 0.5, 0.0, -1.32, 0, 0);
+    s.resizeScan(ranges.size());
+    for (std::size_t i = 0; i < ranges.size(); ++i) s.setScanRange(i, ranges[i]), s.setScanRangeValidity(i, true);
+    return s;
+  };
+  const mrpt::poses::CPose3D at(4, 4, 0, -0.28, 0, 0);
+  for (const auto& scan : {scanOf(kNaN, {1.22f, 0.156f, 4.0f}), scanOf(std::numeric_limits<float>::infinity(), {1.0f, 2.0f}),
+                           scanOf(static_cast<float>(M_PI), {1.5f})}) {
+    for (const auto method : {CRTreeOccupancyGridMap::lmConsensus, CRTreeOccupancyGridMap::lmMeanInformation,
+                              CRTreeOccupancyGridMap::lmCellsDifference}) {
+      m.likelihoodOptions.likelihoodMethod = method;
+      m.likelihoodOptions.scanLikelihoodOnGridView = false;
+      const double native = m.computeObservationLikelihood(scan, at);
+      m.likelihoodOptions.scanLikelihoodOnGridView = true;
+      const double on_view = m.computeObservationLikelihood(scan, at);
+      EXPECT_TRUE(on_view == native || (std::isnan(on_view) && std::isnan(native))) << on_view << " vs " << native;
+    }
+  }
+  EXPECT_EQ(m.map().statistics().cells, before.cells);
   EXPECT_EQ(m.map().checkInvariants(), "");
 }
