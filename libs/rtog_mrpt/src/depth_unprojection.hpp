@@ -24,8 +24,9 @@ namespace rtog::detail {
 /// (7 MiB for 640 x 480), up to 100 tables when the sensor pose changes from frame to frame.
 /// Only the centre pixels of the blocks are needed here; they are undistorted per call.
 ///
-/// Throws std::invalid_argument, as MRPT throws, if the image's size is not a multiple of the
-/// decimation or differs from the camera model's; `decimation` must be at least 2.
+/// Throws std::invalid_argument naming the sizes where MRPT's own assertions would throw: an image
+/// whose size is not a multiple of the decimation or differs from the camera model's;
+/// `decimation` must be at least 2.
 void unprojectDecimated(const mrpt::obs::CObservation3DRangeScan& depth, std::size_t decimation,
                         std::vector<Eigen::Vector3f>& pts, std::size_t& invalid);
 
