@@ -206,8 +206,9 @@ TEST(FuzzRegressions, MeanInformationOfAScanReachingBeyondTheView) {
 // rtog_fuzz_insert (long run of 2026-12-04, after about 1,029,000 executions of its third run):
 // scored by consensus on the 2D view, a scan with a NaN aperture has NaN beam angles, and MRPT
 // read the grid cells of its NaN end points at an undefined index (SEGV in
-// COccupancyGridMap2D::computeObservationLikelihood_Consensus, any build); a scan of one beam
-// (its angle 0 / 0) likewise. Such scans are scored by the native path, as with the view off.
+// COccupancyGridMap2D::computeObservationLikelihood_Consensus, any build). A scan of one beam,
+// which MRPT's sin/cos table refuses (assertion nRays >= 2), is scored the same way: by the
+// native path, as with the view off.
 TEST(FuzzRegressions, EndPointMethodsOnTheViewWithNaNBeamAngles) {
   CRTreeOccupancyGridMap m(0.5);
   mrpt::obs::CObservation2DRangeScan good;

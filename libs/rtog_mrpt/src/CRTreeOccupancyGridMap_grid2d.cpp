@@ -276,9 +276,10 @@ std::optional<double> CRTreeOccupancyGridMap::gridViewLikelihood(const mrpt::obs
   std::optional<mrpt::obs::CObservation2DRangeScan> trimmed;  // made only when needed: a scan is a heavy object
   const mrpt::obs::CObservation2DRangeScan* scored = scan;
   if (method == lmConsensus || method == lmMeanInformation || method == lmCellsDifference) {
-    // MRPT puts beam i at angle aperture * (i / (n - 1) - 1/2): a non-finite aperture, or a single
-    // beam (0 / 0), gives NaN end points, whose cells these methods would read at an undefined
-    // index. Scored by the native path, which counts such beams as invalid.
+    // MRPT puts beam i at angle aperture * (i / (n - 1) - 1/2): a non-finite aperture gives NaN end
+    // points, whose cells these methods would read at an undefined index; a single beam MRPT
+    // refuses by an assertion (nRays >= 2 in its sin/cos table). Both are scored by the native
+    // path, which counts NaN beams as invalid and casts one beam as the insertion does.
     if (!std::isfinite(scan->aperture) || scan->getScanSize() < 2) return std::nullopt;
     const float limit = scan->maxRange > 0.0f ? std::min(scan->maxRange, 1e5f) : 1e5f;
     const auto farOrBad = [&](std::size_t i) {
