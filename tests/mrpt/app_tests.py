@@ -1,91 +1,22 @@
 #!/usr/bin/env python3
 """Integration tests: the unmodified MRPT 2.5 applications with librtog_mrpt.so preloaded, on
-the datasets of Debian's mrpt-common, with the configs of share/rtog/config.
+the datasets of Debian's mrpt-common, with the configs of share/rtog/config. The runner is in
+app_common.py, the stock-config drop-in cases in app_dropin.py.
 
 Usage: app_tests.py --plugin LIB --mapcheck EXE --config-dir DIR --datasets DIR --work-dir DIR CASE
 """
 import argparse
-import glob
 import json
 import math
 import os
 import re
-import shutil
 import statistics
 import subprocess
 import sys
 import time
 
-SENA = "2006-01ENE-21-SENA_Telecom Faculty_one_loop_only.rawlog"
-
-
-def fail(msg):
-    print("FAIL: " + msg)
-    sys.exit(1)
-
-
-class Runner:
-    def __init__(self, a):
-        self.a = a
-
-    def config(self, name, run_dir):
-        """Copies a config into run_dir with the dataset directory substituted."""
-        with open(os.path.join(self.a.config_dir, name)) as f:
-            text = f.read()
-        text = text.replace("/usr/share/mrpt/datasets", self.a.datasets)
-        dst = os.path.join(run_dir, name)
-        with open(dst, "w") as f:
-            f.write(text)
-        return dst
-
-    def run_dir(self, name):
-        d = os.path.join(self.a.work_dir, name)
-        shutil.rmtree(d, ignore_errors=True)
-        os.makedirs(d)
-        return d
-
-    def app(self, args, cwd, preload=True, timeout=280, seed=1):
-        """Runs an unmodified MRPT app; the seed shim pins MRPT's clock-seeded generator."""
-        env = dict(os.environ)
-        env["LD_PRELOAD"] = " ".join(self.a.preload_first + [self.a.seed_shim] + ([self.a.plugin] if preload else []))
-        env["RTOG_TEST_SEED"] = str(seed)
-        env.pop("DISPLAY", None)
-        t0 = time.time()
-        p = subprocess.run(args, cwd=cwd, env=env, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
-                           stderr=subprocess.STDOUT, timeout=timeout)
-        out = p.stdout.decode(errors="replace")
-        with open(os.path.join(cwd, os.path.basename(args[0]) + ".log"), "a") as f:
-            f.write(out)
-        print("$ %sRTOG_TEST_SEED=%d %s  -> exit %d in %.1f s" % ("LD_PRELOAD=... " if preload else "", seed,
-                                                                " ".join(args), p.returncode, time.time() - t0))
-        return p.returncode, out
-
-    def run_config(self, run_name, cfg_name, app, args=(), preload=True, seed=1, subdirs=()):
-        """Fresh run directory, config copied in, `app cfg args...` run there; fails on a non-zero
-        exit. Returns (run directory, output)."""
-        d = self.run_dir(run_name)
-        cfg = self.config(cfg_name, d)
-        for sub in subdirs:
-            os.makedirs(os.path.join(d, sub))
-        rc, out = self.app([app, cfg] + list(args), d, preload=preload, seed=seed)
-        if rc != 0:
-            fail("%s (%s) exited %d:\n%s" % (app, cfg_name, rc, out[-3000:]))
-        return d, out
-
-    def mapcheck(self, path, min_occupied):
-        p = subprocess.run([self.a.mapcheck, path, "--min-occupied", str(min_occupied)], stdout=subprocess.PIPE,
-                           stderr=subprocess.STDOUT)
-        out = p.stdout.decode()
-        print("mapcheck %s:\n%s" % (os.path.basename(path), out.strip()))
-        if p.returncode != 0:
-            fail("map %s does not load back or is unsound" % path)
-        return dict(l.split(" ", 1) for l in out.strip().splitlines())
-
-    def one_file(self, pattern):
-        files = glob.glob(pattern)
-        if len(files) != 1:
-            fail("expected one file matching %s, found %s" % (pattern, files))
-        return files[0]
+from app_common import PDF_RE, SENA, Runner, fail
+import app_dropin
 
 
 def case_icp_slam_extra_map(r):
@@ -113,95 +44,6 @@ def case_icp_slam_gridmatch(r):
     r.mapcheck(base + ".rtog", 1000)
     if not os.path.exists(base + ".png"):
         fail("the COccupancyGridMap2D image was not written")
-
-
-STOCK = "/usr/share/mrpt/config_files"
-
-
-def ini_set(text, key, value):
-    """Sets `key = value` wherever the key stands (MRPT keys ignore case)."""
-    pat = re.compile(r"^(\s*)" + re.escape(key) + r"\s*=.*$", re.M | re.I)
-    if not pat.search(text):
-        fail("the stock config has no key " + key)
-    return pat.sub(lambda m: m.group(1) + key + " = " + str(value), text)
-
-
-def renamed(text, maptype):
-    """A stock config's grid, pasted as rtog's map type and nothing else changed."""
-    return text.replace("occupancyGrid_count", maptype + "_count").replace("_occupancyGrid_00_", "_%s_00_" % maptype)
-
-
-def stock_pair(r, name, stock_cfg, app, args, overrides, maptype="rtreeGridMap2D", seed=1):
-    """Runs `app` with a stock MRPT config as shipped, then with its grid renamed to `maptype` and
-    the plugin preloaded. `overrides` only switch off windows and logs, the same in both runs.
-    Returns (stock run directory, stock output, our directory, our output)."""
-    with open(os.path.join(STOCK, stock_cfg)) as f:
-        text = f.read()
-    for k, v in overrides.items():
-        text = ini_set(text, k, v)
-    runs = []
-    for tag, cfg_text, preload in (("stock", text, False), (maptype, renamed(text, maptype), True)):
-        d = r.run_dir(os.path.join(name, tag))
-        cfg = os.path.join(d, os.path.basename(stock_cfg))
-        with open(cfg, "w") as f:
-            f.write(cfg_text)
-        rc, out = r.app([app, cfg] + list(args), d, preload=preload, seed=seed)
-        if rc != 0:
-            fail("%s (%s, %s) exited %d:\n%s" % (app, stock_cfg, tag, rc, out[-3000:]))
-        runs += [d, out]
-    return runs
-
-
-def read_path(path):
-    with open(path) as f:
-        return [tuple(float(v) for v in line.split()[1:3]) for line in f if line.strip()]
-
-
-def compare_paths(ref, ours, label, tol):
-    if not ref or len(ref) != len(ours):
-        fail("%s: %d poses against the stock grid's %d" % (label, len(ours), len(ref)))
-    d = [math.hypot(a[0] - b[0], a[1] - b[1]) for a, b in zip(ref, ours)]
-    mean = sum(d) / len(d)
-    print("%s: %d poses; distance to the stock grid's path: mean %.6f m, max %.6f m" % (label, len(d), mean, max(d)))
-    if mean > tol:
-        fail("%s departs from the stock grid's path by %.3f m on average (tolerance %.2f)" % (label, mean, tol))
-
-
-def case_icp_slam_dropin(r):
-    """icp-slam matching against the grid, the stock classic-gridmatch config on SENA: the grid
-    pasted as rtreeGridMap2D gives the stock grid's path."""
-    out_dir = {"logOutput_dir": "OUT", "SHOW_PROGRESS_3D_REAL_TIME": 0, "SAVE_3D_SCENE": 0, "LOG_FREQUENCY": 0}
-    d0, _, d1, out = stock_pair(r, "icp_slam_dropin", "icp-slam/icp-slam_demo_classic_gridmatch.ini", "icp-slam",
-                                [os.path.join(r.a.datasets, SENA)], out_dir)
-    print("ICP results rejected as low quality: %d" % out.count("low quality"))
-    compare_paths(read_path(os.path.join(d0, "OUT", "log_estimated_path.txt")),
-                  read_path(os.path.join(d1, "OUT", "log_estimated_path.txt")), "icp-slam, rtreeGridMap2D", 0.05)
-
-
-def case_rbpf_slam_dropin(r):
-    """rbpf-slam with the optimal proposal (it needs a COccupancyGridMap2D), the stock config on
-    SENA, on the same seed: the same path."""
-    out_dir = {"logOutput_dir": "OUT", "SHOW_PROGRESS_IN_WINDOW": 0, "SAVE_3D_SCENE": 0, "SAVE_MAP_IMAGES": 0,
-               "LOG_FREQUENCY": 0}
-    d0, _, d1, _ = stock_pair(r, "rbpf_slam_dropin", "rbpf-slam/gridmapping_optimal_sampling.ini", "rbpf-slam",
-                              [os.path.join(r.a.datasets, SENA)], out_dir)
-    compare_paths(read_path(os.path.join(d0, "OUT", "log_estimated_path.txt")),
-                  read_path(os.path.join(d1, "OUT", "log_estimated_path.txt")), "rbpf-slam, rtreeGridMap2D", 0.05)
-
-
-def case_pf_localization_dropin(r):
-    """pf-localization, the stock localization_demo config (its map built from the simplemap), on
-    the same seed: the same estimates at every step."""
-    datasets = os.path.join(r.a.datasets, "")
-    over = {"SHOW_PROGRESS_3D_REAL_TIME": "false", "logOutput_dir": "OUT",
-            "map_file": datasets + "localization_demo.simplemap.gz", "rawlog_file": datasets + "localization_demo.rawlog"}
-    _, out0, _, out1 = stock_pair(r, "pf_localization_dropin", "pf-localization/localization_demo.ini",
-                                  "pf-localization", [], over)
-    ref = [(float(a), float(b)) for a, b, _ in PDF_RE.findall(out0)]
-    ours = [(float(a), float(b)) for a, b, _ in PDF_RE.findall(out1)]
-    if len(ref) < 20:
-        fail("pf-localization printed only %d estimates" % len(ref))
-    compare_paths(ref, ours, "pf-localization, rtreeGridMap2D", 0.05)
 
 
 def case_observations2map(r):
@@ -253,7 +95,6 @@ def case_observations2map_prior(r):
         fail("the scans reach too few of the prior's cells for the test to say anything")
 
 
-PDF_RE = re.compile(r"PDF estimation: \(([-\d.]+),([-\d.]+),([-\d.]+)deg\)")
 
 
 def pf_track(r, cfg_name, tag, seed, preload):
@@ -453,7 +294,7 @@ def main():
     p.add_argument("--preload-first", action="append", default=[])
     p.add_argument("case")
     a = p.parse_args()
-    fn = globals().get("case_" + a.case)
+    fn = globals().get("case_" + a.case) or getattr(app_dropin, "case_" + a.case, None)
     if not fn:
         fail("unknown case " + a.case)
     os.makedirs(a.work_dir, exist_ok=True)

@@ -1,0 +1,96 @@
+"""The drop-in cases: a stock MRPT app config as Debian ships it, run once as shipped and once with
+its COccupancyGridMap2D section renamed to rtog's type and nothing else changed; the two runs must
+give the same path (or estimates)."""
+import math
+import os
+import re
+
+from app_common import PDF_RE, SENA, fail
+
+STOCK = "/usr/share/mrpt/config_files"
+
+
+def ini_set(text, key, value):
+    """Sets `key = value` wherever the key stands (MRPT keys ignore case)."""
+    pat = re.compile(r"^(\s*)" + re.escape(key) + r"\s*=.*$", re.M | re.I)
+    if not pat.search(text):
+        fail("the stock config has no key " + key)
+    return pat.sub(lambda m: m.group(1) + key + " = " + str(value), text)
+
+
+def renamed(text, maptype):
+    """A stock config's grid, pasted as rtog's map type and nothing else changed."""
+    return text.replace("occupancyGrid_count", maptype + "_count").replace("_occupancyGrid_00_", "_%s_00_" % maptype)
+
+
+def stock_pair(r, name, stock_cfg, app, args, overrides, maptype="rtreeGridMap2D", seed=1):
+    """Runs `app` with a stock MRPT config as shipped, then with its grid renamed to `maptype` and
+    the plugin preloaded. `overrides` only switch off windows and logs, the same in both runs.
+    Returns (stock run directory, stock output, our directory, our output)."""
+    with open(os.path.join(STOCK, stock_cfg)) as f:
+        text = f.read()
+    for k, v in overrides.items():
+        text = ini_set(text, k, v)
+    runs = []
+    for tag, cfg_text, preload in (("stock", text, False), (maptype, renamed(text, maptype), True)):
+        d = r.run_dir(os.path.join(name, tag))
+        cfg = os.path.join(d, os.path.basename(stock_cfg))
+        with open(cfg, "w") as f:
+            f.write(cfg_text)
+        rc, out = r.app([app, cfg] + list(args), d, preload=preload, seed=seed)
+        if rc != 0:
+            fail("%s (%s, %s) exited %d:\n%s" % (app, stock_cfg, tag, rc, out[-3000:]))
+        runs += [d, out]
+    return runs
+
+
+def read_path(path):
+    with open(path) as f:
+        return [tuple(float(v) for v in line.split()[1:3]) for line in f if line.strip()]
+
+
+def compare_paths(ref, ours, label, tol):
+    if not ref or len(ref) != len(ours):
+        fail("%s: %d poses against the stock grid's %d" % (label, len(ours), len(ref)))
+    d = [math.hypot(a[0] - b[0], a[1] - b[1]) for a, b in zip(ref, ours)]
+    mean = sum(d) / len(d)
+    print("%s: %d poses; distance to the stock grid's path: mean %.6f m, max %.6f m" % (label, len(d), mean, max(d)))
+    if mean > tol:
+        fail("%s departs from the stock grid's path by %.3f m on average (tolerance %.2f)" % (label, mean, tol))
+
+
+def case_icp_slam_dropin(r):
+    """icp-slam matching against the grid, the stock classic-gridmatch config on SENA: the grid
+    pasted as rtreeGridMap2D gives the stock grid's path."""
+    out_dir = {"logOutput_dir": "OUT", "SHOW_PROGRESS_3D_REAL_TIME": 0, "SAVE_3D_SCENE": 0, "LOG_FREQUENCY": 0}
+    d0, _, d1, out = stock_pair(r, "icp_slam_dropin", "icp-slam/icp-slam_demo_classic_gridmatch.ini", "icp-slam",
+                                [os.path.join(r.a.datasets, SENA)], out_dir)
+    print("ICP results rejected as low quality: %d" % out.count("low quality"))
+    compare_paths(read_path(os.path.join(d0, "OUT", "log_estimated_path.txt")),
+                  read_path(os.path.join(d1, "OUT", "log_estimated_path.txt")), "icp-slam, rtreeGridMap2D", 0.05)
+
+
+def case_rbpf_slam_dropin(r):
+    """rbpf-slam with the optimal proposal (it needs a COccupancyGridMap2D), the stock config on
+    SENA, on the same seed: the same path."""
+    out_dir = {"logOutput_dir": "OUT", "SHOW_PROGRESS_IN_WINDOW": 0, "SAVE_3D_SCENE": 0, "SAVE_MAP_IMAGES": 0,
+               "LOG_FREQUENCY": 0}
+    d0, _, d1, _ = stock_pair(r, "rbpf_slam_dropin", "rbpf-slam/gridmapping_optimal_sampling.ini", "rbpf-slam",
+                              [os.path.join(r.a.datasets, SENA)], out_dir)
+    compare_paths(read_path(os.path.join(d0, "OUT", "log_estimated_path.txt")),
+                  read_path(os.path.join(d1, "OUT", "log_estimated_path.txt")), "rbpf-slam, rtreeGridMap2D", 0.05)
+
+
+def case_pf_localization_dropin(r):
+    """pf-localization, the stock localization_demo config (its map built from the simplemap), on
+    the same seed: the same estimates at every step."""
+    datasets = os.path.join(r.a.datasets, "")
+    over = {"SHOW_PROGRESS_3D_REAL_TIME": "false", "logOutput_dir": "OUT",
+            "map_file": datasets + "localization_demo.simplemap.gz", "rawlog_file": datasets + "localization_demo.rawlog"}
+    _, out0, _, out1 = stock_pair(r, "pf_localization_dropin", "pf-localization/localization_demo.ini",
+                                  "pf-localization", [], over)
+    ref = [(float(a), float(b)) for a, b, _ in PDF_RE.findall(out0)]
+    ours = [(float(a), float(b)) for a, b, _ in PDF_RE.findall(out1)]
+    if len(ref) < 20:
+        fail("pf-localization printed only %d estimates" % len(ref))
+    compare_paths(ref, ours, "pf-localization, rtreeGridMap2D", 0.05)
