@@ -367,3 +367,38 @@ TEST(RayTraversal, QueuedRaysMarkWhatEachWalkMarks) {
     ASSERT_TRUE(freeMarks(wide_off) == want) << "round " << round;
   }
 }
+
+// The lane window is stored cell-linear, x fastest, and swept back into bricks 16 cells of a row
+// at a time: a window one, two or four bricks wide in x puts four, two or one rows in a word,
+// and one brick deep in y or z makes the other strides small. Rays confined so, starting at
+// cell corners too, mark what markRayFree marks.
+TEST(RayTraversal, QueuedRaysInNarrowWindowsMarkWhatEachWalkMarks) {
+  std::mt19937 rng(35);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  int windows = 0;
+  for (int narrow_axis = 0; narrow_axis < 3; ++narrow_axis)
+    for (int bricks : {1, 2, 4}) {
+      UpdateBatch queued, one_by_one;
+      const double width = 16.0 * bricks;
+      for (int i = 0; i < 2000; ++i) {
+        Eigen::Vector3d a, b;
+        for (int axis = 0; axis < 3; ++axis) {
+          const double span = axis == narrow_axis ? width : 100.0;
+          // Brick -3 .. in the narrow axis (negative keys), about the origin in the others.
+          const double base = axis == narrow_axis ? -48.0 : -50.0;
+          a[axis] = base + u(rng) * span;
+          b[axis] = base + u(rng) * span;
+          if (i % 5 == 0) a[axis] = std::floor(a[axis]), b[axis] = std::floor(b[axis]);  // corners: ties
+        }
+        if (i % 7 == 0) b[narrow_axis] = a[narrow_axis];  // flat in the narrow axis
+        const Key ka = floorKey(a), kb = floorKey(b);
+        queued.queueRayFree(a, b, ka, kb);
+        one_by_one.markRayFree(a, b, ka, kb);
+      }
+      const auto want = freeMarks(one_by_one);
+      ASSERT_GT(want.size(), 10u);
+      ASSERT_TRUE(freeMarks(queued) == want) << "narrow axis " << narrow_axis << ", " << bricks << " bricks";
+      ++windows;
+    }
+  EXPECT_EQ(windows, 9);
+}

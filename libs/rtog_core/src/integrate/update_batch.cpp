@@ -150,20 +150,40 @@ bool UpdateBatch::walkInWindow(std::vector<std::uint32_t>& lanes) {
   detail::walkLanes(queued_, lanes, w, window, touched);
   std::fill_n(window_.data(), kBrickWords, 0);
   touched[-1] = 0;
-  const std::size_t mask0 = (std::size_t{1} << w.bits[0]) - 1, mask1 = (std::size_t{1} << w.bits[1]) - 1;
-  for (std::size_t b = 0; b < w.bricks(); ++b) {
-    if (touched[b] == 0) continue;
-    touched[b] = 0;
-    std::uint64_t* brick_words = window + b * kBrickWords;
-    const Key brick{w.origin.x + static_cast<std::int32_t>(b & mask0),
-                    w.origin.y + static_cast<std::int32_t>((b >> w.bits[0]) & mask1),
-                    w.origin.z + static_cast<std::int32_t>(b >> (w.bits[0] + w.bits[1]))};
-    std::array<std::uint64_t, kBrickWords>& free = brickFor(brickOrigin(brick)).free;
-    for (int i = 0; i < kBrickWords; ++i) {
-      free[static_cast<std::size_t>(i)] |= brick_words[i];
-      brick_words[i] = 0;
+  // Into the bricks: a window word is 64 cells of an x-row, four bricks' 16-cell rows; each
+  // brick met is looked up once per window (brick_slots_, by its index in the window).
+  if (brick_slots_.size() < w.bricks()) brick_slots_.resize(w.bricks(), kNoSlot);
+  const int sx = w.shift(1), sy = w.shift(2);
+  const std::int64_t mx = (std::int64_t{1} << sx) - 1, my = (std::int64_t{1} << (sy - sx)) - 1;
+  constexpr std::int64_t kRow = kBrickSize, kRowMask = (std::uint64_t{1} << kRow) - 1;
+  for (std::size_t run = 0; run < w.bricks(); ++run) {
+    if (touched[run] == 0) continue;
+    touched[run] = 0;
+    for (std::size_t i = 0; i < kBrickWords; ++i) {
+      std::uint64_t& word = window[run * kBrickWords + i];
+      if (word == 0) continue;
+      const std::int64_t first = static_cast<std::int64_t>(run * kBrickWords + i) * 64;
+      for (std::int64_t c = 0; c < 64; c += kRow) {
+        const std::uint64_t row = (word >> c) & kRowMask;
+        if (row == 0) continue;
+        const std::int64_t cell = first + c, x = cell & mx, y = (cell >> sx) & my, z = cell >> sy;
+        const std::size_t b = static_cast<std::size_t>((x >> kBrickBits) | ((y >> kBrickBits) << w.bits[0]) |
+                                                       ((z >> kBrickBits) << (w.bits[0] + w.bits[1])));
+        if (brick_slots_[b] == kNoSlot) {
+          const Key brick{w.origin.x + static_cast<std::int32_t>(x >> kBrickBits),
+                          w.origin.y + static_cast<std::int32_t>(y >> kBrickBits),
+                          w.origin.z + static_cast<std::int32_t>(z >> kBrickBits)};
+          brick_slots_[b] = brickSlot(brick);
+          slotted_.push_back(static_cast<std::uint32_t>(b));
+        }
+        const int local = localIndex(0, static_cast<int>(y & (kBrickSize - 1)), static_cast<int>(z & (kBrickSize - 1)));
+        brickAt(brick_slots_[b]).free[static_cast<std::size_t>(local >> 6)] |= row << (local & 63);
+      }
+      word = 0;
     }
   }
+  for (const std::uint32_t b : slotted_) brick_slots_[b] = kNoSlot;
+  slotted_.clear();
   return true;
 }
 

@@ -80,7 +80,7 @@ class alignas(64) UpdateBatch {
            sorted_.capacity() * sizeof(void*) + sorted_keys_.capacity() * sizeof(Key) +
            sorted_codes_.capacity() * sizeof(std::uint64_t) + queued_.capacity() * sizeof(QueuedRay) +
            lane_rays_.capacity() * sizeof(std::uint32_t) + window_.capacity() * sizeof(std::uint64_t) +
-           touched_.capacity();
+           touched_.capacity() + (brick_slots_.capacity() + slotted_.capacity()) * sizeof(std::uint32_t);
   }
 
  private:
@@ -113,7 +113,10 @@ class alignas(64) UpdateBatch {
   std::vector<QueuedRay> queued_;
   std::vector<std::uint32_t> lane_rays_;  // walkQueued(): the queued rays the window takes
   std::vector<std::uint64_t> window_;     // walkInWindow(): 64 words a brick, zero between walks
-  std::vector<std::uint8_t> touched_;     // walkInWindow(): a flag a brick of the window
+  std::vector<std::uint8_t> touched_;     // walkInWindow(): a flag a run of kBrickWords window words
+  static constexpr std::uint32_t kNoSlot = 0xffffffffu;
+  std::vector<std::uint32_t> brick_slots_;  // walkInWindow(): a window brick's slot, or kNoSlot
+  std::vector<std::uint32_t> slotted_;      // walkInWindow(): the window bricks given a slot
   bool lanes_ = detail::laneWalkAvailable();  // asked once: queueRayFree() asks for every ray
 };
 

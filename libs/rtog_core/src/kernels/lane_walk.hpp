@@ -1,4 +1,4 @@
-// Walking many short rays at once into a dense window of bricks, eight at a time with AVX2
+// Walking many short rays at once into a dense window of cells, eight at a time with AVX2
 // (the batch's queued free walks). The marks equal walkRay's, cell for cell.
 #pragma once
 
@@ -19,16 +19,21 @@ struct QueuedRay {
   Key from_key, to_key;
 };
 
-/// Window geometry: bricks along each axis a power of two, so that a step into the next brick
-/// moves a word offset by a shift of the step.
+/// Window geometry: whole bricks, a power of two of them along each axis, stored cell-linear
+/// (x fastest): a step along an axis moves a cell's index by a constant stride, so that a lane
+/// steps with one add. Word i of the window holds the cells 64 i .. 64 i + 63.
 struct LaneWindow {
   Key origin;   // brick coordinates of the window's first brick
   int bits[3];  // log2 of the bricks along each axis
   std::size_t bricks() const { return std::size_t{1} << (bits[0] + bits[1] + bits[2]); }
-  std::int64_t wordOffset(const Key& cell) const {
-    const std::int64_t bx = (cell.x >> kBrickBits) - origin.x, by = (cell.y >> kBrickBits) - origin.y,
-                       bz = (cell.z >> kBrickBits) - origin.z;
-    return ((bz << (bits[0] + bits[1])) | (by << bits[0]) | bx) * kBrickWords;
+  /// log2 of the index stride of a step along `axis`.
+  int shift(int axis) const {
+    return axis == 0 ? 0 : axis == 1 ? bits[0] + kBrickBits : bits[0] + bits[1] + 2 * kBrickBits;
+  }
+  std::int64_t cellIndex(const Key& cell) const {
+    std::int64_t i = 0;
+    for (int a = 0; a < 3; ++a) i |= (std::int64_t{cell[a]} - std::int64_t{origin[a]} * kBrickSize) << shift(a);
+    return i;
   }
 };
 
@@ -36,8 +41,9 @@ struct LaneWindow {
 bool laneWalkAvailable();
 
 /// Walks queued[i] for each i of `rays` (each leaving its z-layer, inside the window) into
-/// `window` (kBrickWords words a brick; the kBrickWords words before it are scratch), setting
-/// touched[b] for each brick b marked. Only where laneWalkAvailable().
+/// `window` (kBrickWords words a brick, cell-linear; the kBrickWords words before it are
+/// scratch), setting touched[k] for each run k of kBrickWords words marked. Only where
+/// laneWalkAvailable().
 void walkLanes(const std::vector<QueuedRay>& queued, const std::vector<std::uint32_t>& rays, const LaneWindow& w,
                std::uint64_t* window, std::uint8_t* touched);
 
