@@ -45,7 +45,7 @@ void addLocalPoint(const Frame& f, double lx, double ly, double lz, ObservationB
                           static_cast<float>(R(1, 0) * lx + R(1, 1) * ly + R(1, 2) * lz + f.t[1]),
                           static_cast<float>(R(2, 0) * lx + R(2, 1) * ly + R(2, 2) * lz + f.t[2]));
   out.is_hit.push_back(1);
-  out.ranges.push_back(static_cast<float>(std::sqrt(lx * lx + ly * ly + lz * lz)));
+  if (out.with_ranges) out.ranges.push_back(static_cast<float>(std::sqrt(lx * lx + ly * ly + lz * lz)));
 }
 
 void setOrigin(const CPose3D& sensor, ObservationBeams& out) {
@@ -55,7 +55,7 @@ void setOrigin(const CPose3D& sensor, ObservationBeams& out) {
 void reserveMore(ObservationBeams& out, std::size_t n) {
   out.points.reserve(out.points.size() + n);
   out.is_hit.reserve(out.is_hit.size() + n);
-  out.ranges.reserve(out.ranges.size() + n);
+  if (out.with_ranges) out.ranges.reserve(out.ranges.size() + n);
 }
 
 // Points of a points map, given in the frame `frame`, into `out`.
@@ -164,6 +164,7 @@ bool CRTreeOccupancyGridMap::extractBeams(const mrpt::obs::CObservation& obs, co
                                           ObservationBeams& out, bool forInsertion) const {
   using namespace mrpt::obs;
   out.clear();  // not replaced: callers reuse `out` and its capacity
+  out.with_ranges = !forInsertion;
   // Scratch for the sensor-frame points, kept per thread from call to call.
   thread_local std::vector<Eigen::Vector3f> local;
   std::size_t dec = insertionOptions.decimation;

@@ -15,7 +15,8 @@ struct ObservationBeams {
   Eigen::Vector3d origin = Eigen::Vector3d::Zero();  ///< sensor position (map frame)
   std::vector<Eigen::Vector3f> points;               ///< beam end points (map frame)
   std::vector<std::uint8_t> is_hit;                  ///< 1: return, 0: no-return beam
-  std::vector<float> ranges;                         ///< measured range of each beam [m]
+  std::vector<float> ranges;                         ///< measured range of each beam [m], if `with_ranges`
+  bool with_ranges = true;  ///< false: `ranges` stays empty (insertion reads none; a depth frame's are 1 MB)
   std::size_t invalid = 0;                           ///< beams dropped as invalid (no range)
   /// Empties, keeping the buffers' capacity for the next observation.
   void clear() {
