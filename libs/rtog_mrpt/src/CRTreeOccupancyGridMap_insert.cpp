@@ -39,23 +39,38 @@ struct Frame {
   double t[3];
 };
 
-void addLocalPoint(const Frame& f, double lx, double ly, double lz, ObservationBeams& out) {
+// Appends the points get(i, x, y, z) gives for i = 0, dec, 2 dec, ... < n (false: an invalid
+// one, counted), moved by the frame, written into buffers sized once: pushed back one by one
+// (three vectors, a capacity test each), a depth frame's 257,449 points took twice as long.
+template <class Get>
+void addFramePoints(const Frame& f, std::size_t n, std::size_t dec, Get&& get, ObservationBeams& out) {
+  const std::size_t room = (n + dec - 1) / dec, base = out.points.size(), hits = out.is_hit.size(),
+                    ranged = out.ranges.size();
+  out.points.resize(base + room);
+  if (out.with_ranges) out.ranges.resize(ranged + room);
+  Eigen::Vector3f* pts = out.points.data() + base;
+  float* ranges = out.with_ranges ? out.ranges.data() + ranged : nullptr;
   const auto& R = f.R;
-  out.points.emplace_back(static_cast<float>(R(0, 0) * lx + R(0, 1) * ly + R(0, 2) * lz + f.t[0]),
-                          static_cast<float>(R(1, 0) * lx + R(1, 1) * ly + R(1, 2) * lz + f.t[1]),
-                          static_cast<float>(R(2, 0) * lx + R(2, 1) * ly + R(2, 2) * lz + f.t[2]));
-  out.is_hit.push_back(1);
-  if (out.with_ranges) out.ranges.push_back(static_cast<float>(std::sqrt(lx * lx + ly * ly + lz * lz)));
+  std::size_t kept = 0;
+  for (std::size_t i = 0; i < n; i += dec) {
+    double lx, ly, lz;
+    if (!get(i, lx, ly, lz)) {
+      ++out.invalid;
+      continue;
+    }
+    pts[kept] = Eigen::Vector3f(static_cast<float>(R(0, 0) * lx + R(0, 1) * ly + R(0, 2) * lz + f.t[0]),
+                                static_cast<float>(R(1, 0) * lx + R(1, 1) * ly + R(1, 2) * lz + f.t[1]),
+                                static_cast<float>(R(2, 0) * lx + R(2, 1) * ly + R(2, 2) * lz + f.t[2]));
+    if (ranges) ranges[kept] = static_cast<float>(std::sqrt(lx * lx + ly * ly + lz * lz));
+    ++kept;
+  }
+  out.points.resize(base + kept);
+  if (out.with_ranges) out.ranges.resize(ranged + kept);
+  out.is_hit.resize(hits + kept, 1);
 }
 
 void setOrigin(const CPose3D& sensor, ObservationBeams& out) {
   out.origin = Eigen::Vector3d(sensor.x(), sensor.y(), sensor.z());
-}
-
-void reserveMore(ObservationBeams& out, std::size_t n) {
-  out.points.reserve(out.points.size() + n);
-  out.is_hit.reserve(out.is_hit.size() + n);
-  if (out.with_ranges) out.ranges.reserve(out.ranges.size() + n);
 }
 
 // Points of a points map, given in the frame `frame`, into `out`.
@@ -64,21 +79,18 @@ void addPointsMap(const mrpt::maps::CPointsMap& pm, const CPose3D& frame, std::s
   const auto& xs = pm.getPointsBufferRef_x();
   const auto& ys = pm.getPointsBufferRef_y();
   const auto& zs = pm.getPointsBufferRef_z();
-  reserveMore(out, xs.size() / decimation + 1);
-  const Frame f(frame);
-  for (std::size_t i = 0; i < xs.size(); i += decimation) {
-    if (!std::isfinite(xs[i]) || !std::isfinite(ys[i]) || !std::isfinite(zs[i])) {
-      ++out.invalid;
-      continue;
-    }
-    addLocalPoint(f, xs[i], ys[i], zs[i], out);
-  }
+  addFramePoints(Frame(frame), xs.size(), decimation, [&](std::size_t i, double& x, double& y, double& z) {
+    if (!std::isfinite(xs[i]) || !std::isfinite(ys[i]) || !std::isfinite(zs[i])) return false;
+    x = xs[i], y = ys[i], z = zs[i];
+    return true;
+  }, out);
 }
 
 void addLocalPoints(const CPose3D& sensor, const std::vector<Eigen::Vector3f>& local, ObservationBeams& out) {
-  reserveMore(out, local.size());
-  const Frame f(sensor);
-  for (const auto& p : local) addLocalPoint(f, p.x(), p.y(), p.z(), out);
+  addFramePoints(Frame(sensor), local.size(), 1, [&](std::size_t i, double& x, double& y, double& z) {
+    x = local[i].x(), y = local[i].y(), z = local[i].z();
+    return true;
+  }, out);
 }
 
 // Keys of the sensor-frame point cache: everything the decoded points depend on.
@@ -262,15 +274,16 @@ bool CRTreeOccupancyGridMap::extractBeams(const mrpt::obs::CObservation& obs, co
                        depth->points3D_z.size());
       // Only the point cloud was stored (sensor frame).
       setOrigin(sensor, out);
-      reserveMore(out, depth->points3D_x.size() / dec + 1);
-      for (std::size_t i = 0; i < depth->points3D_x.size(); i += dec) {
-        const float x = depth->points3D_x[i], y = depth->points3D_y[i], z = depth->points3D_z[i];
-        if (!std::isfinite(x) || !std::isfinite(y) || !std::isfinite(z) || (x == 0 && y == 0 && z == 0)) {
-          ++out.invalid;
-          continue;
-        }
-        addLocalPoint(frame, x, y, z, out);
-      }
+      const auto& xs = depth->points3D_x;
+      const auto& ys = depth->points3D_y;
+      const auto& zs = depth->points3D_z;
+      addFramePoints(frame, xs.size(), dec, [&](std::size_t i, double& x, double& y, double& z) {
+        if (!std::isfinite(xs[i]) || !std::isfinite(ys[i]) || !std::isfinite(zs[i]) ||
+            (xs[i] == 0 && ys[i] == 0 && zs[i] == 0))
+          return false;
+        x = xs[i], y = ys[i], z = zs[i];
+        return true;
+      }, out);
       return true;
     }
     setOrigin(sensor, out);
