@@ -74,7 +74,7 @@ void UpdateBatch::queueRayFree(const Eigen::Vector3d& from, const Eigen::Vector3
     markRayFree(from, to, from_key, to_key);
     return;
   }
-  // The whole queue at once: grown by doubling, it was copied thirteen times into fresh memory.
+  // The whole queue at once: grown by doubling, it would be copied into fresh memory again and again.
   if (queued_.capacity() < kQueuedRays) queued_.reserve(kQueuedRays);
   queued_.push_back(QueuedRay{from, to, from_key, to_key});
   if (queued_.size() == kQueuedRays) walkQueued();

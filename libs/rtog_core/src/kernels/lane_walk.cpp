@@ -142,7 +142,6 @@ __attribute__((target("avx2"))) void walkLanesAvx2(const std::vector<QueuedRay>&
   }
 }
 
-
 }  // namespace
 #endif
 
