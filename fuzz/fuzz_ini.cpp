@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdint>
 #include <exception>
+#include <stdexcept>
 #include <algorithm>
 #include <memory>
 #include <string>
@@ -123,27 +124,40 @@ bool isOurMapCount(const std::string& key) {
   return false;
 }
 
-// The section with every stock map's count set to 0. MRPT 2.5.8's TSetOfMetricMapInitializers holds
-// a new definition by raw pointer while its loadFromConfigFile runs, so a stock map's loader that
-// throws on a bad value (e.g. COccupancyGridMap2D's likelihoodMethod) leaks it: MRPT's code, not
-// ours. Our own definitions keep a load error and raise it at creation for that reason.
-mrpt::config::CConfigFileMemory withOurMapsOnly(const mrpt::config::CConfigFileMemory& cfg, const std::string& sec) {
-  std::string text;
-  cfg.getContent(text);
-  mrpt::config::CConfigFileMemory ours(text);
-  std::vector<std::string> keys;
-  ours.getAllKeys(sec, keys);
-  for (const std::string& key : keys)
-    if (endsWith(key, "_count") && !isOurMapCount(key))
-      ours.write(sec, key, 0);
-  return ours;
-}
+// The configuration as MRPT's readers see it, with every stock map's count read as 0. MRPT 2.5.8's
+// TSetOfMetricMapInitializers holds a new definition by raw pointer while its loadFromConfigFile
+// runs, so a stock map's loader that throws on a bad value (e.g. COccupancyGridMap2D's
+// likelihoodMethod) leaks it: MRPT's code, not ours. Our own definitions keep a load error and
+// raise it at creation for that reason. A view, not a copy: a copy would run MRPT's preprocessor
+// over the text again, which was the largest part of an input's time.
+class OurMapsOnly : public mrpt::config::CConfigFileBase {
+ public:
+  explicit OurMapsOnly(const mrpt::config::CConfigFileBase& all) : all_(all) {}
+  void getAllSections(std::vector<std::string>& sections) const override { all_.getAllSections(sections); }
+  void getAllKeys(const std::string& section, std::vector<std::string>& keys) const override {
+    all_.getAllKeys(section, keys);
+  }
+  void clear() override { throw std::logic_error("OurMapsOnly is read-only"); }
 
-void createMaps(const mrpt::config::CConfigFileMemory& all, const std::string& sec) {
+ protected:
+  void writeString(const std::string&, const std::string&, const std::string&) override {
+    throw std::logic_error("OurMapsOnly is read-only");
+  }
+  std::string readString(const std::string& section, const std::string& name, const std::string& def,
+                         bool failIfNotFound) const override {
+    if (endsWith(name, "_count") && !isOurMapCount(name)) return "0";  // MRPT reads counts with default 0
+    return all_.read_string(section, name, def, failIfNotFound);
+  }
+
+ private:
+  const mrpt::config::CConfigFileBase& all_;
+};
+
+void createMaps(const mrpt::config::CConfigFileBase& all, const std::string& sec) {
   mrpt::maps::TSetOfMetricMapInitializers inits;
   try {
     rtog::checkMapCounts(all, sec);  // as rtog build does: MRPT reads "-1" as four billion maps
-    inits.loadFromConfigFile(withOurMapsOnly(all, sec), sec);
+    inits.loadFromConfigFile(OurMapsOnly(all), sec);
   } catch (const std::exception&) {
     return;
   }

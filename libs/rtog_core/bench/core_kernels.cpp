@@ -1,5 +1,5 @@
 // Micro-benchmarks of the core's inner loops (Google Benchmark): the exact walkers, the
-// planar batch's runs, the AVX2 lanes, the box cover and the layer-update kernels. Not a test:
+// planar batch's runs, the AVX2 and AVX-512 lanes, the box cover and the layer-update kernels. Not a test:
 // run `build/libs/rtog_core/rtog-core-micro` on a quiet machine to compare two builds.
 #include <benchmark/benchmark.h>
 
@@ -53,9 +53,14 @@ void BM_WalkRay3D(benchmark::State& state) {
 }
 BENCHMARK(BM_WalkRay3D);
 
+// Argument: the lane kernel (detail::LaneKernel: 0 none, 1 AVX2, 2 AVX-512).
 void BM_UpdateBatchQueuedRays(benchmark::State& state) {
   const auto rays = makeRays(4096, 80.0, false, 2);
   UpdateBatch batch;
+  if (!batch.useLaneKernel(static_cast<detail::LaneKernel>(state.range(0)))) {
+    state.SkipWithError("this CPU does not run that lane kernel");
+    return;
+  }
   for (auto _ : state) {
     batch.clear();
     for (const Ray& r : rays) batch.queueRayFree(r.from, r.to, r.from_key, r.to_key);
@@ -64,7 +69,7 @@ void BM_UpdateBatchQueuedRays(benchmark::State& state) {
   }
   state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(rays.size()));
 }
-BENCHMARK(BM_UpdateBatchQueuedRays);
+BENCHMARK(BM_UpdateBatchQueuedRays)->Arg(0)->Arg(1)->Arg(2);
 
 void BM_PlanarBatchRuns(benchmark::State& state) {
   const auto rays = makeRays(4096, 300.0, true, 3);

@@ -1,5 +1,6 @@
-// The update batch's queued free walks (eight rays at a time in AVX2 lanes, through a dense
-// window of cells, where the CPU has AVX2) mark exactly what its ray-by-ray walk marks.
+// The update batch's queued free walks (eight rays at a time in AVX2 lanes or sixteen in AVX-512
+// ones, through a dense window of cells, where the CPU has them) mark exactly what its ray-by-ray
+// walk marks: every lane kernel this CPU runs is tested, not only the one it would choose.
 #include <gtest/gtest.h>
 
 #include <array>
@@ -7,6 +8,7 @@
 #include <cstdio>
 #include <map>
 #include <random>
+#include <vector>
 
 #include "integrate/update_batch.hpp"
 
@@ -27,6 +29,19 @@ std::map<Key, std::array<std::uint64_t, kBrickWords>> freeMarks(UpdateBatch& bat
   return marks;
 }
 
+// The lane kernels this CPU runs (the one insertion uses first), each named once per process.
+std::vector<detail::LaneKernel> kernelsHere() {
+  static const char* names[] = {"none: every ray walked alone", "AVX2", "AVX-512"};
+  std::vector<detail::LaneKernel> kernels{detail::laneKernel()};
+  for (const auto k : {detail::LaneKernel::Avx2, detail::LaneKernel::Avx512})
+    if (k != kernels.front() && detail::laneKernelRuns(k)) kernels.push_back(k);
+  static bool said = false;
+  for (std::size_t i = 0; i < kernels.size() && !said; ++i)
+    std::printf("[ lanes    ] %s%s\n", names[static_cast<int>(kernels[i])], i == 0 ? " (this CPU's choice)" : "");
+  said = true;
+  return kernels;
+}
+
 }  // namespace
 
 // Queued rays (walked eight at a time in AVX2 lanes through a dense window, where the CPU has
@@ -37,10 +52,11 @@ TEST(RayTraversal, QueuedRaysMarkWhatEachWalkMarks) {
   std::mt19937 rng(33);
   std::uniform_real_distribution<double> c(-1.0, 1.0), len(0.0, 90.0);
   std::uniform_int_distribution<int> ci(-60, 60), kind(0, 7);
-  const bool avx2 = __builtin_cpu_supports("avx2");
-  std::printf("[ lanes    ] AVX2 %s\n", avx2 ? "on this CPU: lanes walked" : "absent: every ray walked alone");
+  const auto kernels = kernelsHere();
   for (int round = 0; round < 16; ++round) {
-    UpdateBatch queued, wide_off, one_by_one;
+    std::vector<UpdateBatch> queued(kernels.size());
+    for (std::size_t k = 0; k < kernels.size(); ++k) ASSERT_TRUE(queued[k].useLaneKernel(kernels[k]));
+    UpdateBatch wide_off, one_by_one;
     const Eigen::Vector3d shared(c(rng) * 30.0, c(rng) * 30.0, c(rng) * 10.0);
     const int rays = round == 0 ? 20000 : 3000;  // round 0 fills the queue more than twice
     for (int i = 0; i < rays; ++i) {
@@ -72,7 +88,7 @@ TEST(RayTraversal, QueuedRaysMarkWhatEachWalkMarks) {
         default: break;
       }
       const Key ka = floorKey(a), kb = floorKey(b);
-      queued.queueRayFree(a, b, ka, kb);
+      for (UpdateBatch& q : queued) q.queueRayFree(a, b, ka, kb);
       wide_off.queueRayFree(a, b, ka, kb);
       if (i % 997 == 0) wide_off.walkQueued(/*wide=*/false);
       one_by_one.markRayFree(a, b, ka, kb);
@@ -80,7 +96,8 @@ TEST(RayTraversal, QueuedRaysMarkWhatEachWalkMarks) {
     wide_off.walkQueued(false);
     const auto want = freeMarks(one_by_one);
     ASSERT_GT(want.size(), 10u);
-    ASSERT_TRUE(freeMarks(queued) == want) << "round " << round;
+    for (std::size_t k = 0; k < kernels.size(); ++k)
+      ASSERT_TRUE(freeMarks(queued[k]) == want) << "round " << round << ", kernel " << static_cast<int>(kernels[k]);
     ASSERT_TRUE(freeMarks(wide_off) == want) << "round " << round;
   }
 }
@@ -92,10 +109,13 @@ TEST(RayTraversal, QueuedRaysMarkWhatEachWalkMarks) {
 TEST(RayTraversal, QueuedRaysInNarrowWindowsMarkWhatEachWalkMarks) {
   std::mt19937 rng(35);
   std::uniform_real_distribution<double> u(0.0, 1.0);
+  const auto kernels = kernelsHere();
   int windows = 0;
   for (int narrow_axis = 0; narrow_axis < 3; ++narrow_axis)
     for (int bricks : {1, 2, 4}) {
-      UpdateBatch queued, one_by_one;
+      std::vector<UpdateBatch> queued(kernels.size());
+      for (std::size_t k = 0; k < kernels.size(); ++k) ASSERT_TRUE(queued[k].useLaneKernel(kernels[k]));
+      UpdateBatch one_by_one;
       const double width = 16.0 * bricks;
       for (int i = 0; i < 2000; ++i) {
         Eigen::Vector3d a, b;
@@ -109,12 +129,14 @@ TEST(RayTraversal, QueuedRaysInNarrowWindowsMarkWhatEachWalkMarks) {
         }
         if (i % 7 == 0) b[narrow_axis] = a[narrow_axis];  // flat in the narrow axis
         const Key ka = floorKey(a), kb = floorKey(b);
-        queued.queueRayFree(a, b, ka, kb);
+        for (UpdateBatch& q : queued) q.queueRayFree(a, b, ka, kb);
         one_by_one.markRayFree(a, b, ka, kb);
       }
       const auto want = freeMarks(one_by_one);
       ASSERT_GT(want.size(), 10u);
-      ASSERT_TRUE(freeMarks(queued) == want) << "narrow axis " << narrow_axis << ", " << bricks << " bricks";
+      for (std::size_t k = 0; k < kernels.size(); ++k)
+        ASSERT_TRUE(freeMarks(queued[k]) == want)
+            << "narrow axis " << narrow_axis << ", " << bricks << " bricks, kernel " << static_cast<int>(kernels[k]);
       ++windows;
     }
   EXPECT_EQ(windows, 9);

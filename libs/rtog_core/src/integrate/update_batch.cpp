@@ -1,6 +1,5 @@
 #include "integrate/update_batch.hpp"
 
-
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
@@ -69,7 +68,7 @@ void UpdateBatch::queueRayFree(const Eigen::Vector3d& from, const Eigen::Vector3
   // Long rays would need a window too large to sweep (LiDAR rays reach thousands of cells);
   // walked at once, they also find the bricks their end points were just marked in.
   const auto reach = [&](int a) { return std::abs(std::int64_t{to_key[a]} - from_key[a]); };
-  if (!lanes_ || from_key.z == to_key.z || reach(0) >= kLaneReach || reach(1) >= kLaneReach ||
+  if (lanes_ == detail::LaneKernel::None || from_key.z == to_key.z || reach(0) >= kLaneReach || reach(1) >= kLaneReach ||
       reach(2) >= kLaneReach / 2) {
     markRayFree(from, to, from_key, to_key);
     return;
@@ -80,9 +79,16 @@ void UpdateBatch::queueRayFree(const Eigen::Vector3d& from, const Eigen::Vector3
   if (queued_.size() == kQueuedRays) walkQueued();
 }
 
+bool UpdateBatch::useLaneKernel(detail::LaneKernel kernel) {
+  if (!detail::laneKernelRuns(kernel)) return false;
+  walkQueued();  // what the old kernel queued
+  lanes_ = kernel;
+  return true;
+}
+
 void UpdateBatch::walkQueued(bool wide) {
   if (queued_.empty()) return;
-  // queueRayFree queues only what lanes can walk (AVX2, rays leaving their z-layer).
+  // queueRayFree queues only what lanes can walk (a lane kernel, rays leaving their z-layer).
   lane_rays_.clear();
   if (wide)
     for (std::uint32_t i = 0; i < queued_.size(); ++i) lane_rays_.push_back(i);
@@ -149,7 +155,7 @@ bool UpdateBatch::walkInWindow(std::vector<std::uint32_t>& lanes) {
   if (touched_.size() < w.bricks() + 1) touched_.resize(w.bricks() + 1, 0);
   std::uint64_t* window = window_.data() + kBrickWords;
   std::uint8_t* touched = touched_.data() + 1;
-  detail::walkLanes(queued_, lanes, w, window, touched);
+  detail::walkLanes(lanes_, queued_, lanes, w, window, touched);
   std::fill_n(window_.data(), kBrickWords, 0);
   touched[-1] = 0;
   // Into the bricks: a window word is 64 cells of an x-row, four bricks' 16-cell rows; each

@@ -42,13 +42,17 @@ class alignas(64) UpdateBatch {
   void clear();
   /// Marks the cells of traverseRay(from, to, from_key, to_key) free.
   void markRayFree(const Eigen::Vector3d& from, const Eigen::Vector3d& to, const Key& from_key, const Key& to_key);
-  /// markRayFree, perhaps later: where the CPU has AVX2, a ray that leaves its z-layer and spans
-  /// under kLaneReach cells waits in a queue, to be walked with others eight at a time
-  /// (finalize() walks what is left); others are walked at once. The marks are the same.
+  /// markRayFree, perhaps later: where the CPU has a lane walk (detail::laneKernel()), a ray that
+  /// leaves its z-layer and spans under kLaneReach cells waits in a queue, to be walked with
+  /// others eight or sixteen at a time (finalize() walks what is left); others are walked at
+  /// once. The marks are the same.
   void queueRayFree(const Eigen::Vector3d& from, const Eigen::Vector3d& to, const Key& from_key, const Key& to_key);
   static constexpr std::int32_t kLaneReach = 240;
-  /// Walks the queued rays now, with AVX2 if `wide` and the CPU has it, else one by one.
+  /// Walks the queued rays now, in lanes if `wide`, else one by one.
   void walkQueued(bool wide = true);
+  /// The lane walk this batch uses from now on (tests and benchmarks compare them; the default
+  /// is detail::laneKernel()); false, and no change, if this CPU cannot run it.
+  bool useLaneKernel(detail::LaneKernel kernel);
   /// Returns false if the cell was already marked occupied in this batch.
   bool markOccupied(const Key& k) {
     const int i = localIndex(k);
@@ -117,7 +121,7 @@ class alignas(64) UpdateBatch {
   static constexpr std::uint32_t kNoSlot = 0xffffffffu;
   std::vector<std::uint32_t> brick_slots_;  // walkInWindow(): a window brick's slot, or kNoSlot
   std::vector<std::uint32_t> slotted_;      // walkInWindow(): the window bricks given a slot
-  bool lanes_ = detail::laneWalkAvailable();  // asked once: queueRayFree() asks for every ray
+  detail::LaneKernel lanes_ = detail::laneKernel();  // asked once: queueRayFree() asks for every ray
 };
 
 }  // namespace rtog

@@ -19,87 +19,96 @@ namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
-// One ray in walkRay's floating-point form (its 3D branch): a lane's state.
-struct LaneRay {
-  double t[3], dt[3];
-  std::int64_t left[3];   // steps left along each axis
-  std::int64_t delta[3];  // what a step along each axis adds to the cell index
-  std::int64_t index;     // the current cell's index in the window
-  std::int64_t steps;
-};
-
-// Compiled for AVX2 like its caller: called between steps with the upper halves of the YMM
-// registers in use, legacy-SSE code pays on Intel cores for every instruction (a false
-// dependency and a merge), where VEX-encoded code pays nothing.
-__attribute__((target("avx2"))) void setUpLane(const QueuedRay& q, const LaneWindow& w, LaneRay& r) {
+// Compiled for AVX2, and called only from the kernels below: called between steps with the upper
+// halves of the vector registers in use, legacy-SSE code pays on Intel cores for every
+// instruction (a false dependency and a merge), where VEX-encoded code pays nothing.
+__attribute__((target("avx2"))) std::int64_t setUpLane(const QueuedRay& q, const LaneWindow& w, double t[3],
+                                                       double dt[3], std::int64_t left[3], std::int64_t delta[3],
+                                                       std::int64_t& index) {
   int step[3];
-  r.steps = detail::setUpWalk(q.from, q.to, q.from_key, q.to_key, step, r.t, r.dt);
+  const std::int64_t steps = detail::setUpWalk(q.from, q.to, q.from_key, q.to_key, step, t, dt);
   for (int a = 0; a < 3; ++a) {
     const std::int64_t diff = std::int64_t{q.to_key[a]} - q.from_key[a];
-    r.left[a] = diff < 0 ? -diff : diff;
-    r.delta[a] = std::int64_t{step[a]} * (std::int64_t{1} << w.shift(a));
+    left[a] = diff < 0 ? -diff : diff;
+    delta[a] = std::int64_t{step[a]} * (std::int64_t{1} << w.shift(a));
   }
-  r.index = kBrickWords * 64 + w.cellIndex(q.from_key);  // past the scratch words
+  index = kBrickWords * 64 + w.cellIndex(q.from_key);  // past the scratch words
+  return steps;
 }
 
-// Eight rays in two groups of four AVX2 lanes: each step is branch-free (the axis by compares
-// and blends, the cell by one add of the chosen axis's stride), so the two groups' dependency
-// chains overlap instead of waiting on mispredicted branches. A lane whose ray ends takes the
-// next ray. `touched` gets a non-zero byte for each run of kBrickWords words marked (index:
-// word / kBrickWords), so that only those are swept.
-__attribute__((target("avx2"))) void walkLanesAvx2(const std::vector<QueuedRay>& queued,
-                                               const std::vector<std::uint32_t>& rays, const LaneWindow& w,
-                                               std::uint64_t* window, std::uint8_t* touched) {
-  constexpr int kGroups = 2, kLanes = 4 * kGroups;
-  alignas(32) double t[kGroups][3][4], dt[kGroups][3][4];
-  alignas(32) std::int64_t left[kGroups][3][4], delta[kGroups][3][4], index[kGroups][4];
+// The lanes' state in walkRay's floating-point form (its 3D branch), kGroups registers of kWidth
+// lanes for each quantity; a lane whose ray ends takes the next ray. Inlined into each kernel
+// whole, so that it is compiled for the kernel's instruction set (an out-of-line copy would be
+// legacy SSE, called with the vector registers' upper halves in use).
+template <int kGroups, int kWidth>
+struct Lanes {
+  static constexpr int kLanes = kGroups * kWidth;
+  alignas(64) double t[kGroups][3][kWidth], dt[kGroups][3][kWidth];
+  alignas(64) std::int64_t left[kGroups][3][kWidth];   // steps left along each axis
+  alignas(64) std::int64_t delta[kGroups][3][kWidth];  // what a step along each axis adds to the index
+  alignas(64) std::int64_t index[kGroups][kWidth];     // the current cell's index in the window
   std::int64_t steps[kLanes];
+  const std::vector<QueuedRay>& queued;
+  const std::vector<std::uint32_t>& rays;
+  const LaneWindow& w;
   std::size_t next = 0;
   int live = 0;
-  // The window's scratch words come first here: a lane without a ray stands still (no
-  // stride, no axis ever at its end) on cell 0, in them.
-  std::uint64_t* const words = window - kBrickWords;
-  std::uint8_t* const runs = touched - 1;
-  const auto load = [&](int lane) {
-    const int g = lane / 4, j = lane % 4;
+
+  __attribute__((always_inline)) Lanes(const std::vector<QueuedRay>& q, const std::vector<std::uint32_t>& r,
+                                       const LaneWindow& win)
+      : queued(q), rays(r), w(win) {
+    for (int lane = 0; lane < kLanes; ++lane) live += load(lane);
+  }
+  /// Gives `lane` the next ray; false if none is left. A lane without a ray stands still (no
+  /// stride, no axis ever at its end) on cell 0, in the window's scratch words.
+  __attribute__((always_inline)) bool load(int lane) {
+    const int g = lane / kWidth, j = lane % kWidth;
     if (next < rays.size()) {  // queued rays leave their z-layer: at least one step
-      LaneRay r;
-      setUpLane(queued[rays[next++]], w, r);
-      for (int a = 0; a < 3; ++a) {
-        t[g][a][j] = r.t[a];
-        dt[g][a][j] = r.dt[a];
-        left[g][a][j] = r.left[a];
-        delta[g][a][j] = r.delta[a];
-      }
-      index[g][j] = r.index;
-      steps[lane] = r.steps;
+      double rt[3], rdt[3];
+      std::int64_t rleft[3], rdelta[3];
+      steps[lane] = setUpLane(queued[rays[next++]], w, rt, rdt, rleft, rdelta, index[g][j]);
+      for (int a = 0; a < 3; ++a) t[g][a][j] = rt[a], dt[g][a][j] = rdt[a], left[g][a][j] = rleft[a], delta[g][a][j] = rdelta[a];
       return true;
     }
-    for (int a = 0; a < 3; ++a) {
-      t[g][a][j] = dt[g][a][j] = 0.0;
-      left[g][a][j] = -1;
-      delta[g][a][j] = 0;
-    }
+    for (int a = 0; a < 3; ++a) t[g][a][j] = dt[g][a][j] = 0.0, left[g][a][j] = -1, delta[g][a][j] = 0;
     index[g][j] = 0;
     steps[lane] = std::numeric_limits<std::int64_t>::max();
     return false;
-  };
-  for (int lane = 0; lane < kLanes; ++lane) live += load(lane);
+  }
+  /// Steps every lane can take before the first of them ends.
+  __attribute__((always_inline)) std::int64_t run() const { return *std::min_element(steps, steps + kLanes); }
+  /// After `run` steps: lanes that ended take new rays.
+  __attribute__((always_inline)) void refill(std::int64_t run) {
+    for (int lane = 0; lane < kLanes; ++lane)
+      if ((steps[lane] -= run) == 0 && !load(lane)) --live;
+  }
+};
+
+// Eight rays in two groups of four AVX2 lanes: each step is branch-free (the axis by compares
+// and blends, the cell by one add of the chosen axis's stride), so the two groups' dependency
+// chains overlap instead of waiting on mispredicted branches. `touched` gets a non-zero byte for
+// each run of kBrickWords words marked (index: word / kBrickWords), so that only those are swept.
+__attribute__((target("avx2"))) void walkLanesAvx2(const std::vector<QueuedRay>& queued,
+                                               const std::vector<std::uint32_t>& rays, const LaneWindow& w,
+                                               std::uint64_t* window, std::uint8_t* touched) {
+  constexpr int kGroups = 2;
+  Lanes<kGroups, 4> L(queued, rays, w);
+  std::uint64_t* const words = window - kBrickWords;  // the scratch words first
+  std::uint8_t* const runs = touched - 1;
   const __m256d inf = _mm256_set1_pd(kInf);
   const __m256i zero = _mm256_setzero_si256(), one = _mm256_set1_epi64x(1), low6 = _mm256_set1_epi64x(63),
                 all = _mm256_set1_epi64x(-1);
-  while (live > 0) {
+  while (L.live > 0) {
     __m256d T[kGroups][3];
     __m256i left_v[kGroups][3], index_v[kGroups];
     for (int g = 0; g < kGroups; ++g) {
       for (int a = 0; a < 3; ++a) {
-        T[g][a] = _mm256_load_pd(t[g][a]);
-        left_v[g][a] = _mm256_load_si256(reinterpret_cast<const __m256i*>(left[g][a]));
+        T[g][a] = _mm256_load_pd(L.t[g][a]);
+        left_v[g][a] = _mm256_load_si256(reinterpret_cast<const __m256i*>(L.left[g][a]));
       }
-      index_v[g] = _mm256_load_si256(reinterpret_cast<const __m256i*>(index[g]));
+      index_v[g] = _mm256_load_si256(reinterpret_cast<const __m256i*>(L.index[g]));
     }
-    std::int64_t run = steps[0];
-    for (int lane = 1; lane < kLanes; ++lane) run = std::min(run, steps[lane]);
+    const std::int64_t run = L.run();
     for (std::int64_t step = 0; step < run; ++step)
       for (int g = 0; g < kGroups; ++g) {
         const __m256i at = _mm256_srli_epi64(index_v[g], 6);
@@ -124,45 +133,115 @@ __attribute__((target("avx2"))) void walkLanesAvx2(const std::vector<QueuedRay>&
           left_v[g][a] = _mm256_add_epi64(left_v[g][a], step_mask);  // -1 where this axis steps
           const __m256d at_end = _mm256_castsi256_pd(_mm256_cmpeq_epi64(left_v[g][a], zero));
           const __m256d next_t =
-              _mm256_blendv_pd(_mm256_add_pd(T[g][a], _mm256_load_pd(dt[g][a])), inf, at_end);
+              _mm256_blendv_pd(_mm256_add_pd(T[g][a], _mm256_load_pd(L.dt[g][a])), inf, at_end);
           T[g][a] = _mm256_blendv_pd(T[g][a], next_t, chosen[a]);
           index_v[g] = _mm256_add_epi64(
               index_v[g],
-              _mm256_and_si256(_mm256_load_si256(reinterpret_cast<const __m256i*>(delta[g][a])), step_mask));
+              _mm256_and_si256(_mm256_load_si256(reinterpret_cast<const __m256i*>(L.delta[g][a])), step_mask));
         }
       }
     for (int g = 0; g < kGroups; ++g) {
       for (int a = 0; a < 3; ++a) {
-        _mm256_store_pd(t[g][a], T[g][a]);
-        _mm256_store_si256(reinterpret_cast<__m256i*>(left[g][a]), left_v[g][a]);
+        _mm256_store_pd(L.t[g][a], T[g][a]);
+        _mm256_store_si256(reinterpret_cast<__m256i*>(L.left[g][a]), left_v[g][a]);
       }
-      _mm256_store_si256(reinterpret_cast<__m256i*>(index[g]), index_v[g]);
+      _mm256_store_si256(reinterpret_cast<__m256i*>(L.index[g]), index_v[g]);
     }
-    for (int lane = 0; lane < kLanes; ++lane) {
-      steps[lane] -= run;
-      if (steps[lane] == 0) live += load(lane) ? 0 : -1;
+    L.refill(run);
+  }
+}
+
+// The same walk, sixteen rays in two groups of eight AVX-512 lanes: the axis choice and the
+// per-axis updates are masked operations where AVX2 needs blends, and each step's eight marks go
+// out through memory (extracting eight lanes costs more than the stores' forwarding).
+__attribute__((target("avx512f"))) void walkLanesAvx512(const std::vector<QueuedRay>& queued,
+                                                    const std::vector<std::uint32_t>& rays, const LaneWindow& w,
+                                                    std::uint64_t* window, std::uint8_t* touched) {
+  constexpr int kGroups = 2, kWidth = 8;
+  Lanes<kGroups, kWidth> L(queued, rays, w);
+  std::uint64_t* const words = window - kBrickWords;
+  std::uint8_t* const runs = touched - 1;
+  alignas(64) std::int64_t at_s[kWidth];
+  alignas(64) std::uint64_t bit_s[kWidth];
+  const __m512d inf = _mm512_set1_pd(kInf);
+  const __m512i zero = _mm512_setzero_si512(), one = _mm512_set1_epi64(1), low6 = _mm512_set1_epi64(63);
+  constexpr __mmask8 kAll = 0xFF;  // the maskz forms: the unmasked ones read an undefined register
+  while (L.live > 0) {
+    __m512d T[kGroups][3], DT[kGroups][3];
+    __m512i left_v[kGroups][3], delta_v[kGroups][3], index_v[kGroups];
+    for (int g = 0; g < kGroups; ++g) {
+      for (int a = 0; a < 3; ++a) {
+        T[g][a] = _mm512_load_pd(L.t[g][a]);
+        DT[g][a] = _mm512_load_pd(L.dt[g][a]);
+        left_v[g][a] = _mm512_load_si512(L.left[g][a]);
+        delta_v[g][a] = _mm512_load_si512(L.delta[g][a]);
+      }
+      index_v[g] = _mm512_load_si512(L.index[g]);
     }
+    const std::int64_t run = L.run();
+    for (std::int64_t step = 0; step < run; ++step)
+      for (int g = 0; g < kGroups; ++g) {
+        _mm512_store_si512(at_s, _mm512_maskz_srli_epi64(kAll, index_v[g], 6));
+        _mm512_store_si512(bit_s, _mm512_maskz_sllv_epi64(kAll, one, _mm512_and_si512(index_v[g], low6)));
+        for (int j = 0; j < kWidth; ++j) {
+          words[at_s[j]] |= bit_s[j];
+          runs[at_s[j] >> 6] = 1;
+        }
+        // walkRay's choice: x if tx <= ty and tx <= tz, else y if ty <= tz, else z.
+        const __mmask8 x_first =
+            _mm512_cmp_pd_mask(T[g][0], T[g][1], _CMP_LE_OQ) & _mm512_cmp_pd_mask(T[g][0], T[g][2], _CMP_LE_OQ);
+        const auto y_first = static_cast<__mmask8>(~x_first & _mm512_cmp_pd_mask(T[g][1], T[g][2], _CMP_LE_OQ));
+        const auto z_first = static_cast<__mmask8>(~(x_first | y_first));
+        const __mmask8 chosen[3] = {x_first, y_first, z_first};
+        for (int a = 0; a < 3; ++a) {
+          const __mmask8 k = chosen[a];
+          left_v[g][a] = _mm512_mask_sub_epi64(left_v[g][a], k, left_v[g][a], one);
+          const __mmask8 at_end = _mm512_mask_cmpeq_epi64_mask(k, left_v[g][a], zero);
+          T[g][a] = _mm512_mask_add_pd(T[g][a], static_cast<__mmask8>(k & ~at_end), T[g][a], DT[g][a]);
+          T[g][a] = _mm512_mask_mov_pd(T[g][a], at_end, inf);
+          index_v[g] = _mm512_mask_add_epi64(index_v[g], k, index_v[g], delta_v[g][a]);
+        }
+      }
+    for (int g = 0; g < kGroups; ++g) {
+      for (int a = 0; a < 3; ++a) {
+        _mm512_store_pd(L.t[g][a], T[g][a]);
+        _mm512_store_si512(L.left[g][a], left_v[g][a]);
+      }
+      _mm512_store_si512(L.index[g], index_v[g]);
+    }
+    L.refill(run);
   }
 }
 
 }  // namespace
 #endif
 
-bool laneWalkAvailable() {
+LaneKernel laneKernel() {
 #if defined(RTOG_LANE_WALK)
-  return cpuHasAvx2();
+  static const LaneKernel best = cpuPrefersAvx512() ? LaneKernel::Avx512
+                                 : cpuHasAvx2()     ? LaneKernel::Avx2
+                                                    : LaneKernel::None;
+  return best;
 #else
-  return false;
+  return LaneKernel::None;
 #endif
 }
 
-void walkLanes(const std::vector<QueuedRay>& queued, const std::vector<std::uint32_t>& rays, const LaneWindow& w,
-               std::uint64_t* window, std::uint8_t* touched) {
+bool laneKernelRuns(LaneKernel k) {
 #if defined(RTOG_LANE_WALK)
-  walkLanesAvx2(queued, rays, w, window, touched);
+  return k == LaneKernel::None || (k == LaneKernel::Avx2 && cpuHasAvx2()) || (k == LaneKernel::Avx512 && cpuHasAvx512());
 #else
-  (void)queued, (void)rays, (void)w, (void)window, (void)touched;
+  return k == LaneKernel::None;
 #endif
+}
+
+void walkLanes(LaneKernel kernel, const std::vector<QueuedRay>& queued, const std::vector<std::uint32_t>& rays,
+               const LaneWindow& w, std::uint64_t* window, std::uint8_t* touched) {
+#if defined(RTOG_LANE_WALK)
+  if (kernel == LaneKernel::Avx512) return walkLanesAvx512(queued, rays, w, window, touched);
+  if (kernel == LaneKernel::Avx2) return walkLanesAvx2(queued, rays, w, window, touched);
+#endif
+  (void)kernel, (void)queued, (void)rays, (void)w, (void)window, (void)touched;
 }
 
 }  // namespace detail

@@ -1,5 +1,5 @@
-// Walking many short rays at once into a dense window of cells, eight at a time with AVX2
-// (the batch's queued free walks). The marks equal walkRay's, cell for cell.
+// Walking many short rays at once into a dense window of cells, eight at a time with AVX2 or
+// sixteen with AVX-512 (the batch's queued free walks). The marks equal walkRay's, cell for cell.
 #pragma once
 
 #include <cstdint>
@@ -37,15 +37,22 @@ struct LaneWindow {
   }
 };
 
-/// True where walkLanes() runs (x86-64 with AVX2).
-bool laneWalkAvailable();
+/// The lane walks: none (each ray walked alone), AVX2 (two groups of four lanes) or AVX-512 (two
+/// groups of eight). Their marks are the same.
+enum class LaneKernel : std::uint8_t { None, Avx2, Avx512 };
+
+/// The kernel for this CPU: AVX-512 where it is worth it (cpuPrefersAvx512), else AVX2 where the
+/// CPU has it, else none.
+LaneKernel laneKernel();
+/// True if `kernel` runs on this CPU (None always does).
+bool laneKernelRuns(LaneKernel kernel);
 
 /// Walks queued[i] for each i of `rays` (each leaving its z-layer, inside the window) into
 /// `window` (kBrickWords words a brick, cell-linear; the kBrickWords words before it are
-/// scratch), setting touched[k] for each run k of kBrickWords words marked. Only where
-/// laneWalkAvailable().
-void walkLanes(const std::vector<QueuedRay>& queued, const std::vector<std::uint32_t>& rays, const LaneWindow& w,
-               std::uint64_t* window, std::uint8_t* touched);
+/// scratch), setting touched[k] for each run k of kBrickWords words marked. Only with a kernel
+/// other than None that laneKernelRuns().
+void walkLanes(LaneKernel kernel, const std::vector<QueuedRay>& queued, const std::vector<std::uint32_t>& rays,
+               const LaneWindow& w, std::uint64_t* window, std::uint8_t* touched);
 
 }  // namespace detail
 }  // namespace rtog
