@@ -63,6 +63,14 @@ int runCommand(const Command& cmd, std::ostream& out, std::ostream& err) {
         const auto before = earlier.machine.find("merged_rows_date");
         run.machine["merged_rows_date"] = (before == earlier.machine.end() ? std::string() : before->second + ", ") +
                                           (when == earlier.machine.end() ? std::string("?") : when->second);
+        // And their machines' CPUs, each once: the report says where the kept rows were measured.
+        const auto cpus = earlier.machine.find("merged_rows_cpu");
+        const auto cpu = earlier.machine.find("cpu");
+        std::string kept = cpus == earlier.machine.end() ? std::string() : cpus->second;
+        const std::string that = cpu == earlier.machine.end() ? std::string("?") : cpu->second;
+        if (kept.empty() && cpus == earlier.machine.end()) kept = that;
+        else if (("; " + kept + "; ").find("; " + that + "; ") == std::string::npos) kept += "; " + that;
+        run.machine["merged_rows_cpu"] = kept;
       }
     }
     if (json) writeJson(results, run, *json);

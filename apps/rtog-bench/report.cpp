@@ -165,7 +165,11 @@ void writeMarkdown(const std::vector<Result>& results, const RunInfo& run, std::
      << field("date") << ".\n\n"
      << (run.machine.count("merged_rows_date")
              ? "This run measured some datasets only (`--only`); the rows of the others are those of the runs of " +
-                   field("merged_rows_date") + " on the same machine (`--merge-json`).\n\n"
+                   field("merged_rows_date") +
+                   (!run.machine.count("merged_rows_cpu") || field("merged_rows_cpu") == field("cpu")
+                        ? " on the same machine"
+                        : ", on a machine with " + field("merged_rows_cpu") + " (so ratios compare within a dataset, not across)") +
+                   " (`--merge-json`).\n\n"
              : std::string())
      << "Reproduce: `./build/apps/rtog-bench/rtog-bench"
      << (run.repeats != Options{}.repeats ? " --repeats " + std::to_string(run.repeats) : std::string())
