@@ -68,8 +68,8 @@ void UpdateBatch::queueRayFree(const Eigen::Vector3d& from, const Eigen::Vector3
   // Long rays would need a window too large to sweep (LiDAR rays reach thousands of cells);
   // walked at once, they also find the bricks their end points were just marked in.
   const auto reach = [&](int a) { return std::abs(std::int64_t{to_key[a]} - from_key[a]); };
-  if (lanes_ == detail::LaneKernel::None || from_key.z == to_key.z || reach(0) >= kLaneReach || reach(1) >= kLaneReach ||
-      reach(2) >= kLaneReach / 2) {
+  if (lanes_ == detail::LaneKernel::None || from_key.z == to_key.z || reach(0) >= kLaneReach ||
+      reach(1) >= kLaneReach || reach(2) >= kLaneReach / 2) {
     markRayFree(from, to, from_key, to_key);
     return;
   }

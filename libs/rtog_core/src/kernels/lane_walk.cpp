@@ -67,7 +67,12 @@ struct Lanes {
       double rt[3], rdt[3];
       std::int64_t rleft[3], rdelta[3];
       steps[lane] = setUpLane(queued[rays[next++]], w, rt, rdt, rleft, rdelta, index[g][j]);
-      for (int a = 0; a < 3; ++a) t[g][a][j] = rt[a], dt[g][a][j] = rdt[a], left[g][a][j] = rleft[a], delta[g][a][j] = rdelta[a];
+      for (int a = 0; a < 3; ++a) {
+        t[g][a][j] = rt[a];
+        dt[g][a][j] = rdt[a];
+        left[g][a][j] = rleft[a];
+        delta[g][a][j] = rdelta[a];
+      }
       return true;
     }
     for (int a = 0; a < 3; ++a) t[g][a][j] = dt[g][a][j] = 0.0, left[g][a][j] = -1, delta[g][a][j] = 0;
@@ -229,7 +234,8 @@ LaneKernel laneKernel() {
 
 bool laneKernelRuns(LaneKernel k) {
 #if defined(RTOG_LANE_WALK)
-  return k == LaneKernel::None || (k == LaneKernel::Avx2 && cpuHasAvx2()) || (k == LaneKernel::Avx512 && cpuHasAvx512());
+  return k == LaneKernel::None || (k == LaneKernel::Avx2 && cpuHasAvx2()) ||
+         (k == LaneKernel::Avx512 && cpuHasAvx512());
 #else
   return k == LaneKernel::None;
 #endif
