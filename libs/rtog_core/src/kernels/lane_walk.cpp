@@ -185,6 +185,7 @@ __attribute__((target("avx512f"))) void walkLanesAvx512(const std::vector<Queued
     }
     const std::int64_t run = L.run();
     for (std::int64_t step = 0; step < run; ++step)
+#pragma GCC unroll 2
       for (int g = 0; g < kGroups; ++g) {
         _mm512_store_si512(at_s, _mm512_maskz_srli_epi64(kAll, index_v[g], 6));
         _mm512_store_si512(bit_s, _mm512_maskz_sllv_epi64(kAll, one, _mm512_and_si512(index_v[g], low6)));
