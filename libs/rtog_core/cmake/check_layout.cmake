@@ -21,7 +21,7 @@ foreach(f IN LISTS all)
   endif()
   string(REGEX MATCHALL "#include \"[^\"]+\"" includes "${text}")
   # Intrinsics, target attributes and their headers only in src/kernels.
-  if(NOT f MATCHES "^src/kernels/" AND text MATCHES "(_mm_|_mm256_|__m128|__m256|target\\(\"|intrin\\.h)")
+  if(NOT f MATCHES "^src/kernels/" AND text MATCHES "(_mm_|_mm256_|_mm512_|__m128|__m256|__m512|__mmask|target\\(\"|intrin\\.h)")
     fail("${f}: intrinsics or a target attribute outside src/kernels")
   endif()
   # Threads are started only in src/parallel.
