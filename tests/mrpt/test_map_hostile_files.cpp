@@ -142,6 +142,27 @@ TEST(HostileFiles, GridExtentsAllocateNothingTheyPromise) {
   }
 }
 
+// The backed grid's likelihood options are COccupancyGridMap2D's, which MRPT reads unchecked:
+// stored with a beam step of 0, its likelihood field would loop forever. Refused on load, with
+// the grid read into unchanged.
+TEST(HostileFiles, BackedGridLikelihoodStepsOfZeroAreRefused) {
+  const char* keys[] = {"LF_decimation", "MI_skip_rays", "rayTracing_decimation", "consensus_takeEachRange"};
+  for (int which = 0; which < 4; ++which) {
+    SCOPED_TRACE(keys[which]);
+    rtog::CRTreeBackedGridMap2D stored(0.1);
+    auto& lo = stored.likelihoodOptions;
+    if (which == 0) lo.LF_decimation = 0;
+    if (which == 1) lo.MI_skip_rays = 0;
+    if (which == 2) lo.rayTracing_decimation = 0;
+    if (which == 3) lo.consensus_takeEachRange = 0;
+    rtog::CRTreeBackedGridMap2D into(0.1);
+    const std::string into_bytes = archiveBytes(into);
+    const std::string error = readInto(archiveBytes(stored), into);
+    EXPECT_NE(error.find(keys[which]), std::string::npos) << "loaded: '" << error << "'";
+    EXPECT_TRUE(archiveBytes(into) == into_bytes) << "the grid a failed load was read into changed";
+  }
+}
+
 // Bit flips in a real map's options (fixed seed): each load fails with a message or gives a map
 // whose options pass every check an .ini's values pass.
 TEST(HostileFiles, FlippedOptionBitsFailOrValidate) {

@@ -142,6 +142,30 @@ LF_decimation=9
   EXPECT_EQ(g->likelihoodOptions.LF_decimation, 9u);
 }
 
+// The backed grid's likelihood options are COccupancyGridMap2D's, which MRPT reads unchecked: a
+// beam step of 0 (here as rtog_fuzz_ini found it, "LF_decimation==") made its likelihood field
+// loop forever. Each such value is now a clear error at creation, as for the R-tree map (MRPT's
+// reader takes no rayTracing_decimation from an .ini: HostileFiles covers it in a stored map).
+TEST(MapOptions, BackedGridLikelihoodValuesAreChecked) {
+  for (const auto& [line, key] : std::vector<std::pair<std::string, std::string>>{
+           {"LF_decimation==", "LF_decimation"},
+           {"LF_decimation=0", "LF_decimation"},
+           {"MI_skip_rays=0", "MI_skip_rays"},
+           {"consensus_takeEachRange=0", "consensus_takeEachRange"},
+           {"LF_stdHit=0", "LF_stdHit"},
+           {"LF_maxRange=nan", "LF_maxRange"}}) {
+    SCOPED_TRACE(line);
+    try {
+      fromIni("[MappingApplication]\nrtreeGridMap2D_count=1\n[MappingApplication_rtreeGridMap2D_00_likelihoodOpts]\n" +
+              line + "\n");
+      ADD_FAILURE() << "no exception";
+    } catch (const std::exception& e) {
+      EXPECT_NE(std::string(e.what()).find(key), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("rtog::CRTreeBackedGridMap2D"), std::string::npos) << e.what();
+    }
+  }
+}
+
 TEST(MapOptions, SaveToConfigFileRoundTrip) {
   CRTreeOccupancyGridMap::TInsertionOptions io;
   io.sensorModel = "endpoint";

@@ -50,7 +50,9 @@ void CRTreeBackedGridMap2D::TMapDefinition::loadFromConfigFile_map_specific(
     band.loadFromConfigFile(source, sec);
     gridView_minZ = band.gridView_minZ, gridView_maxZ = band.gridView_maxZ;
     insertionOpts.loadFromConfigFile(source, prefix + "_insertOpts");
+    // The grid's own struct, read by MRPT, which checks none of its values.
     likelihoodOpts.loadFromConfigFile(source, prefix + "_likelihoodOpts");
+    checkLikelihoodValues(likelihoodOpts, "rtog::CRTreeBackedGridMap2D", prefix + "_likelihoodOpts");
   } catch (const std::exception& e) {
     loadError = e.what();  // raised in internal_CreateFromMapDefinition
   }

@@ -6,6 +6,7 @@
 
 #include "archive_read.hpp"
 #include "mrpt_grid.hpp"
+#include "options_check.hpp"
 #include "rtog/mrpt/CRTreeBackedGridMap2D.h"
 
 namespace rtog {
@@ -70,6 +71,7 @@ void CRTreeBackedGridMap2D::serializeFrom(mrpt::serialization::CArchive& in, uin
   in >> band.gridView_minZ >> band.gridView_maxZ;
   try {
     band.validate();
+    checkLikelihoodValues(lo, kWho, "likelihoodOptions");
   } catch (const std::invalid_argument& e) {
     throw std::runtime_error(std::string(kWho) + ": the stored options are invalid: " + e.what());
   }

@@ -280,20 +280,8 @@ void CRTreeOccupancyGridMap::TLikelihoodOptions::saveToConfigFile(mrpt::config::
 
 void CRTreeOccupancyGridMap::TLikelihoodOptions::validate() const {
   const std::string sec = "likelihoodOpts";
-  auto positive = [&](float v, const char* k) {
-    if (!(std::isfinite(v) && v > 0.0f)) badOption(sec, k, "must be a positive number, got " + std::to_string(v));
-  };
-  positive(LF_stdHit, "LF_stdHit");
-  positive(LF_maxRange, "LF_maxRange");
-  positive(LF_maxCorrsDistance, "LF_maxCorrsDistance");
-  positive(rayTracing_stdHit, "rayTracing_stdHit");
-  if (!(LF_zHit >= 0.0f && LF_zRandom >= 0.0f && LF_zHit + LF_zRandom > 0.0f))
-    badOption(sec, "LF_zHit/LF_zRandom", "must be non-negative and not both zero");
-  if (LF_decimation < 1) badOption(sec, "LF_decimation", "must be >= 1");
-  if (rayTracing_decimation < 1) badOption(sec, "rayTracing_decimation", "must be >= 1");
+  checkLikelihoodValues(*this, "rtog::CRTreeOccupancyGridMap", sec);
   if (!likelihoodMethodName(likelihoodMethod)) badOption(sec, "likelihoodMethod", "not a known method");
-  if (MI_skip_rays < 1) badOption(sec, "MI_skip_rays", "must be >= 1");
-  if (consensus_takeEachRange < 1) badOption(sec, "consensus_takeEachRange", "must be >= 1");
 }
 
 // ---- TMatchingOptions --------------------------------------------------------------------

@@ -1,6 +1,7 @@
 // Checks of .ini sections shared by the map types' option loaders.
 #pragma once
 
+#include <cmath>
 #include <initializer_list>
 #include <stdexcept>
 #include <string>
@@ -32,6 +33,35 @@ void validateInSection(const std::string& section, Validate&& validate) {
   } catch (const std::invalid_argument& e) {
     throw std::invalid_argument(std::string(e.what()) + " (section [" + section + "])");
   }
+}
+
+/// Throws std::invalid_argument ("WHO: invalid option [SECTION] KEY: why") unless likelihood
+/// options hold usable values: positive widths and ranges, hit and random weights non-negative
+/// and not both zero, and each decimation or skip at least 1 (COccupancyGridMap2D's likelihood
+/// methods step through the beams by them: with 0, its likelihood field loops forever). For
+/// rtog's options and for COccupancyGridMap2D's (the backed grid's) alike: the members have the
+/// same names.
+template <class LikelihoodOptions>
+void checkLikelihoodValues(const LikelihoodOptions& o, const std::string& who, const std::string& section) {
+  const auto bad = [&](const char* key, const std::string& why) {
+    throw std::invalid_argument(who + ": invalid option [" + section + "] " + key + ": " + why);
+  };
+  const auto positive = [&](float v, const char* key) {
+    if (!(std::isfinite(v) && v > 0.0f)) bad(key, "must be a positive number, got " + std::to_string(v));
+  };
+  positive(o.LF_stdHit, "LF_stdHit");
+  positive(o.LF_maxRange, "LF_maxRange");
+  positive(o.LF_maxCorrsDistance, "LF_maxCorrsDistance");
+  positive(o.rayTracing_stdHit, "rayTracing_stdHit");
+  if (!(o.LF_zHit >= 0.0f && o.LF_zRandom >= 0.0f && o.LF_zHit + o.LF_zRandom > 0.0f))
+    bad("LF_zHit/LF_zRandom", "must be non-negative and not both zero");
+  const auto atLeastOne = [&](long long v, const char* key) {
+    if (v < 1) bad(key, "must be >= 1, got " + std::to_string(v));
+  };
+  atLeastOne(o.LF_decimation, "LF_decimation");
+  atLeastOne(o.rayTracing_decimation, "rayTracing_decimation");
+  atLeastOne(o.MI_skip_rays, "MI_skip_rays");
+  atLeastOne(o.consensus_takeEachRange, "consensus_takeEachRange");
 }
 
 }  // namespace rtog
