@@ -1,9 +1,10 @@
 // Micro-benchmarks of the core's inner loops (Google Benchmark): the exact walkers, the
-// planar batch's runs, the AVX2 and AVX-512 lanes, the box cover and the layer-update kernels. Not a test:
-// run `build/libs/rtog_core/rtog-core-micro` on a quiet machine to compare two builds.
+// planar batch's runs, the AVX2 and AVX-512 lanes (random rays and a depth image's), the box
+// cover and the layer-update kernels. Not a test: run `build/libs/rtog_core/rtog-core-micro` on a quiet machine to compare two builds.
 #include <benchmark/benchmark.h>
 
 #include <array>
+#include <cmath>
 #include <random>
 #include <vector>
 
@@ -43,6 +44,24 @@ std::vector<Ray> makeRays(std::size_t n, double reach, bool planar, unsigned see
   return rays;
 }
 
+// The rays of one depth image (640 x 480, 525 px focal length) in a room of 5 x 6 x 2.5 m, in
+// cells of `cell` metres, pixel by pixel as an observation gives them: neighbouring rays have
+// about the same length and pass through the same cells near the camera.
+std::vector<Ray> makeDepthFrameRays(double cell) {
+  const Eigen::Vector3d o = Eigen::Vector3d(0.37, 0.61, 0.29) * cell;
+  std::vector<Ray> rays;
+  for (int v = 0; v < 480; ++v)
+    for (int u = 0; u < 640; ++u) {
+      const Eigen::Vector3d d(1.0, -(u - 319.5) / 525.0, -(v - 239.5) / 525.0);
+      double t = 5.0 + 0.3 * std::sin(0.05 * u) * std::cos(0.07 * v);  // the far wall, not flat
+      if (d.y() != 0.0) t = std::min(t, (d.y() > 0 ? 3.0 : -3.0) / d.y());
+      if (d.z() != 0.0) t = std::min(t, (d.z() > 0 ? 1.7 : -0.8) / d.z());
+      const Eigen::Vector3d from = o / cell, to = (o + t * d) / cell;
+      rays.push_back(Ray{from, to, floorKey(from), floorKey(to)});
+    }
+  return rays;
+}
+
 void BM_WalkRay3D(benchmark::State& state) {
   const auto rays = makeRays(4096, 80.0, false, 1);
   std::int64_t cells = 0;
@@ -70,6 +89,24 @@ void BM_UpdateBatchQueuedRays(benchmark::State& state) {
   state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(rays.size()));
 }
 BENCHMARK(BM_UpdateBatchQueuedRays)->Arg(0)->Arg(1)->Arg(2);
+
+// Arguments: the lane kernel as above; the cell size in millimetres.
+void BM_UpdateBatchDepthFrame(benchmark::State& state) {
+  const auto rays = makeDepthFrameRays(static_cast<double>(state.range(1)) / 1000.0);
+  UpdateBatch batch;
+  if (!batch.useLaneKernel(static_cast<detail::LaneKernel>(state.range(0)))) {
+    state.SkipWithError("this CPU does not run that lane kernel");
+    return;
+  }
+  for (auto _ : state) {
+    batch.clear();
+    for (const Ray& r : rays) batch.queueRayFree(r.from, r.to, r.from_key, r.to_key);
+    batch.finalize();
+    benchmark::DoNotOptimize(batch.bricks().size());
+  }
+  state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(rays.size()));
+}
+BENCHMARK(BM_UpdateBatchDepthFrame)->ArgsProduct({{0, 1, 2}, {50, 100}})->Unit(benchmark::kMillisecond);
 
 void BM_PlanarBatchRuns(benchmark::State& state) {
   const auto rays = makeRays(4096, 300.0, true, 3);

@@ -36,56 +36,49 @@ __attribute__((target("avx2"))) std::int64_t setUpLane(const QueuedRay& q, const
   return steps;
 }
 
-// The lanes' state in walkRay's floating-point form (its 3D branch), kGroups registers of kWidth
-// lanes for each quantity; a lane whose ray ends takes the next ray. Inlined into each kernel
-// whole, so that it is compiled for the kernel's instruction set (an out-of-line copy would be
-// legacy SSE, called with the vector registers' upper halves in use).
+// The lanes walk rays in waves: a wave of rays set up at once is walked to its longest ray's
+// end, each lane marking its own ray's cells, then the scratch cell. Rays queued side by side
+// come from neighbouring pixels or beams and have about the same length, so little of a wave
+// is spent waiting; lanes that each took a new ray when theirs ended stopped every few steps
+// instead, to store, refill and reload their state.
+//
+// A wave's state for the AVX2 kernel, walkRay's floating-point form (its 3D branch): kGroups
+// registers of kWidth lanes for each quantity. Inlined into the kernel whole, so that it is
+// compiled for the kernel's instruction set (an out-of-line copy would be legacy SSE, called
+// with the vector registers' upper halves in use).
 template <int kGroups, int kWidth>
-struct Lanes {
+struct Wave {
   static constexpr int kLanes = kGroups * kWidth;
   alignas(64) double t[kGroups][3][kWidth], dt[kGroups][3][kWidth];
   alignas(64) std::int64_t left[kGroups][3][kWidth];   // steps left along each axis
   alignas(64) std::int64_t delta[kGroups][3][kWidth];  // what a step along each axis adds to the index
   alignas(64) std::int64_t index[kGroups][kWidth];     // the current cell's index in the window
-  std::int64_t steps[kLanes];
-  const std::vector<QueuedRay>& queued;
-  const std::vector<std::uint32_t>& rays;
-  const LaneWindow& w;
-  std::size_t next = 0;
-  int live = 0;
-
-  __attribute__((always_inline)) Lanes(const std::vector<QueuedRay>& q, const std::vector<std::uint32_t>& r,
-                                       const LaneWindow& win)
-      : queued(q), rays(r), w(win) {
-    for (int lane = 0; lane < kLanes; ++lane) live += load(lane);
-  }
-  /// Gives `lane` the next ray; false if none is left. A lane without a ray stands still (no
-  /// stride, no axis ever at its end) on cell 0, in the window's scratch words.
-  __attribute__((always_inline)) bool load(int lane) {
-    const int g = lane / kWidth, j = lane % kWidth;
-    if (next < rays.size()) {  // queued rays leave their z-layer: at least one step
-      double rt[3], rdt[3];
-      std::int64_t rleft[3], rdelta[3];
-      steps[lane] = setUpLane(queued[rays[next++]], w, rt, rdt, rleft, rdelta, index[g][j]);
-      for (int a = 0; a < 3; ++a) {
-        t[g][a][j] = rt[a];
-        dt[g][a][j] = rdt[a];
-        left[g][a][j] = rleft[a];
-        delta[g][a][j] = rdelta[a];
+  alignas(64) std::int64_t steps[kGroups][kWidth];     // the cells the lane marks
+  /// Loads rays[first, first + kLanes) into the lanes; returns the most steps of them. A
+  /// lane past the end has no steps, on cell 0, in the window's scratch words.
+  __attribute__((always_inline)) std::int64_t load(const std::vector<QueuedRay>& queued,
+                                                   const std::vector<std::uint32_t>& rays, std::size_t first,
+                                                   const LaneWindow& w) {
+    std::int64_t most = 0;
+    for (int lane = 0; lane < kLanes; ++lane) {
+      const int g = lane / kWidth, j = lane % kWidth;
+      if (first + lane < rays.size()) {
+        double rt[3], rdt[3];
+        std::int64_t rleft[3], rdelta[3];
+        steps[g][j] = setUpLane(queued[rays[first + lane]], w, rt, rdt, rleft, rdelta, index[g][j]);
+        most = std::max(most, steps[g][j]);
+        for (int a = 0; a < 3; ++a) {
+          t[g][a][j] = rt[a];
+          dt[g][a][j] = rdt[a];
+          left[g][a][j] = rleft[a];
+          delta[g][a][j] = rdelta[a];
+        }
+      } else {
+        for (int a = 0; a < 3; ++a) t[g][a][j] = dt[g][a][j] = 0.0, left[g][a][j] = -1, delta[g][a][j] = 0;
+        index[g][j] = steps[g][j] = 0;
       }
-      return true;
     }
-    for (int a = 0; a < 3; ++a) t[g][a][j] = dt[g][a][j] = 0.0, left[g][a][j] = -1, delta[g][a][j] = 0;
-    index[g][j] = 0;
-    steps[lane] = std::numeric_limits<std::int64_t>::max();
-    return false;
-  }
-  /// Steps every lane can take before the first of them ends.
-  __attribute__((always_inline)) std::int64_t run() const { return *std::min_element(steps, steps + kLanes); }
-  /// After `run` steps: lanes that ended take new rays.
-  __attribute__((always_inline)) void refill(std::int64_t run) {
-    for (int lane = 0; lane < kLanes; ++lane)
-      if ((steps[lane] -= run) == 0 && !load(lane)) --live;
+    return most;
   }
 };
 
@@ -96,28 +89,32 @@ struct Lanes {
 __attribute__((target("avx2"))) void walkLanesAvx2(const std::vector<QueuedRay>& queued,
                                                const std::vector<std::uint32_t>& rays, const LaneWindow& w,
                                                std::uint64_t* window, std::uint8_t* touched) {
-  constexpr int kGroups = 2;
-  Lanes<kGroups, 4> L(queued, rays, w);
+  constexpr int kGroups = 2, kWidth = 4;
+  Wave<kGroups, kWidth> L;
   std::uint64_t* const words = window - kBrickWords;  // the scratch words first
   std::uint8_t* const runs = touched - 1;
   const __m256d inf = _mm256_set1_pd(kInf);
   const __m256i zero = _mm256_setzero_si256(), one = _mm256_set1_epi64x(1), low6 = _mm256_set1_epi64x(63),
                 all = _mm256_set1_epi64x(-1);
-  while (L.live > 0) {
+  for (std::size_t first = 0; first < rays.size(); first += L.kLanes) {
+    const std::int64_t most = L.load(queued, rays, first, w);
     __m256d T[kGroups][3];
-    __m256i left_v[kGroups][3], index_v[kGroups];
+    __m256i left_v[kGroups][3], index_v[kGroups], steps_v[kGroups];
     for (int g = 0; g < kGroups; ++g) {
       for (int a = 0; a < 3; ++a) {
         T[g][a] = _mm256_load_pd(L.t[g][a]);
         left_v[g][a] = _mm256_load_si256(reinterpret_cast<const __m256i*>(L.left[g][a]));
       }
       index_v[g] = _mm256_load_si256(reinterpret_cast<const __m256i*>(L.index[g]));
+      steps_v[g] = _mm256_load_si256(reinterpret_cast<const __m256i*>(L.steps[g]));
     }
-    const std::int64_t run = L.run();
-    for (std::int64_t step = 0; step < run; ++step)
+    __m256i step_v = zero;
+    for (std::int64_t step = 0; step < most; ++step, step_v = _mm256_add_epi64(step_v, one))
       for (int g = 0; g < kGroups; ++g) {
-        const __m256i at = _mm256_srli_epi64(index_v[g], 6);
-        const __m256i bit = _mm256_sllv_epi64(one, _mm256_and_si256(index_v[g], low6));
+        // A lane past its ray's end marks cell 0, in the scratch words.
+        const __m256i cell = _mm256_and_si256(index_v[g], _mm256_cmpgt_epi64(steps_v[g], step_v));
+        const __m256i at = _mm256_srli_epi64(cell, 6);
+        const __m256i bit = _mm256_sllv_epi64(one, _mm256_and_si256(cell, low6));
         const __m128i at_lo = _mm256_castsi256_si128(at), at_hi = _mm256_extracti128_si256(at, 1);
         const __m128i bit_lo = _mm256_castsi256_si128(bit), bit_hi = _mm256_extracti128_si256(bit, 1);
         const std::int64_t at0 = _mm_cvtsi128_si64(at_lo), at1 = _mm_extract_epi64(at_lo, 1),
@@ -145,25 +142,67 @@ __attribute__((target("avx2"))) void walkLanesAvx2(const std::vector<QueuedRay>&
               _mm256_and_si256(_mm256_load_si256(reinterpret_cast<const __m256i*>(L.delta[g][a])), step_mask));
         }
       }
-    for (int g = 0; g < kGroups; ++g) {
-      for (int a = 0; a < 3; ++a) {
-        _mm256_store_pd(L.t[g][a], T[g][a]);
-        _mm256_store_si256(reinterpret_cast<__m256i*>(L.left[g][a]), left_v[g][a]);
-      }
-      _mm256_store_si256(reinterpret_cast<__m256i*>(L.index[g]), index_v[g]);
-    }
-    L.refill(run);
   }
 }
 
+// Sets up eight lanes as setUpLane does, from rays[first, first + 8) (lanes past the end get
+// none: no steps). The same IEEE operations on the same operands, eight at a time: the rays'
+// ends and keys are gathered, the divisions masked where an axis does not move.
+__attribute__((target("avx512f"), always_inline)) inline void setUpLanes8(
+    const std::vector<QueuedRay>& queued, const std::vector<std::uint32_t>& rays, std::size_t first,
+    const LaneWindow& w, __m512d T[3], __m512d DT[3], __m512i left[3], __m512i delta[3], __m512i& index,
+    __m512i& steps) {
+  const std::size_t n = first < rays.size() ? std::min<std::size_t>(8, rays.size() - first) : 0;
+  const auto live = static_cast<__mmask8>((1u << n) - 1u);
+  alignas(64) std::int64_t offsets[8] = {};
+  for (std::size_t j = 0; j < n; ++j) offsets[j] = std::int64_t{rays[first + j]} * std::int64_t{sizeof(QueuedRay)};
+  const __m512i at = _mm512_load_si512(offsets);
+  const QueuedRay& q0 = queued.front();
+  const auto field = [](const double* p) { return static_cast<const void*>(p); };
+  const auto coordinate = [](const Key& k, int a) {
+    return static_cast<const void*>(a == 0 ? &k.x : a == 1 ? &k.y : &k.z);
+  };
+  const __m512d inf = _mm512_set1_pd(kInf), plus = _mm512_set1_pd(1.0), minus = _mm512_set1_pd(-1.0);
+  const __m512i zero = _mm512_setzero_si512();
+  constexpr __mmask8 kAll = 0xFF;
+  steps = zero;
+  index = zero;
+  for (int a = 0; a < 3; ++a) {
+    const __m512d from = _mm512_mask_i64gather_pd(_mm512_setzero_pd(), live, at, field(&q0.from[a]), 1);
+    const __m512d to = _mm512_mask_i64gather_pd(_mm512_setzero_pd(), live, at, field(&q0.to[a]), 1);
+    const __m256i none = _mm256_setzero_si256();
+    const __m256i from_key32 = _mm512_mask_i64gather_epi32(none, live, at, coordinate(q0.from_key, a), 1);
+    const __m256i to_key32 = _mm512_mask_i64gather_epi32(none, live, at, coordinate(q0.to_key, a), 1);
+    const __m512i from_key = _mm512_maskz_cvtepi32_epi64(kAll, from_key32);
+    const __m512i diff = _mm512_maskz_sub_epi64(kAll, _mm512_maskz_cvtepi32_epi64(kAll, to_key32), from_key);
+    const __mmask8 up = _mm512_cmpgt_epi64_mask(diff, zero), down = _mm512_cmplt_epi64_mask(diff, zero);
+    left[a] = _mm512_maskz_abs_epi64(kAll, diff);
+    steps = _mm512_maskz_add_epi64(kAll, steps, left[a]);
+    const __m512d d = _mm512_maskz_sub_pd(kAll, to, from);
+    const __m512d key = _mm512_maskz_cvtepi32_pd(kAll, from_key32);
+    const __m512d boundary = _mm512_mask_add_pd(key, up, key, plus);
+    const auto moves = static_cast<__mmask8>(up | down);
+    DT[a] = _mm512_mask_div_pd(inf, moves, _mm512_mask_mov_pd(plus, down, minus), d);
+    T[a] = _mm512_mask_div_pd(inf, moves, _mm512_maskz_sub_pd(kAll, boundary, from), d);
+    const __m512i stride = _mm512_set1_epi64(std::int64_t{1} << w.shift(a));
+    delta[a] = _mm512_mask_sub_epi64(_mm512_maskz_mov_epi64(up, stride), down, zero, stride);
+    const __m512i window_start = _mm512_set1_epi64(std::int64_t{w.origin[a]} * kBrickSize);
+    const __m512i local = _mm512_maskz_sub_epi64(kAll, from_key, window_start);
+    index = _mm512_maskz_or_epi64(kAll, index, _mm512_maskz_sllv_epi64(kAll, local, _mm512_set1_epi64(w.shift(a))));
+  }
+  // Past the scratch words, as setUpLane.
+  index = _mm512_maskz_add_epi64(kAll, index, _mm512_set1_epi64(std::int64_t{kBrickWords} * 64));
+}
+
 // The same walk, sixteen rays in two groups of eight AVX-512 lanes: the axis choice and the
-// per-axis updates are masked operations where AVX2 needs blends, and each step's eight marks go
-// out through memory (extracting eight lanes costs more than the stores' forwarding).
+// per-axis updates are masked operations where AVX2 needs blends. A lane in the same cell as its
+// left neighbour marks nothing (near the sensor, rays of neighbouring pixels share cells); the
+// other lanes' marks are compressed to the front and go out through memory (extracting lanes
+// costs more than the stores' forwarding).
 __attribute__((target("avx512f"))) void walkLanesAvx512(const std::vector<QueuedRay>& queued,
                                                     const std::vector<std::uint32_t>& rays, const LaneWindow& w,
                                                     std::uint64_t* window, std::uint8_t* touched) {
   constexpr int kGroups = 2, kWidth = 8;
-  Lanes<kGroups, kWidth> L(queued, rays, w);
   std::uint64_t* const words = window - kBrickWords;
   std::uint8_t* const runs = touched - 1;
   alignas(64) std::int64_t at_s[kWidth];
@@ -171,25 +210,34 @@ __attribute__((target("avx512f"))) void walkLanesAvx512(const std::vector<Queued
   const __m512d inf = _mm512_set1_pd(kInf);
   const __m512i zero = _mm512_setzero_si512(), one = _mm512_set1_epi64(1), low6 = _mm512_set1_epi64(63);
   constexpr __mmask8 kAll = 0xFF;  // the maskz forms: the unmasked ones read an undefined register
-  while (L.live > 0) {
+  for (std::size_t first = 0; first < rays.size(); first += kGroups * kWidth) {
     __m512d T[kGroups][3], DT[kGroups][3];
-    __m512i left_v[kGroups][3], delta_v[kGroups][3], index_v[kGroups];
-    for (int g = 0; g < kGroups; ++g) {
-      for (int a = 0; a < 3; ++a) {
-        T[g][a] = _mm512_load_pd(L.t[g][a]);
-        DT[g][a] = _mm512_load_pd(L.dt[g][a]);
-        left_v[g][a] = _mm512_load_si512(L.left[g][a]);
-        delta_v[g][a] = _mm512_load_si512(L.delta[g][a]);
-      }
-      index_v[g] = _mm512_load_si512(L.index[g]);
-    }
-    const std::int64_t run = L.run();
-    for (std::int64_t step = 0; step < run; ++step)
+    __m512i left_v[kGroups][3], delta_v[kGroups][3], index_v[kGroups], steps_v[kGroups];
+    for (int g = 0; g < kGroups; ++g)
+      setUpLanes8(queued, rays, first + g * kWidth, w, T[g], DT[g], left_v[g], delta_v[g], index_v[g], steps_v[g]);
+    alignas(64) std::int64_t longest[kWidth];  // (GCC's reduce_max reads an undefined register)
+    _mm512_store_si512(longest, _mm512_maskz_max_epi64(kAll, steps_v[0], steps_v[1]));
+    const std::int64_t most = *std::max_element(longest, longest + kWidth);
+    __m512i step_v = zero;
+    for (std::int64_t step = 0; step < most; ++step, step_v = _mm512_maskz_add_epi64(kAll, step_v, one))
 #pragma GCC unroll 2
       for (int g = 0; g < kGroups; ++g) {
-        _mm512_store_si512(at_s, _mm512_maskz_srli_epi64(kAll, index_v[g], 6));
-        _mm512_store_si512(bit_s, _mm512_maskz_sllv_epi64(kAll, one, _mm512_and_si512(index_v[g], low6)));
-        for (int j = 0; j < kWidth; ++j) {
+        // A lane past its ray's end marks cell 0, in the scratch words. A lane in its left
+        // neighbour's cell marks nothing: near the sensor, rays of neighbouring pixels share cells.
+        const __m512i all_cells = _mm512_maskz_mov_epi64(_mm512_cmpgt_epi64_mask(steps_v[g], step_v), index_v[g]);
+        const auto own = static_cast<__mmask8>(
+            _mm512_cmpneq_epi64_mask(all_cells, _mm512_maskz_alignr_epi64(kAll, all_cells, all_cells, 7)) | 1u);
+        const __m512i cell = _mm512_maskz_compress_epi64(own, all_cells);
+        _mm512_store_si512(at_s, _mm512_maskz_srli_epi64(kAll, cell, 6));
+        _mm512_store_si512(bit_s, _mm512_maskz_sllv_epi64(kAll, one, _mm512_and_si512(cell, low6)));
+        // Two marks always (the compress leaves cell 0 behind the lanes it keeps): the count's
+        // branch then goes the same way step after step.
+        const int marks = __builtin_popcount(own);
+        for (int j = 0; j < 2; ++j) {
+          words[at_s[j]] |= bit_s[j];
+          runs[at_s[j] >> 6] = 1;
+        }
+        for (int j = 2; j < marks; ++j) {
           words[at_s[j]] |= bit_s[j];
           runs[at_s[j] >> 6] = 1;
         }
@@ -208,14 +256,6 @@ __attribute__((target("avx512f"))) void walkLanesAvx512(const std::vector<Queued
           index_v[g] = _mm512_mask_add_epi64(index_v[g], k, index_v[g], delta_v[g][a]);
         }
       }
-    for (int g = 0; g < kGroups; ++g) {
-      for (int a = 0; a < 3; ++a) {
-        _mm512_store_pd(L.t[g][a], T[g][a]);
-        _mm512_store_si512(L.left[g][a], left_v[g][a]);
-      }
-      _mm512_store_si512(L.index[g], index_v[g]);
-    }
-    L.refill(run);
   }
 }
 
