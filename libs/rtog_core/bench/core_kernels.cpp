@@ -1,6 +1,7 @@
 // Micro-benchmarks of the core's inner loops (Google Benchmark): the exact walkers, the
 // planar batch's runs, the AVX2 and AVX-512 lanes (random rays and a depth image's), the box
-// cover and the layer-update kernels. Not a test: run `build/libs/rtog_core/rtog-core-micro` on a quiet machine to compare two builds.
+// cover and the layer-update kernels. Not a test: run `build/libs/rtog_core/rtog-core-micro` on
+// a quiet machine to compare two builds.
 #include <benchmark/benchmark.h>
 
 #include <array>
