@@ -1,6 +1,10 @@
 // Insertion of every supported observation type from MRPT's own rawlogs.
 #include <gtest/gtest.h>
 
+#include <limits>
+#include <utility>
+#include <vector>
+
 #include <mrpt/obs/CObservation2DRangeScan.h>
 #include <mrpt/obs/CObservation3DRangeScan.h>
 #include <mrpt/obs/CObservationOdometry.h>
@@ -212,4 +216,96 @@ TEST(MapInsert, BackedGridFollowsTheRTree) {
   });
   ASSERT_GT(checked, 1000u);
   EXPECT_GT(double(agree) / double(checked / 7), 0.99);
+}
+
+namespace {
+
+// The map an observation makes through insertObservation (its points read piece by piece by the
+// insertion threads) is the map of extractBeams' points given whole to the core, with the same
+// counts.
+void expectInsertionIsItsBeams(CRTreeOccupancyGridMap& m, const mrpt::obs::CObservation& obs,
+                               const mrpt::poses::CPose3D& robot) {
+  ASSERT_TRUE(m.insertObservation(obs, robot));
+  rtog::ObservationBeams beams;
+  ASSERT_TRUE(m.extractBeams(obs, robot, beams, true));
+  rtog::OccupancyMap whole(m.map().params());
+  const rtog::InsertStats stats = whole.insertPointCloud(beams.origin, beams.points.data(), beams.points.size(),
+                                                         m.insertionOptions.toInsertParams(), beams.is_hit.data());
+  EXPECT_TRUE(stats == m.lastInsertStats);
+  EXPECT_EQ(beams.invalid, m.invalidRangesSkipped);
+  EXPECT_GT(stats.raysTotal(), 300u);
+  std::vector<std::pair<rtog::Box, float>> a, b;
+  m.map().forEachLeaf([&](const rtog::Box& box, float v) { a.emplace_back(box, v); });
+  whole.forEachLeaf([&](const rtog::Box& box, float v) { b.emplace_back(box, v); });
+  ASSERT_EQ(a.size(), b.size());
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    ASSERT_EQ(a[i].first.min, b[i].first.min);
+    ASSERT_EQ(a[i].first.max, b[i].first.max);
+    ASSERT_EQ(a[i].second, b[i].second);
+  }
+  expectSound(m);
+}
+
+}  // namespace
+
+TEST(MapInsert, EveryTypeInsertsTheBeamsExtractBeamsGives) {
+  const mrpt::poses::CPose3D robot(1, 2, 0.5, 0.3, 0.05, -0.02);
+  {
+    SCOPED_TRACE("Velodyne");
+    CRTreeOccupancyGridMap m(0.2);
+    expectInsertionIsItsBeams(m, *firstObservation(dataset("test_velodyne_VLP16.rawlog")), robot);
+  }
+  {
+    SCOPED_TRACE("rotating scan");
+    CRTreeOccupancyGridMap m(0.2);
+    m.insertionOptions.decimation = 3;
+    expectInsertionIsItsBeams(m, *firstObservation(dataset("rot_scan_velodyne.rawlog")), robot);
+    EXPECT_GT(m.invalidRangesSkipped, 0u);
+  }
+  auto depth =
+      std::dynamic_pointer_cast<mrpt::obs::CObservation3DRangeScan>(firstObservation(dataset("tests_rgbd.rawlog")));
+  ASSERT_TRUE(depth);
+  {
+    SCOPED_TRACE("depth image");
+    CRTreeOccupancyGridMap m(0.05);
+    m.insertionOptions.decimation_3d_range = 2;
+    expectInsertionIsItsBeams(m, *depth, robot);
+  }
+  // Points only, some without depth (0, 0, 0) or not finite; every second one taken.
+  mrpt::obs::CObservation3DRangeScan points = *depth;
+  points.unprojectInto(points);
+  points.hasRangeImage = false;
+  for (std::size_t i = 0; i < points.points3D_x.size(); i += 11)
+    points.points3D_x[i] = points.points3D_y[i] = points.points3D_z[i] = 0;
+  for (std::size_t i = 5; i < points.points3D_x.size(); i += 13)
+    points.points3D_y[i] = std::numeric_limits<float>::quiet_NaN();
+  {
+    SCOPED_TRACE("depth points");
+    CRTreeOccupancyGridMap m(0.05);
+    m.insertionOptions.decimation = 2;
+    expectInsertionIsItsBeams(m, points, robot);
+    EXPECT_GT(m.invalidRangesSkipped, points.points3D_x.size() / 2 / 13);
+  }
+  {
+    SCOPED_TRACE("point cloud");
+    auto cloud = mrpt::obs::CObservationPointCloud::Create();
+    auto pm = mrpt::maps::CSimplePointsMap::Create();
+    for (std::size_t i = 0; i < points.points3D_x.size(); ++i)
+      pm->insertPointFast(points.points3D_x[i], points.points3D_y[i], points.points3D_z[i]);
+    cloud->pointcloud = pm;
+    cloud->sensorPose = mrpt::poses::CPose3D(0.1, 0, 0.3, 0, 0, 0);
+    CRTreeOccupancyGridMap m(0.05);
+    expectInsertionIsItsBeams(m, *cloud, robot);
+    EXPECT_GT(m.invalidRangesSkipped, 0u);
+  }
+  {
+    SCOPED_TRACE("2D scan, octomap preset");
+    auto frames = loadOdometryFrames(dataset(kSena), 1);
+    auto scan = frames[0].sf->getObservationByClass<mrpt::obs::CObservation2DRangeScan>();
+    ASSERT_TRUE(scan);
+    CRTreeOccupancyGridMap::TInsertionOptions io;
+    io.sensorModelPreset = "octomap";
+    CRTreeOccupancyGridMap m(0.05, io);
+    expectInsertionIsItsBeams(m, *scan, frames[0].pose);
+  }
 }

@@ -16,6 +16,7 @@
 #include "depth_unprojection.hpp"
 #include "fingerprint.hpp"
 #include "rotating_scan.hpp"
+#include "sensor_points.hpp"
 
 namespace rtog {
 
@@ -31,66 +32,25 @@ void requireSameSizes(const char* what, std::size_t x, std::size_t y, std::size_
                                 std::to_string(x) + ", y " + std::to_string(y) + ", z " + std::to_string(z) + ")");
 }
 
-// A pose's rotation and translation taken out once per observation: CPose3D::composePoint is
-// a library call per point. Same arithmetic, same order.
-struct Frame {
-  explicit Frame(const CPose3D& pose) : R(pose.getRotationMatrix()), t{pose.x(), pose.y(), pose.z()} {}
-  mrpt::math::CMatrixDouble33 R;
-  double t[3];
-};
-
-// Appends the points get(i, x, y, z) gives for i = 0, dec, 2 dec, ... < n (false: an invalid
-// one, counted), moved by the frame, written into buffers sized once: a depth frame has a
-// quarter of a million points, and pushing each back into three vectors tests three capacities.
-template <class Get>
-void addFramePoints(const Frame& f, std::size_t n, std::size_t dec, Get&& get, ObservationBeams& out) {
-  const std::size_t room = (n + dec - 1) / dec, base = out.points.size(), hits = out.is_hit.size(),
-                    ranged = out.ranges.size();
-  out.points.resize(base + room);
-  if (out.with_ranges) out.ranges.resize(ranged + room);
-  Eigen::Vector3f* pts = out.points.data() + base;
-  float* ranges = out.with_ranges ? out.ranges.data() + ranged : nullptr;
-  const auto& R = f.R;
-  std::size_t kept = 0;
-  for (std::size_t i = 0; i < n; i += dec) {
-    double lx, ly, lz;
-    if (!get(i, lx, ly, lz)) {
-      ++out.invalid;
-      continue;
-    }
-    pts[kept] = Eigen::Vector3f(static_cast<float>(R(0, 0) * lx + R(0, 1) * ly + R(0, 2) * lz + f.t[0]),
-                                static_cast<float>(R(1, 0) * lx + R(1, 1) * ly + R(1, 2) * lz + f.t[1]),
-                                static_cast<float>(R(2, 0) * lx + R(2, 1) * ly + R(2, 2) * lz + f.t[2]));
-    if (ranges) ranges[kept] = static_cast<float>(std::sqrt(lx * lx + ly * ly + lz * lz));
-    ++kept;
-  }
-  out.points.resize(base + kept);
-  if (out.with_ranges) out.ranges.resize(ranged + kept);
-  out.is_hit.resize(hits + kept, 1);
-}
-
-void setOrigin(const CPose3D& sensor, ObservationBeams& out) {
-  out.origin = Eigen::Vector3d(sensor.x(), sensor.y(), sensor.z());
-}
-
-// Points of a points map, given in the frame `frame`, into `out`.
-void addPointsMap(const mrpt::maps::CPointsMap& pm, const CPose3D& frame, std::size_t decimation,
-                  ObservationBeams& out) {
+// Points of a points map (sensor frame), every `dec`-th.
+void takePointsMap(const mrpt::maps::CPointsMap& pm, std::size_t dec, detail::SensorPoints& sp) {
   const auto& xs = pm.getPointsBufferRef_x();
   const auto& ys = pm.getPointsBufferRef_y();
   const auto& zs = pm.getPointsBufferRef_z();
-  addFramePoints(Frame(frame), xs.size(), decimation, [&](std::size_t i, double& x, double& y, double& z) {
-    if (!std::isfinite(xs[i]) || !std::isfinite(ys[i]) || !std::isfinite(zs[i])) return false;
-    x = xs[i], y = ys[i], z = zs[i];
-    return true;
-  }, out);
+  requireSameSizes("points map", xs.size(), ys.size(), zs.size());
+  sp.x = xs.data(), sp.y = ys.data(), sp.z = zs.data();
+  sp.n = xs.size();
+  sp.dec = dec;
 }
 
-void addLocalPoints(const CPose3D& sensor, const std::vector<Eigen::Vector3f>& local, ObservationBeams& out) {
-  addFramePoints(Frame(sensor), local.size(), 1, [&](std::size_t i, double& x, double& y, double& z) {
-    x = local[i].x(), y = local[i].y(), z = local[i].z();
-    return true;
-  }, out);
+// Points decoded into `local` (sensor frame, valid, decimated already).
+void takeLocal(const std::vector<Eigen::Vector3f>& local, detail::SensorPoints& sp) {
+  static_assert(sizeof(Eigen::Vector3f) == 3 * sizeof(float), "Vector3f: three packed floats");
+  const float* first = local.empty() ? nullptr : local.front().data();
+  sp.x = first, sp.y = first ? first + 1 : nullptr, sp.z = first ? first + 2 : nullptr;
+  sp.stride = 3;
+  sp.n = local.size();
+  sp.dec = 1;
 }
 
 // Keys of the sensor-frame point cache: everything the decoded points depend on.
@@ -174,11 +134,37 @@ void CRTreeOccupancyGridMap::localPointsCached(std::uint64_t key, Decode&& decod
 
 bool CRTreeOccupancyGridMap::extractBeams(const mrpt::obs::CObservation& obs, const CPose3D& robotPose,
                                           ObservationBeams& out, bool forInsertion) const {
-  using namespace mrpt::obs;
   out.clear();  // not replaced: callers reuse `out` and its capacity
   out.with_ranges = !forInsertion;
-  // Scratch for the sensor-frame points, kept per thread from call to call.
+  if (const auto* range = dynamic_cast<const mrpt::obs::CObservationRange*>(&obs)) {
+    // Insertion takes the readings as cones (insertSonar), never as beams; for the likelihood
+    // they are the echoes on the axes.
+    if (forInsertion) return false;
+    sonarEndPoints(*range, robotPose, out);
+    return true;
+  }
+  detail::SensorPoints sp;
+  if (!sensorPoints(obs, robotPose, forInsertion, sp)) return false;
+  out.origin = sp.origin;
+  out.invalid = sp.invalid;
+  const std::size_t room = sp.size();
+  out.points.resize(room);
+  if (out.with_ranges) out.ranges.resize(room);
+  float* ranges = out.with_ranges ? out.ranges.data() : nullptr;
+  const std::size_t kept = sp.read(0, room, out.points.data(), ranges, out.invalid);
+  out.points.resize(kept);
+  if (out.with_ranges) out.ranges.resize(kept);
+  out.is_hit.resize(kept, 1);
+  return true;
+}
+
+bool CRTreeOccupancyGridMap::sensorPoints(const mrpt::obs::CObservation& obs, const CPose3D& robotPose,
+                                          bool forInsertion, detail::SensorPoints& sp) const {
+  using namespace mrpt::obs;
+  // Scratch for decoded sensor-frame points, kept per thread from call to call; `sp` points
+  // into it until this thread's next call.
   thread_local std::vector<Eigen::Vector3f> local;
+  local.clear();
   std::size_t dec = insertionOptions.decimation;
   if (!forInsertion)
     dec = likelihoodOptions.likelihoodMethod == lmRayTracing ? likelihoodOptions.rayTracing_decimation
@@ -187,49 +173,39 @@ bool CRTreeOccupancyGridMap::extractBeams(const mrpt::obs::CObservation& obs, co
 
   if (const auto* scan = dynamic_cast<const CObservation2DRangeScan*>(&obs)) {
     const CPose3D sensor = robotPose + scan->sensorPose;
-    setOrigin(sensor, out);
+    sp.setSensor(sensor);
     // A level scan's end points all get the float of the sensor z; the origin gets the same
     // value, so that a sensor a hair off a cell face does not trace from the layer next to its
     // end points'.
     const auto R = sensor.getRotationMatrix();
-    if (R(2, 0) == 0.0 && R(2, 1) == 0.0) out.origin.z() = static_cast<double>(static_cast<float>(sensor.z()));
+    if (R(2, 0) == 0.0 && R(2, 1) == 0.0) sp.origin.z() = static_cast<double>(static_cast<float>(sensor.z()));
     // Decoded at every call, not cached: the beam angles' cos/sin are cached, and fingerprinting
     // the ranges would cost as much as this loop.
     {
       const std::size_t n = scan->getScanSize();
       const auto angles = scanAngles(*scan);
-      local.clear();
       local.reserve(n / dec + 1);
       for (std::size_t i = 0; i < n; i += dec) {
         const float r = scan->getScanRange(i);
         if (!scan->getScanRangeValidity(i) || !std::isfinite(r) || !(r > 0.0f)) {
-          ++out.invalid;
+          ++sp.invalid;
           continue;
         }
         local.emplace_back(static_cast<float>(r * angles->cos[i]), static_cast<float>(r * angles->sin[i]), 0.0f);
       }
     }
-    addLocalPoints(sensor, local, out);
-    return true;
-  }
-  if (const auto* range = dynamic_cast<const CObservationRange*>(&obs)) {
-    // Insertion takes the readings as cones (insertSonar), never as beams; for the likelihood
-    // they are the echoes on the axes.
-    if (forInsertion) return false;
-    sonarEndPoints(*range, robotPose, out);
+    takeLocal(local, sp);
     return true;
   }
   if (const auto* pc = dynamic_cast<const CObservationPointCloud*>(&obs)) {
     pc->load();
     if (!pc->pointcloud) return false;
-    const CPose3D sensor = robotPose + pc->sensorPose;
-    setOrigin(sensor, out);
-    addPointsMap(*pc->pointcloud, sensor, dec, out);
+    sp.setSensor(robotPose + pc->sensorPose);
+    takePointsMap(*pc->pointcloud, dec, sp);
     return true;
   }
   if (const auto* velo = dynamic_cast<const CObservationVelodyneScan*>(&obs)) {
-    const CPose3D sensor = robotPose + velo->sensorPose;
-    setOrigin(sensor, out);
+    sp.setSensor(robotPose + velo->sensorPose);
     localPointsCached(
         keyVelodyne(*velo, dec),
         [&](std::vector<Eigen::Vector3f>& pts, std::size_t& invalid) {
@@ -250,43 +226,32 @@ bool CRTreeOccupancyGridMap::extractBeams(const mrpt::obs::CObservation& obs, co
             pts.emplace_back(pcl.x[i], pcl.y[i], pcl.z[i]);
           }
         },
-        local, out.invalid);
-    addLocalPoints(sensor, local, out);
+        local, sp.invalid);
+    takeLocal(local, sp);
     return true;
   }
   if (const auto* rot = dynamic_cast<const CObservationRotatingScan*>(&obs)) {
-    const CPose3D sensor = robotPose + rot->sensorPose;
-    setOrigin(sensor, out);
+    sp.setSensor(robotPose + rot->sensorPose);
     // Not cached: fingerprinting the whole range image costs more than decoding it.
-    local.clear();
     detail::decodeRotatingScan(*rot, dec, insertionOptions.rotatingScan_minElevation_deg,
-                               insertionOptions.rotatingScan_maxElevation_deg, local, out.invalid);
-    addLocalPoints(sensor, local, out);
+                               insertionOptions.rotatingScan_maxElevation_deg, local, sp.invalid);
+    takeLocal(local, sp);
     return true;
   }
   if (const auto* depth = dynamic_cast<const CObservation3DRangeScan*>(&obs)) {
     depth->load();
-    const CPose3D sensor = robotPose + depth->sensorPose;
-    const Frame frame(sensor);
+    sp.setSensor(robotPose + depth->sensorPose);
     if (!depth->hasRangeImage) {
       if (!depth->hasPoints3D) return false;
+      // Only the point cloud was stored (sensor frame).
       requireSameSizes("CObservation3DRangeScan points3D", depth->points3D_x.size(), depth->points3D_y.size(),
                        depth->points3D_z.size());
-      // Only the point cloud was stored (sensor frame).
-      setOrigin(sensor, out);
-      const auto& xs = depth->points3D_x;
-      const auto& ys = depth->points3D_y;
-      const auto& zs = depth->points3D_z;
-      addFramePoints(frame, xs.size(), dec, [&](std::size_t i, double& x, double& y, double& z) {
-        if (!std::isfinite(xs[i]) || !std::isfinite(ys[i]) || !std::isfinite(zs[i]) ||
-            (xs[i] == 0 && ys[i] == 0 && zs[i] == 0))
-          return false;
-        x = xs[i], y = ys[i], z = zs[i];
-        return true;
-      }, out);
+      sp.x = depth->points3D_x.data(), sp.y = depth->points3D_y.data(), sp.z = depth->points3D_z.data();
+      sp.n = depth->points3D_x.size();
+      sp.dec = dec;
+      sp.zero_is_invalid = true;
       return true;
     }
-    setOrigin(sensor, out);
     // MRPT's unprojection through the camera model, into the sensor frame (x forward), once
     // per observation; then the sensor pose on the robot and the robot pose. Decimated, the
     // same points without the table of every pixel MRPT would keep (depth_unprojection.hpp).
@@ -317,8 +282,8 @@ bool CRTreeOccupancyGridMap::extractBeams(const mrpt::obs::CObservation& obs, co
           }
           invalid += pixels > xs.size() ? pixels - xs.size() : 0;
         },
-        local, out.invalid);
-    addLocalPoints(sensor, local, out);
+        local, sp.invalid);
+    takeLocal(local, sp);
     return true;
   }
   return false;
@@ -331,14 +296,19 @@ bool CRTreeOccupancyGridMap::internal_insertObservation(const mrpt::obs::CObserv
       return insertGridScan(*scan, robotPose ? *robotPose : CPose3D());
   if (const auto* range = dynamic_cast<const mrpt::obs::CObservationRange*>(&obs))
     return insertSonar(*range, robotPose ? *robotPose : CPose3D());
-  ObservationBeams beams;
-  if (!extractBeams(obs, robotPose ? *robotPose : CPose3D(), beams, true)) return false;
+  detail::SensorPoints sp;
+  if (!sensorPoints(obs, robotPose ? *robotPose : CPose3D(), true, sp)) return false;
   syncParams();
   const InsertParams ip = insertionOptions.toInsertParams();
-  lastInsertStats = map_.insertPointCloud(beams.origin, beams.points.data(), beams.points.size(), ip,
-                                          beams.is_hit.data());
+  // Read by the insertion threads, moved into the map frame piece by piece. Every point taken
+  // is a beam the map counts or an invalid one.
+  const PointSource source{sp.size(), [&sp](std::size_t first, std::size_t n, Eigen::Vector3f* out) {
+                             std::size_t dropped = 0;
+                             return sp.read(first, n, out, nullptr, dropped);
+                           }};
+  lastInsertStats = map_.insertPointSource(sp.origin, source, ip);
   totalInsertStats += lastInsertStats;
-  invalidRangesSkipped += beams.invalid;
+  invalidRangesSkipped += sp.invalid + (sp.size() - lastInsertStats.raysTotal());
   notifyMapChanged();
   return true;
 }

@@ -88,7 +88,6 @@ InsertStats ScanIntegrator::insert(const Eigen::Vector3d& origin, const Eigen::V
                                    const InsertParams& ip, const std::uint8_t* is_hit,
                                    const std::function<void()>& flush_pending) {
   ip.validate();
-  InsertScratch& scratch = scratch_;
   if (ip.model == SensorModel::RangeNoise) {
     // Graded changes per cell: not the planar cache's two steps.
     flush_pending();
@@ -96,59 +95,119 @@ InsertStats ScanIntegrator::insert(const Eigen::Vector3d& origin, const Eigen::V
   }
   Key lo, hi;
   InsertStats stats;
-  const bool planar = ip.planar_cache && preparePlanarBeams(origin, points, count, ip, is_hit, lo, hi, stats);
-  if (!planar) flush_pending();
-  // Below a few thousand beams a thread costs more than it saves.
-  const std::size_t threads = std::min<std::size_t>(static_cast<std::size_t>(ip.threads), 1 + count / 4096);
-  if (scratch.batches.size() < threads) scratch.batches.resize(threads);
-  if (planar && scratch.planar_batches.size() < threads) scratch.planar_batches.resize(threads);
-  std::vector<InsertStats> part(threads);
-  // Chunks taken as threads become free, traced independently; their union does not depend on
-  // the split. Small chunks (a sixteenth of a thread's share, 256 to 2,048 beams) balance a
-  // single long-range scan. With discretized end points a thread traces each end cell once, and
-  // neighbouring beams share end cells across a chunk border: then four large chunks per thread
-  // (two fixed halves were too uneven, a depth image's rows differing in cost).
-  const std::size_t chunk = ip.discretize ? std::max<std::size_t>(2048, (count + 4 * threads - 1) / (4 * threads))
-                                          : std::clamp<std::size_t>(count / (16 * threads), 256, 2048);
-  parallel::ChunkClaims claims((count + chunk - 1) / chunk, threads);
-  const Key origin_key = planar ? store_.lattice.key(origin) : Key{};
+  if (ip.planar_cache && preparePlanarBeams(origin, points, count, ip, is_hit, lo, hi, stats))
+    return insertPlanar(origin, count, ip, lo, hi, stats);
+  flush_pending();
+  return traceAndApply(count, ip, [&](UpdateBatch& batch, std::size_t first, std::size_t n, InsertStats& own) {
+    traceBeams(store_.lattice, origin, points + first, n, ip, is_hit ? is_hit + first : nullptr, batch, own);
+  });
+}
+
+InsertStats ScanIntegrator::insert(const Eigen::Vector3d& origin, const PointSource& source, const InsertParams& ip,
+                                   const std::function<void()>& flush_pending) {
+  ip.validate();
+  if (ip.model == SensorModel::RangeNoise || (ip.planar_cache && mayBePlanar(origin, source, ip))) {
+    // Read whole, then as a scan given whole: the planar test needs every beam.
+    std::vector<Eigen::Vector3f> points(source.count);
+    points.resize(source.read(0, source.count, points.data()));
+    return insert(origin, points.data(), points.size(), ip, nullptr, flush_pending);
+  }
+  flush_pending();
+  return traceAndApply(source.count, ip, [&](UpdateBatch& batch, std::size_t first, std::size_t n, InsertStats& own) {
+    Eigen::Vector3f piece[kSourcePiece];
+    for (std::size_t at = first; at < first + n; at += kSourcePiece) {
+      const std::size_t kept = source.read(at, std::min(kSourcePiece, first + n - at), piece);
+      traceBeams(store_.lattice, origin, piece, kept, ip, nullptr, batch, own);
+    }
+  });
+}
+
+bool ScanIntegrator::mayBePlanar(const Eigen::Vector3d& origin, const PointSource& source, const InsertParams& ip) {
+  Key origin_key;
+  if (!store_.lattice.tryKey(origin, origin_key)) return true;  // the whole scan's path reports it
+  // A volumetric scan leaves the origin's z-layer within its first beams.
+  Eigen::Vector3f piece[kSourcePiece];
+  const std::size_t kept = source.read(0, std::min(kSourcePiece, source.count), piece);
   const BeamRules rules(store_.lattice, ip);
+  Eigen::Vector3d end;
+  Key end_key;
+  for (std::size_t i = 0; i < kept; ++i) {
+    const BeamEnd kind = rules.classify(origin, piece[i].cast<double>(), true, end, end_key);
+    if ((kind == BeamEnd::Hit || kind == BeamEnd::Truncated) && end_key.z != origin_key.z) return false;
+  }
+  return true;
+}
+
+namespace {
+
+// Chunks are taken as threads become free, traced independently; their union does not depend
+// on the split. Small chunks (a sixteenth of a thread's share, 256 to 2,048 beams) balance a
+// single long-range scan. With discretized end points a thread traces each end cell once, and
+// neighbouring beams share end cells across a chunk border: then four large chunks per thread
+// (two fixed halves were too uneven, a depth image's rows differing in cost).
+std::size_t chunkSize(std::size_t count, std::size_t threads, const InsertParams& ip) {
+  return ip.discretize ? std::max<std::size_t>(2048, (count + 4 * threads - 1) / (4 * threads))
+                       : std::clamp<std::size_t>(count / (16 * threads), 256, 2048);
+}
+
+// Below a few thousand beams a thread costs more than it saves.
+std::size_t threadsFor(std::size_t count, const InsertParams& ip) {
+  return std::min<std::size_t>(static_cast<std::size_t>(ip.threads), 1 + count / 4096);
+}
+
+}  // namespace
+
+InsertStats ScanIntegrator::traceAndApply(std::size_t count, const InsertParams& ip, const TraceChunk& trace) {
+  InsertScratch& scratch = scratch_;
+  const std::size_t threads = threadsFor(count, ip);
+  if (scratch.batches.size() < threads) scratch.batches.resize(threads);
+  std::vector<InsertStats> part(threads);
+  const std::size_t chunk = chunkSize(count, threads, ip);
+  parallel::ChunkClaims claims((count + chunk - 1) / chunk, threads);
   parallel::run(threads, [&](std::size_t t) {
     InsertStats own;  // counted locally: neighbouring entries of `part` share a cache line
-    if (planar) {
-      scratch.planar_batches[t].reset(lo, hi);
-    } else {
-      scratch.batches[t].clear();
-    }
+    UpdateBatch& batch = scratch.batches[t];
+    batch.clear();
+    for (std::size_t c; (c = claims.next(t)) != parallel::ChunkClaims::kNone;)
+      trace(batch, c * chunk, std::min(chunk, count - c * chunk), own);
+    batch.finalize();
+    part[t] = own;
+  });
+  InsertStats stats;
+  for (std::size_t t = 0; t < threads; ++t) stats += part[t];
+  std::vector<const UpdateBatch*> batches;
+  for (std::size_t t = 0; t < threads; ++t) batches.push_back(&scratch.batches[t]);
+  applyBatches(store_, batches, stats, static_cast<int>(threads), scratch.apply_ctx);
+  return stats;
+}
+
+InsertStats ScanIntegrator::insertPlanar(const Eigen::Vector3d& origin, std::size_t count, const InsertParams& ip,
+                                         const Key& lo, const Key& hi, InsertStats stats) {
+  InsertScratch& scratch = scratch_;
+  const std::size_t threads = threadsFor(count, ip);
+  if (scratch.planar_batches.size() < threads) scratch.planar_batches.resize(threads);
+  std::vector<InsertStats> part(threads);
+  const std::size_t chunk = chunkSize(count, threads, ip);
+  parallel::ChunkClaims claims((count + chunk - 1) / chunk, threads);
+  const Key origin_key = store_.lattice.key(origin);
+  const BeamRules rules(store_.lattice, ip);
+  parallel::run(threads, [&](std::size_t t) {
+    InsertStats own;
+    PlanarBatch& batch = scratch.planar_batches[t];
+    batch.reset(lo, hi);
     for (std::size_t c; (c = claims.next(t)) != parallel::ChunkClaims::kNone;) {
       const std::size_t first = c * chunk, n = std::min(chunk, count - first);
-      const std::uint8_t* hits = is_hit ? is_hit + first : nullptr;
-      if (planar) {
-        PlanarBatch& batch = scratch.planar_batches[t];
-        for (std::size_t i = first; i < first + n; ++i) {
-          const PlanarBeam& beam = scratch.planar_beams[i];
-          if (!beam.traced) continue;
-          rules.mark(beam.hit, beam.end, batch, [&] { batch.markRayFree(beam.seg, origin_key, beam.skip_runs); });
-        }
-      } else {
-        traceBeams(store_.lattice, origin, points + first, n, ip, hits, scratch.batches[t], own);
+      for (std::size_t i = first; i < first + n; ++i) {
+        const PlanarBeam& beam = scratch.planar_beams[i];
+        if (!beam.traced) continue;
+        rules.mark(beam.hit, beam.end, batch, [&] { batch.markRayFree(beam.seg, origin_key, beam.skip_runs); });
       }
     }
-    if (planar) {
-      scratch.planar_batches[t].finalize();
-    } else {
-      scratch.batches[t].finalize();
-    }
+    batch.finalize();
     part[t] = own;
   });
   for (std::size_t t = 0; t < threads; ++t) stats += part[t];
-  if (planar) {
-    planar_.apply(store_, scratch.planar_batches, threads, lo.z, stats);
-  } else {
-    std::vector<const UpdateBatch*> batches;
-    for (std::size_t t = 0; t < threads; ++t) batches.push_back(&scratch.batches[t]);
-    applyBatches(store_, batches, stats, static_cast<int>(threads), scratch.apply_ctx);
-  }
+  planar_.apply(store_, scratch.planar_batches, threads, lo.z, stats);
   return stats;
 }
 
@@ -156,7 +215,7 @@ InsertStats ScanIntegrator::insertGraded(const Eigen::Vector3d& origin, const Ei
                                          std::size_t count, const InsertParams& ip, const std::uint8_t* is_hit) {
   (void)store_.lattice.key(origin);  // throws for a bad origin, before any thread starts
   InsertScratch& scratch = scratch_;
-  const std::size_t threads = std::min<std::size_t>(static_cast<std::size_t>(ip.threads), 1 + count / 4096);
+  const std::size_t threads = threadsFor(count, ip);
   if (scratch.graded.size() < threads) scratch.graded.resize(threads);
   std::vector<InsertStats> part(threads);
   // Chunks taken as threads become free; the union of the threads' scans does not depend on the

@@ -16,6 +16,7 @@
 #include "integrate/update_batch.hpp"
 #include "rtog/core/cone.hpp"
 #include "rtog/core/params.hpp"
+#include "rtog/core/point_source.hpp"
 #include "rtog/core/pose_blur.hpp"
 #include "rtog/core/stats.hpp"
 #include "storage/map_store.hpp"
@@ -74,6 +75,11 @@ class ScanIntegrator {
   InsertStats insert(const Eigen::Vector3d& origin, const Eigen::Vector3f* points, std::size_t count,
                      const InsertParams& ip, const std::uint8_t* is_hit, const std::function<void()>& flush_pending);
 
+  /// Integrates one scan read piece by piece (OccupancyMap::insertPointSource):
+  /// as above, but no copy of the scan is made unless it may be planar or is graded.
+  InsertStats insert(const Eigen::Vector3d& origin, const PointSource& source, const InsertParams& ip,
+                     const std::function<void()>& flush_pending);
+
   /// Integrates one scan from a weighted set of poses (OccupancyMap::insertBlurred; pose_blur.cpp).
   InsertStats insertBlurred(const WeightedScan* scans, std::size_t n, const InsertParams& ip,
                             const std::function<void()>& flush_pending);
@@ -90,13 +96,24 @@ class ScanIntegrator {
                          InsertStats& stats);
 
  private:
+  /// Points read from a PointSource at a time (24 KiB, on the tracing thread's stack).
+  static constexpr std::size_t kSourcePiece = 2048;
+  using TraceChunk = std::function<void(UpdateBatch& batch, std::size_t first, std::size_t n, InsertStats& stats)>;
+  /// Traces beams [0, count) in chunks on the insertion threads, each chunk by
+  /// trace(thread's batch, first, n, thread's stats), then applies the batches.
+  InsertStats traceAndApply(std::size_t count, const InsertParams& ip, const TraceChunk& trace);
+  /// A planar scan whose beams preparePlanarBeams() set out: marked, then kept in the planar cache.
+  InsertStats insertPlanar(const Eigen::Vector3d& origin, std::size_t count, const InsertParams& ip, const Key& lo,
+                           const Key& hi, InsertStats stats);
+  /// False if the source's first beams leave the origin's z-layer (then no planar batch takes it).
+  bool mayBePlanar(const Eigen::Vector3d& origin, const PointSource& source, const InsertParams& ip);
+  /// A RangeNoise scan: traced into per-thread graded scans, then applied.
+  InsertStats insertGraded(const Eigen::Vector3d& origin, const Eigen::Vector3f* points, std::size_t count,
+                           const InsertParams& ip, const std::uint8_t* is_hit);
   /// True if every traced beam of the scan stays in the origin's z-layer and the scan is not too
   /// wide for a planar batch: then the beams in exact planar form, with the runs each can skip
   /// (fanSkipRuns), are in scratch_.planar_beams, [lo, hi] bounds their cells in x and y, and
   /// `stats` counts them.
-  /// A RangeNoise scan: traced into per-thread graded scans, then applied.
-  InsertStats insertGraded(const Eigen::Vector3d& origin, const Eigen::Vector3f* points, std::size_t count,
-                           const InsertParams& ip, const std::uint8_t* is_hit);
   bool preparePlanarBeams(const Eigen::Vector3d& origin, const Eigen::Vector3f* points, std::size_t count,
                           const InsertParams& ip, const std::uint8_t* is_hit, Key& lo, Key& hi, InsertStats& stats);
 

@@ -18,10 +18,11 @@ void MapEngine::clear() {
   cover_pending.store(false, std::memory_order_release);
 }
 
-InsertStats MapEngine::insertPointCloud(const Eigen::Vector3d& origin, const Eigen::Vector3f* points,
-                                        std::size_t count, const InsertParams& ip, const std::uint8_t* is_hit) {
+template <class Insert>
+InsertStats MapEngine::integrate(Insert&& insert) {
   ScratchScope scope(scratch);
-  const InsertStats stats = ScanIntegrator(store, planar, *scope).insert(origin, points, count, ip, is_hit, [this] {
+  ScanIntegrator integrator(store, planar, *scope);
+  const InsertStats stats = insert(integrator, [this] {
     if (cover_pending.load(std::memory_order_acquire)) flush();
   });
   if (!planar.empty()) cover_pending.store(true, std::memory_order_release);
@@ -30,14 +31,24 @@ InsertStats MapEngine::insertPointCloud(const Eigen::Vector3d& origin, const Eig
   return stats;
 }
 
-InsertStats MapEngine::insertBlurred(const WeightedScan* scans, std::size_t n, const InsertParams& ip) {
-  ScratchScope scope(scratch);
-  const InsertStats stats = ScanIntegrator(store, planar, *scope).insertBlurred(scans, n, ip, [this] {
-    if (cover_pending.load(std::memory_order_acquire)) flush();
+InsertStats MapEngine::insertPointCloud(const Eigen::Vector3d& origin, const Eigen::Vector3f* points,
+                                        std::size_t count, const InsertParams& ip, const std::uint8_t* is_hit) {
+  return integrate([&](ScanIntegrator& in, const std::function<void()>& flush_pending) {
+    return in.insert(origin, points, count, ip, is_hit, flush_pending);
   });
-  if (!planar.empty()) cover_pending.store(true, std::memory_order_release);
-  scope.keepAtMost(store.index.memoryBytesAtLeast() / 2 + planar.memoryBytes());
-  return stats;
+}
+
+InsertStats MapEngine::insertPointSource(const Eigen::Vector3d& origin, const PointSource& source,
+                                        const InsertParams& ip) {
+  return integrate([&](ScanIntegrator& in, const std::function<void()>& flush_pending) {
+    return in.insert(origin, source, ip, flush_pending);
+  });
+}
+
+InsertStats MapEngine::insertBlurred(const WeightedScan* scans, std::size_t n, const InsertParams& ip) {
+  return integrate([&](ScanIntegrator& in, const std::function<void()>& flush_pending) {
+    return in.insertBlurred(scans, n, ip, flush_pending);
+  });
 }
 
 InsertStats MapEngine::insertCones(const ConeReading* readings, std::size_t n, ConeWeighting w,

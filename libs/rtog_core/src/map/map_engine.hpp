@@ -29,6 +29,7 @@ class MapEngine {
 
   InsertStats insertPointCloud(const Eigen::Vector3d& origin, const Eigen::Vector3f* points, std::size_t count,
                                const InsertParams& ip, const std::uint8_t* is_hit);
+  InsertStats insertPointSource(const Eigen::Vector3d& origin, const PointSource& source, const InsertParams& ip);
   InsertStats insertBlurred(const WeightedScan* scans, std::size_t n, const InsertParams& ip);
   InsertStats insertCones(const ConeReading* readings, std::size_t n, ConeWeighting w, const InsertParams& ip);
   InsertStats applyStepRuns(std::int32_t z, const StepRun* runs, std::size_t n, const StepRule& rule,
@@ -48,6 +49,11 @@ class MapEngine {
   std::unique_ptr<InsertScratch> scratch;  // while inserting (ScratchScope)
   std::mutex cover_mutex;
   std::atomic<bool> cover_pending{false};
+
+ private:
+  /// Runs insert(integrator, flush_pending) with this map's scratch, then notes a pending cover.
+  template <class Insert>
+  InsertStats integrate(Insert&& insert);
 };
 
 }  // namespace rtog

@@ -52,6 +52,11 @@ InsertStats OccupancyMap::insertPointCloud(const Eigen::Vector3d& origin, const 
   return engine_->insertPointCloud(origin, points, count, ip, is_hit);
 }
 
+InsertStats OccupancyMap::insertPointSource(const Eigen::Vector3d& origin, const PointSource& source,
+                                           const InsertParams& ip) {
+  return engine_->insertPointSource(origin, source, ip);
+}
+
 InsertStats OccupancyMap::insertBlurred(const WeightedScan* scans, std::size_t n, const InsertParams& ip) {
   return engine_->insertBlurred(scans, n, ip);
 }

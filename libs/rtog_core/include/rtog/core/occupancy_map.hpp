@@ -20,6 +20,7 @@
 #include "rtog/core/key.hpp"
 #include "rtog/core/log_odds.hpp"
 #include "rtog/core/params.hpp"
+#include "rtog/core/point_source.hpp"
 #include "rtog/core/pose_blur.hpp"
 #include "rtog/core/stats.hpp"
 
@@ -63,6 +64,11 @@ class OccupancyMap {
                                const InsertParams& ip = {}) {
     return insertPointCloud(origin, points.data(), points.size(), ip);
   }
+
+  /// Integrates one scan read piece by piece (PointSource) by the insertion threads, with the
+  /// same result as the points given whole: a scan in the sensor's frame is moved into the map
+  /// frame a few thousand points at a time, never copied whole. Every beam returned.
+  InsertStats insertPointSource(const Eigen::Vector3d& origin, const PointSource& source, const InsertParams& ip = {});
 
   /// Integrates one scan taken from an uncertain pose, given as the scan seen from each pose of
   /// a weighted sample set (e.g. sigmaPoints() of the pose covariance): every cell takes, once,

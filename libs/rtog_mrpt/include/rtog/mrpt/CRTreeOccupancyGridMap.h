@@ -36,6 +36,10 @@ class CObservationRange;
 
 namespace rtog {
 
+namespace detail {
+struct SensorPoints;  // src/sensor_points.hpp
+}
+
 class CRTreeOccupancyGridMap : public mrpt::maps::CMetricMap {
   DEFINE_SERIALIZABLE(CRTreeOccupancyGridMap, rtog)
 
@@ -340,6 +344,10 @@ class CRTreeOccupancyGridMap : public mrpt::maps::CMetricMap {
   /// (capped) through the field's Gaussian-plus-uniform mixture. With the cache on, per lattice
   /// cell, as COccupancyGridMap2D's precomputed field. The caller holds caches_.mutex.
   float fieldTermLocked(const Eigen::Vector3d& p, const FieldParams& f) const;
+  /// An observation's beams in its sensor's frame (not a CObservationRange: see sonarEndPoints),
+  /// decimated for insertion or for the likelihood; false for an unsupported type.
+  bool sensorPoints(const mrpt::obs::CObservation& obs, const mrpt::poses::CPose3D& robotPose, bool forInsertion,
+                    detail::SensorPoints& sp) const;
   /// Sensor-frame points decoded by `decode`, or the last ones if `key` (a fingerprint of
   /// everything they depend on: the observation's data, geometry and decimation) is the last one's.
   template <class Decode>
