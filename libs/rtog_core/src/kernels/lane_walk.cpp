@@ -197,8 +197,7 @@ __attribute__((target("avx512f"), always_inline)) inline void setUpLanes8(
 // The same walk, sixteen rays in two groups of eight AVX-512 lanes: the axis choice and the
 // per-axis updates are masked operations where AVX2 needs blends. A lane in the same cell as its
 // left neighbour marks nothing (near the sensor, rays of neighbouring pixels share cells); the
-// other lanes' marks are compressed to the front and go out through memory (extracting lanes
-// costs more than the stores' forwarding).
+// other lanes' marks are compressed to the front, the first two taken from the registers.
 __attribute__((target("avx512f"))) void walkLanesAvx512(const std::vector<QueuedRay>& queued,
                                                     const std::vector<std::uint32_t>& rays, const LaneWindow& w,
                                                     std::uint64_t* window, std::uint8_t* touched) {
@@ -228,18 +227,24 @@ __attribute__((target("avx512f"))) void walkLanesAvx512(const std::vector<Queued
         const auto own = static_cast<__mmask8>(
             _mm512_cmpneq_epi64_mask(all_cells, _mm512_maskz_alignr_epi64(kAll, all_cells, all_cells, 7)) | 1u);
         const __m512i cell = _mm512_maskz_compress_epi64(own, all_cells);
-        _mm512_store_si512(at_s, _mm512_maskz_srli_epi64(kAll, cell, 6));
-        _mm512_store_si512(bit_s, _mm512_maskz_sllv_epi64(kAll, one, _mm512_and_si512(cell, low6)));
-        // Two marks always (the compress leaves cell 0 behind the lanes it keeps): the count's
-        // branch then goes the same way step after step.
+        const __m512i at = _mm512_maskz_srli_epi64(kAll, cell, 6);
+        const __m512i bit = _mm512_maskz_sllv_epi64(kAll, one, _mm512_and_si512(cell, low6));
+        // The first two marks straight from the registers, always (the compress leaves cell 0
+        // behind the lanes it keeps), so that the count's branch goes the same way step after step.
+        const __m128i at01 = _mm512_maskz_extracti32x4_epi32(0xF, at, 0);
+        const __m128i bit01 = _mm512_maskz_extracti32x4_epi32(0xF, bit, 0);
+        const std::int64_t at0 = _mm_cvtsi128_si64(at01), at1 = _mm_extract_epi64(at01, 1);
+        words[at0] |= static_cast<std::uint64_t>(_mm_cvtsi128_si64(bit01));
+        words[at1] |= static_cast<std::uint64_t>(_mm_extract_epi64(bit01, 1));
+        runs[at0 >> 6] = runs[at1 >> 6] = 1;
         const int marks = __builtin_popcount(own);
-        for (int j = 0; j < 2; ++j) {
-          words[at_s[j]] |= bit_s[j];
-          runs[at_s[j] >> 6] = 1;
-        }
-        for (int j = 2; j < marks; ++j) {
-          words[at_s[j]] |= bit_s[j];
-          runs[at_s[j] >> 6] = 1;
+        if (marks > 2) {
+          _mm512_store_si512(at_s, at);
+          _mm512_store_si512(bit_s, bit);
+          for (int j = 2; j < marks; ++j) {
+            words[at_s[j]] |= bit_s[j];
+            runs[at_s[j] >> 6] = 1;
+          }
         }
         // walkRay's choice: x if tx <= ty and tx <= tz, else y if ty <= tz, else z.
         const __mmask8 x_first =
@@ -251,7 +256,7 @@ __attribute__((target("avx512f"))) void walkLanesAvx512(const std::vector<Queued
           const __mmask8 k = chosen[a];
           left_v[g][a] = _mm512_mask_sub_epi64(left_v[g][a], k, left_v[g][a], one);
           const __mmask8 at_end = _mm512_mask_cmpeq_epi64_mask(k, left_v[g][a], zero);
-          T[g][a] = _mm512_mask_add_pd(T[g][a], static_cast<__mmask8>(k & ~at_end), T[g][a], DT[g][a]);
+          T[g][a] = _mm512_mask_add_pd(T[g][a], k, T[g][a], DT[g][a]);
           T[g][a] = _mm512_mask_mov_pd(T[g][a], at_end, inf);
           index_v[g] = _mm512_mask_add_epi64(index_v[g], k, index_v[g], delta_v[g][a]);
         }
