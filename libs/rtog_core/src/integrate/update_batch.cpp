@@ -63,22 +63,6 @@ void UpdateBatch::markRayFree(const Eigen::Vector3d& from, const Eigen::Vector3d
   walkRay(from, to, from_key, to_key, cursor);
 }
 
-void UpdateBatch::queueRayFree(const Eigen::Vector3d& from, const Eigen::Vector3d& to, const Key& from_key,
-                               const Key& to_key) {
-  // Long rays would need a window too large to sweep (LiDAR rays reach thousands of cells);
-  // walked at once, they also find the bricks their end points were just marked in.
-  const auto reach = [&](int a) { return std::abs(std::int64_t{to_key[a]} - from_key[a]); };
-  if (lanes_ == detail::LaneKernel::None || from_key.z == to_key.z || reach(0) >= kLaneReach ||
-      reach(1) >= kLaneReach || reach(2) >= kLaneReach / 2) {
-    markRayFree(from, to, from_key, to_key);
-    return;
-  }
-  // The whole queue at once: grown by doubling, it would be copied into fresh memory again and again.
-  if (queued_.capacity() < kQueuedRays) queued_.reserve(kQueuedRays);
-  queued_.push_back(QueuedRay{from, to, from_key, to_key});
-  if (queued_.size() == kQueuedRays) walkQueued();
-}
-
 bool UpdateBatch::useLaneKernel(detail::LaneKernel kernel) {
   if (!detail::laneKernelRuns(kernel)) return false;
   walkQueued();  // what the old kernel queued

@@ -4,6 +4,7 @@
 
 #include <array>
 #include <cstdint>
+#include <cstdlib>
 #include <memory>
 #include <vector>
 
@@ -46,7 +47,22 @@ class alignas(64) UpdateBatch {
   /// leaves its z-layer and spans under kLaneReach cells waits in a queue, to be walked with
   /// others eight or sixteen at a time (finalize() walks what is left); others are walked at
   /// once. The marks are the same.
-  void queueRayFree(const Eigen::Vector3d& from, const Eigen::Vector3d& to, const Key& from_key, const Key& to_key);
+  /// Inline: called for every beam of a scan.
+  void queueRayFree(const Eigen::Vector3d& from, const Eigen::Vector3d& to, const Key& from_key, const Key& to_key) {
+    // Long rays would need a window too large to sweep (LiDAR rays reach thousands of cells);
+    // walked at once, they also find the bricks their end points were just marked in.
+    const auto reach = [&](int a) { return std::abs(std::int64_t{to_key[a]} - from_key[a]); };
+    if (lanes_ == detail::LaneKernel::None || from_key.z == to_key.z || reach(0) >= kLaneReach ||
+        reach(1) >= kLaneReach || reach(2) >= kLaneReach / 2) {
+      markRayFree(from, to, from_key, to_key);
+      return;
+    }
+    // The whole queue at once: grown by doubling, it would be copied into fresh memory again
+    // and again.
+    if (queued_.capacity() < kQueuedRays) queued_.reserve(kQueuedRays);
+    queued_.push_back(QueuedRay{from, to, from_key, to_key});
+    if (queued_.size() == kQueuedRays) walkQueued();
+  }
   static constexpr std::int32_t kLaneReach = 240;
   /// Walks the queued rays now, in lanes if `wide`, else one by one.
   void walkQueued(bool wide = true);
