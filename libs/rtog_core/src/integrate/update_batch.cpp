@@ -139,7 +139,8 @@ bool UpdateBatch::walkInWindow(std::vector<std::uint32_t>& lanes) {
   if (touched_.size() < w.bricks() + 1) touched_.resize(w.bricks() + 1, 0);
   std::uint64_t* window = window_.data() + kBrickWords;
   std::uint8_t* touched = touched_.data() + 1;
-  detail::walkLanes(lanes_, queued_, lanes, w, window, touched);
+  detail::orderForWaves(queued_, lanes, wave_order_, wave_shared_);
+  detail::walkLanes(lanes_, queued_, wave_order_, wave_shared_, w, window, touched);
   std::fill_n(window_.data(), kBrickWords, 0);
   touched[-1] = 0;
   // Into the bricks: a window word is 64 cells of an x-row, four bricks' 16-cell rows; each

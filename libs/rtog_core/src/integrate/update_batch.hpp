@@ -132,6 +132,8 @@ class alignas(64) UpdateBatch {
   std::vector<std::pair<std::uint64_t, std::uint32_t>> order_scratch_;  // finalize(): Morton code, slot
   std::vector<QueuedRay> queued_;
   std::vector<std::uint32_t> lane_rays_;  // walkQueued(): the queued rays the window takes
+  std::vector<std::uint32_t> wave_order_;  // walkInWindow(): lane_rays_ as the lanes take them
+  std::vector<std::uint8_t> wave_shared_;  // walkInWindow(): per block of wave_order_, see orderForWaves
   std::vector<std::uint64_t> window_;     // walkInWindow(): 64 words a brick, zero between walks
   std::vector<std::uint8_t> touched_;     // walkInWindow(): a flag a run of kBrickWords window words
   static constexpr std::uint32_t kNoSlot = 0xffffffffu;

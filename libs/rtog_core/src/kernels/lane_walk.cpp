@@ -1,6 +1,7 @@
 #include "kernels/lane_walk.hpp"
 
 #include <algorithm>
+#include <cstdlib>
 #include <limits>
 
 #include "kernels/cpu.hpp"
@@ -194,43 +195,34 @@ __attribute__((target("avx512f"), always_inline)) inline void setUpLanes8(
   index = _mm512_maskz_add_epi64(kAll, index, _mm512_set1_epi64(std::int64_t{kBrickWords} * 64));
 }
 
-// The same walk, sixteen rays in two groups of eight AVX-512 lanes: the axis choice and the
-// per-axis updates are masked operations where AVX2 needs blends. A lane in the same cell as its
-// left neighbour marks nothing (near the sensor, rays of neighbouring pixels share cells); the
-// other lanes' marks are compressed to the front, the first two taken from the registers.
-__attribute__((target("avx512f"))) void walkLanesAvx512(const std::vector<QueuedRay>& queued,
-                                                    const std::vector<std::uint32_t>& rays, const LaneWindow& w,
-                                                    std::uint64_t* window, std::uint8_t* touched) {
+// One wave of the AVX-512 walk (below), from its lanes' set-up to its longest ray's end. With
+// kShared (rays of neighbouring pixels side by side) a lane in the same cell as its left
+// neighbour marks nothing, the other lanes' marks compressed to the front, the first two taken
+// from the registers; else every lane marks, through memory.
+template <bool kShared>
+__attribute__((target("avx512f"), always_inline)) inline void walkWave512(
+    __m512d (&T)[2][3], const __m512d (&DT)[2][3], __m512i (&left_v)[2][3], const __m512i (&delta_v)[2][3],
+    __m512i (&index_v)[2], const __m512i (&steps_v)[2], std::int64_t most, std::uint64_t* words, std::uint8_t* runs) {
   constexpr int kGroups = 2, kWidth = 8;
-  std::uint64_t* const words = window - kBrickWords;
-  std::uint8_t* const runs = touched - 1;
+  constexpr __mmask8 kAll = 0xFF;  // the maskz forms: the unmasked ones read an undefined register
   alignas(64) std::int64_t at_s[kWidth];
   alignas(64) std::uint64_t bit_s[kWidth];
   const __m512d inf = _mm512_set1_pd(kInf);
   const __m512i zero = _mm512_setzero_si512(), one = _mm512_set1_epi64(1), low6 = _mm512_set1_epi64(63);
-  constexpr __mmask8 kAll = 0xFF;  // the maskz forms: the unmasked ones read an undefined register
-  for (std::size_t first = 0; first < rays.size(); first += kGroups * kWidth) {
-    __m512d T[kGroups][3], DT[kGroups][3];
-    __m512i left_v[kGroups][3], delta_v[kGroups][3], index_v[kGroups], steps_v[kGroups];
-    for (int g = 0; g < kGroups; ++g)
-      setUpLanes8(queued, rays, first + g * kWidth, w, T[g], DT[g], left_v[g], delta_v[g], index_v[g], steps_v[g]);
-    alignas(64) std::int64_t longest[kWidth];  // (GCC's reduce_max reads an undefined register)
-    _mm512_store_si512(longest, _mm512_maskz_max_epi64(kAll, steps_v[0], steps_v[1]));
-    const std::int64_t most = *std::max_element(longest, longest + kWidth);
-    __m512i step_v = zero;
-    for (std::int64_t step = 0; step < most; ++step, step_v = _mm512_maskz_add_epi64(kAll, step_v, one))
+  __m512i step_v = zero;
+  for (std::int64_t step = 0; step < most; ++step, step_v = _mm512_maskz_add_epi64(kAll, step_v, one))
 #pragma GCC unroll 2
-      for (int g = 0; g < kGroups; ++g) {
-        // A lane past its ray's end marks cell 0, in the scratch words. A lane in its left
-        // neighbour's cell marks nothing: near the sensor, rays of neighbouring pixels share cells.
-        const __m512i all_cells = _mm512_maskz_mov_epi64(_mm512_cmpgt_epi64_mask(steps_v[g], step_v), index_v[g]);
+    for (int g = 0; g < kGroups; ++g) {
+      // A lane past its ray's end marks cell 0, in the scratch words.
+      const __m512i all_cells = _mm512_maskz_mov_epi64(_mm512_cmpgt_epi64_mask(steps_v[g], step_v), index_v[g]);
+      if (kShared) {
         const auto own = static_cast<__mmask8>(
             _mm512_cmpneq_epi64_mask(all_cells, _mm512_maskz_alignr_epi64(kAll, all_cells, all_cells, 7)) | 1u);
         const __m512i cell = _mm512_maskz_compress_epi64(own, all_cells);
         const __m512i at = _mm512_maskz_srli_epi64(kAll, cell, 6);
         const __m512i bit = _mm512_maskz_sllv_epi64(kAll, one, _mm512_and_si512(cell, low6));
-        // The first two marks straight from the registers, always (the compress leaves cell 0
-        // behind the lanes it keeps), so that the count's branch goes the same way step after step.
+        // The first two marks always (the compress leaves cell 0 behind the lanes it keeps), so
+        // that the count's branch goes the same way step after step.
         const __m128i at01 = _mm512_maskz_extracti32x4_epi32(0xF, at, 0);
         const __m128i bit01 = _mm512_maskz_extracti32x4_epi32(0xF, bit, 0);
         const std::int64_t at0 = _mm_cvtsi128_si64(at01), at1 = _mm_extract_epi64(at01, 1);
@@ -246,21 +238,54 @@ __attribute__((target("avx512f"))) void walkLanesAvx512(const std::vector<Queued
             runs[at_s[j] >> 6] = 1;
           }
         }
-        // walkRay's choice: x if tx <= ty and tx <= tz, else y if ty <= tz, else z.
-        const __mmask8 x_first =
-            _mm512_cmp_pd_mask(T[g][0], T[g][1], _CMP_LE_OQ) & _mm512_cmp_pd_mask(T[g][0], T[g][2], _CMP_LE_OQ);
-        const auto y_first = static_cast<__mmask8>(~x_first & _mm512_cmp_pd_mask(T[g][1], T[g][2], _CMP_LE_OQ));
-        const auto z_first = static_cast<__mmask8>(~(x_first | y_first));
-        const __mmask8 chosen[3] = {x_first, y_first, z_first};
-        for (int a = 0; a < 3; ++a) {
-          const __mmask8 k = chosen[a];
-          left_v[g][a] = _mm512_mask_sub_epi64(left_v[g][a], k, left_v[g][a], one);
-          const __mmask8 at_end = _mm512_mask_cmpeq_epi64_mask(k, left_v[g][a], zero);
-          T[g][a] = _mm512_mask_add_pd(T[g][a], k, T[g][a], DT[g][a]);
-          T[g][a] = _mm512_mask_mov_pd(T[g][a], at_end, inf);
-          index_v[g] = _mm512_mask_add_epi64(index_v[g], k, index_v[g], delta_v[g][a]);
+      } else {
+        _mm512_store_si512(at_s, _mm512_maskz_srli_epi64(kAll, all_cells, 6));
+        _mm512_store_si512(bit_s, _mm512_maskz_sllv_epi64(kAll, one, _mm512_and_si512(all_cells, low6)));
+        for (int j = 0; j < kWidth; ++j) {
+          words[at_s[j]] |= bit_s[j];
+          runs[at_s[j] >> 6] = 1;
         }
       }
+      // walkRay's choice: x if tx <= ty and tx <= tz, else y if ty <= tz, else z.
+      const __mmask8 x_first =
+          _mm512_cmp_pd_mask(T[g][0], T[g][1], _CMP_LE_OQ) & _mm512_cmp_pd_mask(T[g][0], T[g][2], _CMP_LE_OQ);
+      const auto y_first = static_cast<__mmask8>(~x_first & _mm512_cmp_pd_mask(T[g][1], T[g][2], _CMP_LE_OQ));
+      const auto z_first = static_cast<__mmask8>(~(x_first | y_first));
+      const __mmask8 chosen[3] = {x_first, y_first, z_first};
+      for (int a = 0; a < 3; ++a) {
+        const __mmask8 k = chosen[a];
+        left_v[g][a] = _mm512_mask_sub_epi64(left_v[g][a], k, left_v[g][a], one);
+        const __mmask8 at_end = _mm512_mask_cmpeq_epi64_mask(k, left_v[g][a], zero);
+        T[g][a] = _mm512_mask_add_pd(T[g][a], k, T[g][a], DT[g][a]);
+        T[g][a] = _mm512_mask_mov_pd(T[g][a], at_end, inf);
+        index_v[g] = _mm512_mask_add_epi64(index_v[g], k, index_v[g], delta_v[g][a]);
+      }
+    }
+}
+
+// The same walk, sixteen rays in two groups of eight AVX-512 lanes: the axis choice and the
+// per-axis updates are masked operations where AVX2 needs blends.
+__attribute__((target("avx512f"))) void walkLanesAvx512(const std::vector<QueuedRay>& queued,
+                                                    const std::vector<std::uint32_t>& rays,
+                                                    const std::vector<std::uint8_t>& shared, const LaneWindow& w,
+                                                    std::uint64_t* window, std::uint8_t* touched) {
+  constexpr int kGroups = 2, kWidth = 8;
+  constexpr __mmask8 kAll = 0xFF;
+  std::uint64_t* const words = window - kBrickWords;
+  std::uint8_t* const runs = touched - 1;
+  for (std::size_t first = 0; first < rays.size(); first += kGroups * kWidth) {
+    __m512d T[kGroups][3], DT[kGroups][3];
+    __m512i left_v[kGroups][3], delta_v[kGroups][3], index_v[kGroups], steps_v[kGroups];
+    for (int g = 0; g < kGroups; ++g)
+      setUpLanes8(queued, rays, first + g * kWidth, w, T[g], DT[g], left_v[g], delta_v[g], index_v[g], steps_v[g]);
+    alignas(64) std::int64_t longest[kWidth];  // (GCC's reduce_max reads an undefined register)
+    _mm512_store_si512(longest, _mm512_maskz_max_epi64(kAll, steps_v[0], steps_v[1]));
+    const std::int64_t most = *std::max_element(longest, longest + kWidth);
+    if (shared[first / kWaveBlock] != 0) {
+      walkWave512<true>(T, DT, left_v, delta_v, index_v, steps_v, most, words, runs);
+    } else {
+      walkWave512<false>(T, DT, left_v, delta_v, index_v, steps_v, most, words, runs);
+    }
   }
 }
 
@@ -287,13 +312,53 @@ bool laneKernelRuns(LaneKernel k) {
 #endif
 }
 
+void orderForWaves(const std::vector<QueuedRay>& queued, const std::vector<std::uint32_t>& rays,
+                   std::vector<std::uint32_t>& order, std::vector<std::uint8_t>& shared) {
+  // Blocks of kBlock rays, each kept as queued (neighbouring pixels side by side: the AVX-512
+  // lanes skip a neighbour's cell) unless its waves would spend more than an eighth of their
+  // steps waiting, as where a LiDAR's rings alternate; such a block is put in order of length,
+  // stably, by a counting sort on length / 4.
+  constexpr std::size_t kBlock = kWaveBlock, kWave = 16, kKeys = 256;
+  std::uint32_t length[kBlock];
+  std::uint16_t count[kKeys + 1];
+  order.resize(rays.size());
+  shared.assign((rays.size() + kBlock - 1) / kBlock, 0);
+  for (std::size_t first = 0; first < rays.size(); first += kBlock) {
+    const std::size_t n = std::min(kBlock, rays.size() - first);
+    std::uint64_t useful = 0, waiting = 0;
+    for (std::size_t j = 0; j < n; ++j) {
+      const QueuedRay& q = queued[rays[first + j]];
+      std::int64_t l = 0;
+      for (int a = 0; a < 3; ++a) l += std::abs(std::int64_t{q.to_key[a]} - q.from_key[a]);
+      length[j] = static_cast<std::uint32_t>(l);
+      useful += length[j];
+    }
+    for (std::size_t w = 0; w < n; w += kWave) {
+      const std::size_t end = std::min(n, w + kWave);
+      const std::uint32_t most = *std::max_element(length + w, length + end);
+      for (std::size_t j = w; j < end; ++j) waiting += most - length[j];
+    }
+    if (waiting * 8 <= useful) {
+      std::copy(rays.begin() + first, rays.begin() + first + n, order.begin() + first);
+      shared[first / kBlock] = 1;
+      continue;
+    }
+    const auto key = [&](std::size_t j) { return std::min<std::size_t>(length[j] >> 1, kKeys - 1); };
+    std::fill(count, count + kKeys + 1, 0);
+    for (std::size_t j = 0; j < n; ++j) ++count[key(j) + 1];
+    for (std::size_t k = 1; k <= kKeys; ++k) count[k] += count[k - 1];
+    for (std::size_t j = 0; j < n; ++j) order[first + count[key(j)]++] = rays[first + j];
+  }
+}
+
 void walkLanes(LaneKernel kernel, const std::vector<QueuedRay>& queued, const std::vector<std::uint32_t>& rays,
-               const LaneWindow& w, std::uint64_t* window, std::uint8_t* touched) {
+               const std::vector<std::uint8_t>& shared, const LaneWindow& w, std::uint64_t* window,
+               std::uint8_t* touched) {
 #if defined(RTOG_LANE_WALK)
-  if (kernel == LaneKernel::Avx512) return walkLanesAvx512(queued, rays, w, window, touched);
+  if (kernel == LaneKernel::Avx512) return walkLanesAvx512(queued, rays, shared, w, window, touched);
   if (kernel == LaneKernel::Avx2) return walkLanesAvx2(queued, rays, w, window, touched);
 #endif
-  (void)kernel, (void)queued, (void)rays, (void)w, (void)window, (void)touched;
+  (void)kernel, (void)queued, (void)rays, (void)shared, (void)w, (void)window, (void)touched;
 }
 
 }  // namespace detail

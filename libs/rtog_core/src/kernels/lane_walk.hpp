@@ -47,12 +47,23 @@ LaneKernel laneKernel();
 /// True if `kernel` runs on this CPU (None always does).
 bool laneKernelRuns(LaneKernel kernel);
 
+/// Rays are ordered for the lanes in blocks of this many (a multiple of every kernel's wave).
+constexpr std::size_t kWaveBlock = 256;
+
+/// `rays` in an order walkLanes walks well, block by block: a block whose rays are about as long
+/// as their neighbours (a depth image's pixels) as given, with shared[block] = 1 (neighbouring
+/// rays share cells); else by length (a LiDAR's rings alternate), shared[block] = 0, so that a
+/// wave's lanes do not wait long for its longest ray.
+void orderForWaves(const std::vector<QueuedRay>& queued, const std::vector<std::uint32_t>& rays,
+                   std::vector<std::uint32_t>& order, std::vector<std::uint8_t>& shared);
+
 /// Walks queued[i] for each i of `rays` (each leaving its z-layer, inside the window) into
 /// `window` (kBrickWords words a brick, cell-linear; the kBrickWords words before it are
-/// scratch), setting touched[k] for each run k of kBrickWords words marked. Only with a kernel
-/// other than None that laneKernelRuns().
+/// scratch), setting touched[k] for each run k of kBrickWords words marked. `shared`: as
+/// orderForWaves gives it. Only with a kernel other than None that laneKernelRuns().
 void walkLanes(LaneKernel kernel, const std::vector<QueuedRay>& queued, const std::vector<std::uint32_t>& rays,
-               const LaneWindow& w, std::uint64_t* window, std::uint8_t* touched);
+               const std::vector<std::uint8_t>& shared, const LaneWindow& w, std::uint64_t* window,
+               std::uint8_t* touched);
 
 }  // namespace detail
 }  // namespace rtog
