@@ -73,11 +73,11 @@ void BM_WalkRay3D(benchmark::State& state) {
 }
 BENCHMARK(BM_WalkRay3D);
 
-// Argument: the lane kernel (detail::LaneKernel: 0 none, 1 AVX2, 2 AVX-512).
-void BM_UpdateBatchQueuedRays(benchmark::State& state) {
-  const auto rays = makeRays(4096, 80.0, false, 2);
+// The rays queued into an update batch with `kernel` (detail::LaneKernel: 0 none, 1 AVX2,
+// 2 AVX-512), walked and finalized.
+void queueAndWalk(benchmark::State& state, const std::vector<Ray>& rays, std::int64_t kernel) {
   UpdateBatch batch;
-  if (!batch.useLaneKernel(static_cast<detail::LaneKernel>(state.range(0)))) {
+  if (!batch.useLaneKernel(static_cast<detail::LaneKernel>(kernel))) {
     state.SkipWithError("this CPU does not run that lane kernel");
     return;
   }
@@ -89,23 +89,16 @@ void BM_UpdateBatchQueuedRays(benchmark::State& state) {
   }
   state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(rays.size()));
 }
+
+// Argument: the lane kernel.
+void BM_UpdateBatchQueuedRays(benchmark::State& state) {
+  queueAndWalk(state, makeRays(4096, 80.0, false, 2), state.range(0));
+}
 BENCHMARK(BM_UpdateBatchQueuedRays)->Arg(0)->Arg(1)->Arg(2);
 
-// Arguments: the lane kernel as above; the cell size in millimetres.
+// Arguments: the lane kernel; the cell size in millimetres.
 void BM_UpdateBatchDepthFrame(benchmark::State& state) {
-  const auto rays = makeDepthFrameRays(static_cast<double>(state.range(1)) / 1000.0);
-  UpdateBatch batch;
-  if (!batch.useLaneKernel(static_cast<detail::LaneKernel>(state.range(0)))) {
-    state.SkipWithError("this CPU does not run that lane kernel");
-    return;
-  }
-  for (auto _ : state) {
-    batch.clear();
-    for (const Ray& r : rays) batch.queueRayFree(r.from, r.to, r.from_key, r.to_key);
-    batch.finalize();
-    benchmark::DoNotOptimize(batch.bricks().size());
-  }
-  state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(rays.size()));
+  queueAndWalk(state, makeDepthFrameRays(static_cast<double>(state.range(1)) / 1000.0), state.range(0));
 }
 BENCHMARK(BM_UpdateBatchDepthFrame)->ArgsProduct({{0, 1, 2}, {50, 100}})->Unit(benchmark::kMillisecond);
 
