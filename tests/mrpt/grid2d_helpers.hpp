@@ -32,6 +32,18 @@ inline const SenaFixture& senaFixture() {
   return f;
 }
 
+/// The grid the fixture's map claims to be: a stock COccupancyGridMap2D of the mrpt_grid preset's
+/// initial extent (-10 to 10 m), resolution and default options that inserted the same scans itself.
+inline const mrpt::maps::COccupancyGridMap2D& senaStockGrid() {
+  static const mrpt::maps::COccupancyGridMap2D g = [] {
+    mrpt::maps::COccupancyGridMap2D s(-10, 10, -10, 10, 0.05f);
+    auto frames = loadOdometryFrames(dataset(kSena), 40);
+    for (std::size_t i = 0; i < frames.size(); i += 2) frames[i].sf->insertObservationsInto(s, frames[i].pose);
+    return s;
+  }();
+  return g;
+}
+
 /// Poses displaced by +-0.3 m in x and y and +-10 deg in yaw.
 inline std::vector<mrpt::poses::CPose3D> displaced(const mrpt::poses::CPose3D& p) {
   std::vector<mrpt::poses::CPose3D> out;
@@ -55,6 +67,17 @@ inline mrpt::maps::COccupancyGridMap2D stockCopy(const mrpt::maps::COccupancyGri
   EXPECT_TRUE(s.getRawMap() == g.getRawMap());
   return s;
 }
+
+/// A CObservation2DRangeScan of a class of its own (MRPT's IS_CLASS compares the exact runtime
+/// class): MRPT 2.5.8's lmConsensusOWA computes its value only for such a scan (see
+/// MapGrid2D.ConsensusOWAOfADerivedScanEqualsStockGrid); every other method treats it as the scan.
+class DerivedScan : public mrpt::obs::CObservation2DRangeScan {
+ public:
+  explicit DerivedScan(const mrpt::obs::CObservation2DRangeScan& s) : mrpt::obs::CObservation2DRangeScan(s) {}
+  const mrpt::rtti::TRuntimeClassId* GetRuntimeClass() const override { return &kClassId; }
+  static const mrpt::rtti::TRuntimeClassId* baseClass() { return CLASS_ID(mrpt::obs::CObservation2DRangeScan); }
+  static inline const mrpt::rtti::TRuntimeClassId kClassId{"rtog_test::DerivedScan", nullptr, &DerivedScan::baseClass};
+};
 
 struct MalagaFixture {
   mrpt::maps::COccupancyGridMap2D grid;  // a .gridmap(.gz) as MRPT loads it
