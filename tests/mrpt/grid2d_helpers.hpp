@@ -4,11 +4,11 @@
 #include <mrpt/io/CFileGZInputStream.h>
 #include <mrpt/io/CMemoryStream.h>
 #include <mrpt/maps/COccupancyGridMap2D.h>
-#include <mrpt/maps/CSimplePointsMap.h>
 #include <mrpt/obs/CObservation2DRangeScan.h>
 #include <mrpt/serialization/CArchive.h>
 
 #include "rtog/mrpt/CRTreeOccupancyGridMap.h"
+#include "derived_scan.hpp"
 #include "test_helpers.hpp"
 
 namespace rtog_test {
@@ -68,24 +68,6 @@ inline mrpt::maps::COccupancyGridMap2D stockCopy(const mrpt::maps::COccupancyGri
   EXPECT_TRUE(s.getRawMap() == g.getRawMap());
   return s;
 }
-
-/// A CObservation2DRangeScan of a class of its own (MRPT's IS_CLASS compares the exact runtime
-/// class): MRPT 2.5.8's lmConsensusOWA computes its value only for such a scan (see
-/// MapGrid2D.ConsensusOWAOfADerivedScanEqualsStockGrid). MRPT's points maps insert only the exact
-/// class too, so the scan's cached points are built here as OWA builds them for the scan (a
-/// CSimplePointsMap of every point, minDistBetweenLaserPoints = -1), not copied from `s`.
-class DerivedScan : public mrpt::obs::CObservation2DRangeScan {
- public:
-  explicit DerivedScan(const mrpt::obs::CObservation2DRangeScan& s) : mrpt::obs::CObservation2DRangeScan(s) {
-    auto pts = mrpt::maps::CSimplePointsMap::Create();
-    pts->insertionOptions.minDistBetweenLaserPoints = -1;
-    pts->insertObservation(s);
-    m_cachedMap = pts;
-  }
-  const mrpt::rtti::TRuntimeClassId* GetRuntimeClass() const override { return &kClassId; }
-  static const mrpt::rtti::TRuntimeClassId* baseClass() { return CLASS_ID(mrpt::obs::CObservation2DRangeScan); }
-  static inline const mrpt::rtti::TRuntimeClassId kClassId{"rtog_test::DerivedScan", nullptr, &DerivedScan::baseClass};
-};
 
 struct MalagaFixture {
   mrpt::maps::COccupancyGridMap2D grid;  // a .gridmap(.gz) as MRPT loads it
