@@ -4,9 +4,13 @@
 // bad requests are one error line, a non-zero exit and no output.
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <cstdio>
 #include <fstream>
+#include <set>
 #include <string>
 
+#include <mrpt/maps/COccupancyGridMap2D.h>
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 
@@ -43,16 +47,56 @@ TEST(CliImage, WallsAreTheLibrarysAndThePicturesDecode) {
   }
   EXPECT_GT(j["regions"].size(), 0u);
   EXPECT_FALSE(cv::imread(d + "/r.png").empty());
-  // The prior image goes back in through `rtog prior` at the origin the tool printed.
+  // The prior image is the band, one pixel a cell (row 0 the highest y): grey 255 (1 - P),
+  // mid-grey 128 where the band is unknown.
   const cv::Mat prior = cv::imread(d + "/prior.png", cv::IMREAD_GRAYSCALE);
   ASSERT_EQ(prior.cols, g.p.cols);
+  ASSERT_EQ(prior.rows, g.p.rows);
+  std::size_t wrong_pixels = 0;
+  for (int r = 0; r < g.p.rows; ++r)
+    for (int c = 0; c < g.p.cols; ++c) {
+      const float p = g.p.at<float>(r, c);
+      wrong_pixels += prior.at<std::uint8_t>(r, c) != (std::isnan(p) ? 128 : std::lround(255.0 * (1.0 - p)));
+    }
+  EXPECT_EQ(wrong_pixels, 0u);
+  // It goes back in through `rtog prior` at the origin the tool printed: the map holds one cell per
+  // pixel that MRPT's own grid reads as known from the image (white free, black occupied,
+  // mid-grey unknown: doc/priors.md), at that pixel's place, P(occupied) = 1 - the grid's
+  // P(free) (confidence 1), in one plane, and no other cell.
   const std::string origin = std::to_string(g.x0 * g.resolution) + " " + std::to_string(g.y0 * g.resolution);
   ASSERT_EQ(run("prior --image " + d + "/prior.png --resolution 0.05 --origin " + origin + " --confidence 1 --out " + d +
                     "/p.rtog",
                 &out),
             0)
       << out;
-  EXPECT_GT(rtog::cli::loadMap(d + "/p.rtog").cellCount(), m.cellCount() / 50);  // a layer of the 3D-ish map's columns
+  mrpt::maps::COccupancyGridMap2D grid;
+  ASSERT_TRUE(grid.loadFromBitmapFile(d + "/prior.png", 0.05f, mrpt::math::TPoint2D(-g.x0, -g.y0)));
+  ASSERT_EQ(int(grid.getSizeX()), g.p.cols);
+  ASSERT_EQ(int(grid.getSizeY()), g.p.rows);
+  std::size_t known = 0;
+  for (const auto l : grid.getRawMap()) known += l != 0;
+  const rtog::OccupancyMap pm = rtog::cli::loadMap(d + "/p.rtog");
+  std::size_t cells = 0, misplaced = 0, wrong_values = 0;
+  std::set<std::int32_t> planes;
+  pm.forEachLeaf([&](const rtog::Box& b, float v) {
+    rtog::forEachCell(b, [&](const rtog::Key& k) {
+      ++cells;
+      planes.insert(k.z);
+      const std::int64_t cx = std::int64_t(k.x) - g.x0, cy = std::int64_t(k.y) - g.y0;
+      if (cx < 0 || cy < 0 || cx >= g.p.cols || cy >= g.p.rows || grid.getRawMap()[std::size_t(cy * g.p.cols + cx)] == 0) {
+        ++misplaced;
+        return;
+      }
+      wrong_values += !(std::fabs(rtog::probability(v) - (1.0 - grid.getCell(int(cx), int(cy)))) <= 1e-6);
+    });
+  });
+  std::printf("prior image %d x %d pixels, %zu known to MRPT's grid, %zu cells in the prior map\n", g.p.cols, g.p.rows,
+              known, cells);
+  EXPECT_GT(known, 10000u);
+  EXPECT_EQ(cells, known);
+  EXPECT_EQ(misplaced, 0u);
+  EXPECT_EQ(wrong_values, 0u);
+  EXPECT_EQ(planes.size(), 1u);
 }
 
 TEST(CliImage, BadRequestsAreOneErrorLineAndNoOutput) {
