@@ -67,12 +67,21 @@ TEST(MapGrid2D, BandAndCacheInvalidation) {
   m.gridViewOptions = {};
   const auto before = m.gridViewCellCounts();
   auto frames = loadOdometryFrames(dataset(kSena), 60);
-  // notifyMapChanged drops the view
-  ASSERT_TRUE(m.insertObservation(*frames[50].sf->getObservationByClass<mrpt::obs::CObservation2DRangeScan>(),
-                                  frames[50].pose));
+  // notifyMapChanged drops the view: the new one is the stock grid that inserted the scan too.
+  const auto scan = frames[50].sf->getObservationByClass<mrpt::obs::CObservation2DRangeScan>();
+  ASSERT_TRUE(m.insertObservation(*scan, frames[50].pose));
+  mrpt::maps::COccupancyGridMap2D stock = senaStockGrid();
+  ASSERT_TRUE(stock.insertObservation(*scan, frames[50].pose));
+  EXPECT_NE(m.gridView().get(), v1.get());
+  const auto view = m.gridView();
+  ASSERT_EQ(view->getXMin(), stock.getXMin());
+  ASSERT_EQ(view->getYMin(), stock.getYMin());
+  ASSERT_EQ(view->getSizeX(), stock.getSizeX());
+  ASSERT_EQ(view->getSizeY(), stock.getSizeY());
+  EXPECT_TRUE(view->getRawMap() == stock.getRawMap());
+  EXPECT_FALSE(stock.getRawMap() == senaStockGrid().getRawMap());
   const auto after = m.gridViewCellCounts();
   EXPECT_NE(after.free + after.occupied, before.free + before.occupied);
-  EXPECT_NE(m.gridView().get(), v1.get());
 }
 
 TEST(MapGrid2D, ImportedGridmapViewIsBitExact) {
@@ -398,18 +407,36 @@ TEST(MapGrid2D, GridApiEqualsStockGrid) {
   stock.getAsImage(i2);
   ASSERT_EQ(i1.getWidth(), i2.getWidth());
   ASSERT_EQ(i1.getHeight(), i2.getHeight());
-  const std::string png = "/tmp/rtog_test_grid2d_view.png";
+  std::size_t pixels_differ = 0;
+  for (int y = 0; y < int(i1.getHeight()); ++y)
+    for (int x = 0; x < int(i1.getWidth()); ++x) pixels_differ += *i1(x, y) != *i2(x, y);
+  EXPECT_EQ(pixels_differ, 0u);
+  // The bitmaps of the two, and the map loaded from the view's against the stock grid loaded
+  // from the stock grid's: cell for cell.
+  const std::string png = "/tmp/rtog_test_grid2d_view.png", stockFile = "/tmp/rtog_test_grid2d_stock.png";
   ASSERT_TRUE(m.saveAsBitmapFile(png));
+  ASSERT_TRUE(stock.saveAsBitmapFile(stockFile));
   rtog::CRTreeOccupancyGridMap fromPng(0.1);
   ASSERT_TRUE(fromPng.loadFromBitmapFile(png, stock.getResolution()));
   mrpt::maps::COccupancyGridMap2D stockPng;
-  ASSERT_TRUE(stockPng.loadFromBitmapFile(png, stock.getResolution()));
-  EXPECT_EQ(fromPng.gridViewCellCounts().occupied, [&] {
-    std::size_t k = 0;
-    for (auto l : stockPng.getRawMap()) k += l < 0;
-    return k;
-  }());
+  ASSERT_TRUE(stockPng.loadFromBitmapFile(stockFile, stock.getResolution()));
   std::remove(png.c_str());
+  std::remove(stockFile.c_str());
+  const auto pv = fromPng.gridView();
+  // The view spans the known cells; the bitmap's grid has an unknown border around them.
+  const int ox = int(std::lround((pv->getXMin() - stockPng.getXMin()) / stockPng.getResolution()));
+  const int oy = int(std::lround((pv->getYMin() - stockPng.getYMin()) / stockPng.getResolution()));
+  std::size_t png_differ = 0, png_known = 0;
+  for (int y = 0; y < int(stockPng.getSizeY()); ++y)
+    for (int x = 0; x < int(stockPng.getSizeX()); ++x) {
+      const int vx = x - ox, vy = y - oy;
+      const bool inside = vx >= 0 && vy >= 0 && vx < int(pv->getSizeX()) && vy < int(pv->getSizeY());
+      const int want = stockPng.getRawMap()[std::size_t(y) * stockPng.getSizeX() + x];
+      png_differ += (inside ? int(pv->getRawMap()[std::size_t(vy) * pv->getSizeX() + vx]) : 0) != want;
+      png_known += want != 0;
+    }
+  EXPECT_EQ(png_differ, 0u);
+  EXPECT_GT(png_known, 10000u);
 }
 
 TEST(MapGrid2D, MalagaGridmapQueriesEqualStock) {
