@@ -1,6 +1,8 @@
 // Shared fixtures of the 2D-view tests: a map of real SENA scans and the Malaga campus gridmap.
 #pragma once
 
+#include <gtest/gtest.h>
+
 #include <mrpt/io/CFileGZInputStream.h>
 #include <mrpt/io/CMemoryStream.h>
 #include <mrpt/maps/COccupancyGridMap2D.h>
@@ -43,6 +45,23 @@ inline const mrpt::maps::COccupancyGridMap2D& senaStockGrid() {
     return s;
   }();
   return g;
+}
+
+/// The view and the stock grid built by insertion (senaStockGrid) hold the same grid: geometry
+/// and every cell (the queries the tests compare then read the same cells).
+inline void expectViewIsStockGrid(const rtog::CRTreeOccupancyGridMap& m, const mrpt::maps::COccupancyGridMap2D& stock) {
+  const auto view = m.gridView();
+  ASSERT_EQ(view->getXMin(), stock.getXMin());
+  ASSERT_EQ(view->getYMin(), stock.getYMin());
+  ASSERT_EQ(view->getSizeX(), stock.getSizeX());
+  ASSERT_EQ(view->getSizeY(), stock.getSizeY());
+  ASSERT_EQ(view->getResolution(), stock.getResolution());
+  std::size_t differ = 0, first = 0;
+  for (std::size_t i = view->getRawMap().size(); i-- > 0;)
+    if (view->getRawMap()[i] != stock.getRawMap()[i]) ++differ, first = i;
+  ASSERT_EQ(differ, 0u) << "cells differ from the stock grid's, the first at (" << first % stock.getSizeX() << ", "
+                        << first / stock.getSizeX() << "): " << int(view->getRawMap()[first]) << " vs "
+                        << int(stock.getRawMap()[first]);
 }
 
 /// Poses displaced by +-0.3 m in x and y and +-10 deg in yaw.
