@@ -69,74 +69,93 @@ double area2(const Poly2& p) {
   return 0.5 * std::fabs(s);
 }
 
-using Poly3 = std::vector<Eigen::Vector3d>;
+/// Increasing with the angle of (dx, dy) as atan2 is, in [0, 4), without a transcendental call.
+double pseudoAngle(double dx, double dy) {
+  const double s = std::fabs(dx) + std::fabs(dy);
+  if (!(s > 0)) return 0.0;
+  const double p = dy / s;
+  return dx < 0 ? 2.0 - p : dy < 0 ? 4.0 + p : p;
+}
 
-/// A convex polyhedron as its faces, each a convex polygon.
+/// A convex polyhedron as its faces, each a convex polygon, in fixed storage (a cube cut by six
+/// planes has at most 12 faces of at most 10 vertices; the cut's points may repeat a vertex).
 struct Polyhedron {
-  std::vector<Poly3> faces, next;
-  Poly3 cap;
+  static constexpr int kFaces = 16, kVerts = 48;
+  struct Face {
+    int n = 0;
+    Eigen::Vector3d v[kVerts];
+  };
+  Face buf[2][kFaces];
+  int cur = 0, count = 0;  // the faces are buf[cur][0, count)
+  Eigen::Vector3d cap[kVerts];
+  std::pair<double, int> order[kVerts];
 
   void cube(const std::array<Eigen::Vector3d, 8>& v) {
-    static constexpr int kFaces[6][4] = {{0, 2, 6, 4}, {1, 3, 7, 5}, {0, 1, 5, 4},
-                                         {2, 3, 7, 6}, {0, 1, 3, 2}, {4, 5, 7, 6}};
-    faces.resize(6);
+    static constexpr int kCube[6][4] = {{0, 2, 6, 4}, {1, 3, 7, 5}, {0, 1, 5, 4},
+                                        {2, 3, 7, 6}, {0, 1, 3, 2}, {4, 5, 7, 6}};
+    Face* faces = buf[cur];
+    count = 6;
     for (int f = 0; f < 6; ++f) {
-      faces[std::size_t(f)].clear();
-      for (int i = 0; i < 4; ++i) faces[std::size_t(f)].push_back(v[std::size_t(kFaces[f][i])]);
+      faces[f].n = 4;
+      for (int i = 0; i < 4; ++i) faces[f].v[i] = v[std::size_t(kCube[f][i])];
     }
   }
 
   /// Keeps the part where sign * (p[axis] - c) >= 0, closing the cut by a cap face.
   void clip(int axis, double c, double sign) {
-    next.resize(faces.size() + 1);
-    std::size_t n = 0;
-    cap.clear();
-    for (const Poly3& face : faces) {
-      Poly3& out = next[n];
-      out.clear();
-      for (std::size_t i = 0; i < face.size(); ++i) {
-        const Eigen::Vector3d& p = face[i];
-        const Eigen::Vector3d& q = face[(i + 1) % face.size()];
+    const Face* faces = buf[cur];
+    Face* next = buf[cur ^ 1];
+    int n = 0, ncap = 0;
+    for (int f = 0; f < count; ++f) {
+      const Face& face = faces[f];
+      Face& out = next[n];
+      out.n = 0;
+      for (int i = 0, j = 1; i < face.n; ++i, j = (j + 1 == face.n ? 0 : j + 1)) {
+        const Eigen::Vector3d& p = face.v[i];
+        const Eigen::Vector3d& q = face.v[j];
         const double dp = sign * (p[axis] - c), dq = sign * (q[axis] - c);
-        if (dp >= 0) out.push_back(p);
-        if (dp == 0) cap.push_back(p);
+        if (dp >= 0 && out.n < kVerts) out.v[out.n++] = p;
+        if (dp == 0 && ncap < kVerts) cap[ncap++] = p;
         if ((dp > 0 && dq < 0) || (dp < 0 && dq > 0)) {
           Eigen::Vector3d m = p + (q - p) * (dp / (dp - dq));
           m[axis] = c;
-          out.push_back(m);
-          cap.push_back(m);
+          if (out.n < kVerts) out.v[out.n++] = m;
+          if (ncap < kVerts) cap[ncap++] = m;
         }
       }
-      if (out.size() >= 3) ++n;
+      if (out.n >= 3) ++n;
     }
-    if (cap.size() >= 3) {
+    if (ncap >= 3 && n < kFaces) {
       // The cut is convex: its points in order of angle about their mean, in the plane's axes.
       const int a = (axis + 1) % 3, b = (axis + 2) % 3;
-      Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-      for (const auto& p : cap) mean += p;
-      mean /= double(cap.size());
-      std::sort(cap.begin(), cap.end(), [&](const Eigen::Vector3d& p, const Eigen::Vector3d& q) {
-        return std::atan2(p[b] - mean[b], p[a] - mean[a]) < std::atan2(q[b] - mean[b], q[a] - mean[a]);
-      });
-      next[n++] = cap;
+      double ma = 0, mb = 0;
+      for (int i = 0; i < ncap; ++i) ma += cap[i][a], mb += cap[i][b];
+      ma /= ncap, mb /= ncap;
+      for (int i = 0; i < ncap; ++i) order[i] = {pseudoAngle(cap[i][a] - ma, cap[i][b] - mb), i};
+      std::sort(order, order + ncap);
+      Face& out = next[n++];
+      out.n = ncap;
+      for (int i = 0; i < ncap; ++i) out.v[i] = cap[order[i].second];
     }
-    next.resize(n);
-    std::swap(faces, next);
+    count = n;
+    cur ^= 1;
   }
 
   /// Sum of the pyramids from an inner point to the faces.
   double volume() const {
+    const Face* faces = buf[cur];
     Eigen::Vector3d inner = Eigen::Vector3d::Zero();
-    std::size_t count = 0;
-    for (const Poly3& f : faces)
-      for (const auto& p : f) inner += p, ++count;
-    if (count == 0) return 0.0;
-    inner /= double(count);
+    int points = 0;
+    for (int f = 0; f < count; ++f)
+      for (int i = 0; i < faces[f].n; ++i) inner += faces[f].v[i], ++points;
+    if (points == 0) return 0.0;
+    inner /= double(points);
     double v = 0;
-    for (const Poly3& f : faces) {
+    for (int f = 0; f < count; ++f) {
+      const Face& face = faces[f];
       Eigen::Vector3d area = Eigen::Vector3d::Zero();
-      for (std::size_t i = 1; i + 1 < f.size(); ++i) area += (f[i] - f[0]).cross(f[i + 1] - f[0]);
-      v += std::fabs(area.dot(f[0] - inner));
+      for (int i = 1; i + 1 < face.n; ++i) area += (face.v[i] - face.v[0]).cross(face.v[i + 1] - face.v[0]);
+      v += std::fabs(area.dot(face.v[0] - inner));
     }
     return v / 6.0;
   }
@@ -287,7 +306,7 @@ void Placement::general(const Box& box, const std::int64_t lo[3], const std::int
   const Eigen::Vector3d blo(box.min.x, box.min.y, box.min.z);
   const Eigen::Vector3d bhi(box.max.x + 1.0, box.max.y + 1.0, box.max.z + 1.0);
   const double full = 1.0 / (scale_ * scale_ * scale_);  // a dst cell's volume in src cells
-  Polyhedron poly;
+  static thread_local Polyhedron poly;  // 37 KB: not on the stack, not per leaf
   std::array<Eigen::Vector3d, 8> v;
   for (std::int64_t z = lo[2]; z <= hi[2]; ++z)
     for (std::int64_t y = lo[1]; y <= hi[1]; ++y)
@@ -308,8 +327,12 @@ void Placement::general(const Box& box, const std::int64_t lo[3], const std::int
         if (apart) continue;
         double vol = full;
         if (!inside) {
+          // Only by the faces the cell crosses: most cells of a boundary cross one or two.
           poly.cube(v);
-          for (int d = 0; d < 3; ++d) poly.clip(d, blo[d], 1.0), poly.clip(d, bhi[d], -1.0);
+          for (int d = 0; d < 3; ++d) {
+            if (below[d] > 0) poly.clip(d, blo[d], 1.0);
+            if (above[d] > 0) poly.clip(d, bhi[d], -1.0);
+          }
           vol = std::min(poly.volume(), full);
         }
         if (vol > 0) emit(keyOf(x, y, z), vol);
