@@ -11,6 +11,7 @@
 
 #include <Eigen/Geometry>
 
+#include "map/fusion_resample.hpp"
 #include "map_cells.hpp"
 #include "rtog/core/occupancy_map.hpp"
 #include "test_support.hpp"
@@ -67,6 +68,7 @@ TEST(FusionResample, AYawOrA3DTurnWithASubCellShiftConservesTheEvidence) {
   const OccupancyMap& b = tumMap();
   const double want = evidence(b);
   ASSERT_GT(std::fabs(want), 1000.0);
+  ASSERT_GT(b.leafCount(), 4 * kResampleBlock);  // blocks for the two threads to share
   for (const auto& [name, p] : {std::pair<const char*, Eigen::Isometry3d>{"yaw", pose(0.237, -0.161, 0.043, 17)},
                                 {"3D", pose(0.237, -0.161, 0.043, 17, 6, -4)}}) {
     SCOPED_TRACE(name);

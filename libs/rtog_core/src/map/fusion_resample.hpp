@@ -59,6 +59,10 @@ class Placement {
   int kept_ = -1;               // OneAxis: the dst axis kept
 };
 
+/// Leaves per block of the resampling: blocks are summed apart (by the threads) and added in
+/// order, so the sums do not depend on the thread count.
+constexpr std::size_t kResampleBlock = 1024;
+
 /// The other map's evidence in this lattice: per cell, the sum over placed leaves of
 /// (l - l0) * overlap volume, in the order the leaves were added (results do not depend on threads).
 class ResampledEvidence {
@@ -70,6 +74,11 @@ class ResampledEvidence {
       keys_.push_back(k), sums_.push_back(evidence);
     else
       sums_[at] += evidence;
+  }
+  void clear() {
+    index_.clear();
+    keys_.clear();
+    sums_.clear();
   }
   const std::vector<Key>& keys() const { return keys_; }
   const std::vector<double>& sums() const { return sums_; }

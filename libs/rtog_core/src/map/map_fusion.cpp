@@ -9,6 +9,7 @@
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Geometry>
@@ -17,6 +18,7 @@
 #include "integrate/graded_scan.hpp"
 #include "map/fusion_resample.hpp"
 #include "map/map_engine.hpp"
+#include "parallel/parallel.hpp"
 #include "util/flat_hash_map.hpp"
 #include "rtog/core/occupancy_map.hpp"
 
@@ -51,15 +53,41 @@ void shiftedCells(const std::array<std::int64_t, 3>& shift, const Box& box, Inse
 }
 
 /// `other`'s evidence (l - l0 per cell) placed by `pose` and resampled into `dst`, conserved: the
-/// one rule of both fusions (fusion_resample.hpp).
+/// one rule of both fusions (fusion_resample.hpp). The leaves go in blocks of a fixed size, each
+/// summed apart (by the threads, a wave at a time), the blocks' sums added in block order: the
+/// same sums in the same order for any thread count.
 ResampledEvidence resample(const OccupancyMap& other, const Lattice& dst, const Eigen::Isometry3d& pose, float l0,
-                           InsertStats& stats) {
-  ResampledEvidence out;
+                           int threads, InsertStats& stats) {
+  constexpr std::size_t kBlock = kResampleBlock;
+  std::vector<std::pair<Box, float>> leaves;
+  other.forEachLeaf([&](const Box& box, float v) { leaves.emplace_back(box, v); });
   const Placement place(dst, other.lattice(), pose);
-  other.forEachLeaf([&](const Box& box, float v) {
-    const double d = static_cast<double>(v - l0);
-    place.overlaps(box, stats, [&](const Key& k, double volume) { out.add(k, d * volume); });
-  });
+  const std::size_t blocks = (leaves.size() + kBlock - 1) / kBlock;
+  const std::size_t wave = std::max<std::size_t>(1, std::min<std::size_t>(static_cast<std::size_t>(threads), blocks));
+  std::vector<ResampledEvidence> part(wave);
+  std::vector<std::size_t> skipped(wave);
+  ResampledEvidence out;
+  for (std::size_t first = 0; first < blocks; first += wave) {
+    const std::size_t n = std::min(wave, blocks - first);
+    const auto run = [&](std::size_t t) {
+      part[t].clear();
+      InsertStats st;
+      const std::size_t end = std::min(leaves.size(), (first + t + 1) * kBlock);
+      for (std::size_t i = (first + t) * kBlock; i < end; ++i) {
+        const double d = static_cast<double>(leaves[i].second - l0);
+        place.overlaps(leaves[i].first, st, [&](const Key& k, double volume) { part[t].add(k, d * volume); });
+      }
+      skipped[t] = st.skipped_out_of_range;
+    };
+    if (n == 1)
+      run(0);
+    else
+      parallel::run(n, run);
+    for (std::size_t t = 0; t < n; ++t) {
+      for (std::size_t j = 0; j < part[t].keys().size(); ++j) out.add(part[t].keys()[j], part[t].sums()[j]);
+      stats.skipped_out_of_range += skipped[t];
+    }
+  }
   return out;
 }
 
@@ -86,7 +114,7 @@ InsertStats OccupancyMap::fuse(const OccupancyMap& other, const Eigen::Isometry3
       shiftedCells(*shift, box, stats, [&](const Key& k) { graded.markDistinct(k, v - l0); });
     });
   } else {
-    const ResampledEvidence r = resample(other, e.store.lattice, pose, l0, stats);
+    const ResampledEvidence r = resample(other, e.store.lattice, pose, l0, threads, stats);
     graded.reserve(r.keys().size());
     for (std::size_t i = 0; i < r.keys().size(); ++i) graded.markDistinct(r.keys()[i], static_cast<float>(r.sums()[i]));
   }
@@ -123,7 +151,7 @@ InsertStats OccupancyMap::fuse(const OccupancyMap& other, const std::vector<Weig
   InsertStats stats;
   for (const WeightedPose& w : poses) {
     // The other map under this pose, resampled as by the plain fusion: P_i = P(l0 + evidence).
-    const ResampledEvidence r = resample(other, e.store.lattice, w.pose, l0, stats);
+    const ResampledEvidence r = resample(other, e.store.lattice, w.pose, l0, threads, stats);
     for (std::size_t j = 0; j < r.keys().size(); ++j) {
       const auto i = static_cast<std::uint32_t>(keys.size());
       const std::uint32_t at = index.findOrInsert(packKey(r.keys()[j]), i);
