@@ -9,13 +9,16 @@
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Geometry>
 
 #include "integrate/batch_apply.hpp"
 #include "integrate/graded_scan.hpp"
+#include "map/fusion_resample.hpp"
 #include "map/map_engine.hpp"
+#include "parallel/parallel.hpp"
 #include "util/flat_hash_map.hpp"
 #include "rtog/core/occupancy_map.hpp"
 
@@ -31,68 +34,61 @@ void checkRigid(const Eigen::Isometry3d& pose) {
         "rtog::OccupancyMap::fuse: the pose must be rigid (finite, a rotation and a translation)");
 }
 
-/// The shift in cells that `pose` is, if the lattices are equal, the pose has no rotation and its
-/// translation is a whole number of cells (exactly); none otherwise.
-std::optional<std::array<std::int64_t, 3>> wholeCellShift(const Lattice& dst, const Lattice& src, const Eigen::Isometry3d& pose) {
-  if (dst.resolution() != src.resolution() || !pose.linear().isIdentity(0.0)) return std::nullopt;
-  std::array<std::int64_t, 3> shift{};
-  for (int a = 0; a < 3; ++a) {
-    const double c = pose.translation()[a] / dst.resolution();
-    if (!(std::fabs(c) < 1e9) || c != std::round(c) || std::round(c) * dst.resolution() != pose.translation()[a])
-      return std::nullopt;
-    shift[std::size_t(a)] = static_cast<std::int64_t>(std::round(c));
-  }
-  return shift;
+/// The cells of `box` of `src` moved by a whole-cell shift of an equal lattice: each to `emit`, with
+/// no transform per cell; those beyond the keys are left out, the box counted once.
+template <class Emit>
+void shiftedCells(const std::array<std::int64_t, 3>& shift, const Box& box, InsertStats& stats, Emit&& emit) {
+  bool beyond = false;
+  for (std::int64_t z = box.min.z; z <= box.max.z; ++z)
+    for (std::int64_t y = box.min.y; y <= box.max.y; ++y)
+      for (std::int64_t x = box.min.x; x <= box.max.x; ++x) {
+        const std::int64_t kx = x + shift[0], ky = y + shift[1], kz = z + shift[2];
+        if (kx < kKeyMin || ky < kKeyMin || kz < kKeyMin || kx > kKeyMax || ky > kKeyMax || kz > kKeyMax) {
+          beyond = true;
+          continue;
+        }
+        emit(Key{static_cast<std::int32_t>(kx), static_cast<std::int32_t>(ky), static_cast<std::int32_t>(kz)});
+      }
+  if (beyond) ++stats.skipped_out_of_range;
 }
 
-/// The cells of `dst` whose centres, taken back by `inv` into the other map, fall in `box` of
-/// `src`: each given to `emit`. Identity or a shift by whole cells of equal lattices maps centres
-/// to centres, so each cell of the box lands on exactly one cell.
-template <class Emit>
-void forEachCellOfBox(const Lattice& dst, const Lattice& src, const Eigen::Isometry3d& pose,
-                      const Eigen::Isometry3d& inv, const Box& box, InsertStats& stats, Emit&& emit) {
-  // Equal lattices and a shift by whole cells (the identity included: chunks of one log, maps of
-  // one frame): each cell of the box is the cell moved by the shift, with no transform per cell.
-  if (const auto shift = wholeCellShift(dst, src, pose)) {
-    bool beyond = false;
-    for (std::int64_t z = box.min.z; z <= box.max.z; ++z)
-      for (std::int64_t y = box.min.y; y <= box.max.y; ++y)
-        for (std::int64_t x = box.min.x; x <= box.max.x; ++x) {
-          const std::int64_t kx = x + (*shift)[0], ky = y + (*shift)[1], kz = z + (*shift)[2];
-          if (kx < kKeyMin || ky < kKeyMin || kz < kKeyMin || kx > kKeyMax || ky > kKeyMax || kz > kKeyMax) {
-            beyond = true;
-            continue;
-          }
-          emit(Key{static_cast<std::int32_t>(kx), static_cast<std::int32_t>(ky), static_cast<std::int32_t>(kz)});
-        }
-    if (beyond) ++stats.skipped_out_of_range;
-    return;
-  }
-  const Eigen::Vector3d lo = src.boxMin(box), hi = src.boxMax(box);
-  Eigen::Vector3d a = Eigen::Vector3d::Constant(HUGE_VAL), b = Eigen::Vector3d::Constant(-HUGE_VAL);
-  for (int c = 0; c < 8; ++c) {
-    const Eigen::Vector3d corner((c & 1) ? hi.x() : lo.x(), (c & 2) ? hi.y() : lo.y(), (c & 4) ? hi.z() : lo.z());
-    const Eigen::Vector3d p = dst.toLattice(pose * corner);
-    a = a.cwiseMin(p), b = b.cwiseMax(p);
-  }
-  // Cells whose centre lies within [a, b]: from ceil(a - 0.5) to floor(b - 0.5), within the keys.
-  constexpr double kMin = kKeyMin, kMax = kKeyMax;
-  std::int64_t from[3], to[3];
-  bool beyond = false;  // the part beyond the keys is left out, the cuboid counted once
-  for (int i = 0; i < 3; ++i) {
-    const double f = std::ceil(a[i] - 0.5), t = std::floor(b[i] - 0.5);
-    beyond = beyond || f < kMin || t > kMax;
-    from[i] = static_cast<std::int64_t>(std::max(f, kMin));
-    to[i] = static_cast<std::int64_t>(std::min(t, kMax));
-  }
-  if (beyond) ++stats.skipped_out_of_range;
-  for (std::int64_t z = from[2]; z <= to[2]; ++z)
-    for (std::int64_t y = from[1]; y <= to[1]; ++y)
-      for (std::int64_t x = from[0]; x <= to[0]; ++x) {
-        const Key k{static_cast<std::int32_t>(x), static_cast<std::int32_t>(y), static_cast<std::int32_t>(z)};
-        Key back;
-        if (src.tryKey(inv * dst.cellCenter(k), back) && box.contains(back)) emit(k);
+/// `other`'s evidence (l - l0 per cell) placed by `pose` and resampled into `dst`, conserved: the
+/// one rule of both fusions (fusion_resample.hpp). The leaves go in blocks of a fixed size, each
+/// summed apart (by the threads, a wave at a time), the blocks' sums added in block order: the
+/// same sums in the same order for any thread count.
+ResampledEvidence resample(const OccupancyMap& other, const Lattice& dst, const Eigen::Isometry3d& pose, float l0,
+                           int threads, InsertStats& stats) {
+  constexpr std::size_t kBlock = kResampleBlock;
+  std::vector<std::pair<Box, float>> leaves;
+  other.forEachLeaf([&](const Box& box, float v) { leaves.emplace_back(box, v); });
+  const Placement place(dst, other.lattice(), pose);
+  const std::size_t blocks = (leaves.size() + kBlock - 1) / kBlock;
+  const std::size_t wave = std::max<std::size_t>(1, std::min<std::size_t>(static_cast<std::size_t>(threads), blocks));
+  std::vector<ResampledEvidence> part(wave);
+  std::vector<std::size_t> skipped(wave);
+  ResampledEvidence out;
+  for (std::size_t first = 0; first < blocks; first += wave) {
+    const std::size_t n = std::min(wave, blocks - first);
+    const auto run = [&](std::size_t t) {
+      part[t].clear();
+      InsertStats st;
+      const std::size_t end = std::min(leaves.size(), (first + t + 1) * kBlock);
+      for (std::size_t i = (first + t) * kBlock; i < end; ++i) {
+        const double d = static_cast<double>(leaves[i].second - l0);
+        place.overlaps(leaves[i].first, st, [&](const Key& k, double volume) { part[t].add(k, d * volume); });
       }
+      skipped[t] = st.skipped_out_of_range;
+    };
+    if (n == 1)
+      run(0);
+    else
+      parallel::run(n, run);
+    for (std::size_t t = 0; t < n; ++t) {
+      for (std::size_t j = 0; j < part[t].keys().size(); ++j) out.add(part[t].keys()[j], part[t].sums()[j]);
+      stats.skipped_out_of_range += skipped[t];
+    }
+  }
+  return out;
 }
 
 }  // namespace
@@ -106,24 +102,22 @@ InsertStats OccupancyMap::fuse(const OccupancyMap& other, const Eigen::Isometry3
   MapEngine& e = *engine_;
   e.ensureCovered();
   const float l0 = other.logOddsModel().prior();
-  const Eigen::Isometry3d inv = pose.inverse();
   InsertStats stats;
   GradedScan graded;
-  // The other map's leaves are disjoint: moved by a whole-cell shift, no cell is reached twice.
-  const bool distinct = wholeCellShift(e.store.lattice, other.lattice(), pose).has_value();
-  if (distinct) {
+  if (const auto shift = wholeCellShift(e.store.lattice, other.lattice(), pose)) {
+    // Chunks of one log, maps of one frame: the leaves are disjoint and the shift one-to-one, so
+    // each cell is reached once and goes in with no lookup.
     std::size_t cells = 0;
     other.forEachLeaf([&](const Box& box, float) { cells += static_cast<std::size_t>(box.volume()); });
     graded.reserve(cells);
-  }
-  other.forEachLeaf([&](const Box& box, float v) {
-    forEachCellOfBox(e.store.lattice, other.lattice(), pose, inv, box, stats, [&](const Key& k) {
-      if (distinct)
-        graded.markDistinct(k, v - l0);
-      else
-        graded.mark(k, v - l0);
+    other.forEachLeaf([&](const Box& box, float v) {
+      shiftedCells(*shift, box, stats, [&](const Key& k) { graded.markDistinct(k, v - l0); });
     });
-  });
+  } else {
+    const ResampledEvidence r = resample(other, e.store.lattice, pose, l0, threads, stats);
+    graded.reserve(r.keys().size());
+    for (std::size_t i = 0; i < r.keys().size(); ++i) graded.markDistinct(r.keys()[i], static_cast<float>(r.sums()[i]));
+  }
   graded.finalize();
   std::vector<ApplyContext> contexts;
   applyGraded(e.store, {&graded}, stats, threads, contexts);
@@ -156,17 +150,15 @@ InsertStats OccupancyMap::fuse(const OccupancyMap& other, const std::vector<Weig
   std::vector<double> mass, weight;  // sum of w P over the poses that know the cell, and of w
   InsertStats stats;
   for (const WeightedPose& w : poses) {
-    const Eigen::Isometry3d inv = w.pose.inverse();
-    other.forEachLeaf([&](const Box& box, float v) {
-      const double p = probability(v);
-      forEachCellOfBox(e.store.lattice, other.lattice(), w.pose, inv, box, stats, [&](const Key& k) {
-        const auto i = static_cast<std::uint32_t>(keys.size());
-        const std::uint32_t at = index.findOrInsert(packKey(k), i);
-        if (at == i) keys.push_back(k), mass.push_back(0.0), weight.push_back(0.0);
-        mass[at] += w.weight * p;
-        weight[at] += w.weight;
-      });
-    });
+    // The other map under this pose, resampled as by the plain fusion: P_i = P(l0 + evidence).
+    const ResampledEvidence r = resample(other, e.store.lattice, w.pose, l0, threads, stats);
+    for (std::size_t j = 0; j < r.keys().size(); ++j) {
+      const auto i = static_cast<std::uint32_t>(keys.size());
+      const std::uint32_t at = index.findOrInsert(packKey(r.keys()[j]), i);
+      if (at == i) keys.push_back(r.keys()[j]), mass.push_back(0.0), weight.push_back(0.0);
+      mass[at] += w.weight * probability(double(l0) + r.sums()[j]);
+      weight[at] += w.weight;
+    }
   }
   GradedScan graded;
   for (std::size_t i = 0; i < keys.size(); ++i) {

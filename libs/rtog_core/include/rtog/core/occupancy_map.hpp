@@ -113,10 +113,13 @@ class OccupancyMap {
   /// Fuses `other` (another robot's, sensor's or day's map) into this one by the independent
   /// opinion pool: each cell becomes l1 + l2 - l0, clamped (l0: `other`'s prior, counted once), a
   /// cell known in one map only keeps its value (exactly so when l0 is 0, the default). `other` is
-  /// placed by the rigid `pose` (its frame in this map's) and resampled into this lattice, each
-  /// cell taking `other`'s cell at its centre: cell for cell when the pose is a shift by whole
-  /// cells of an equal lattice. Cells beyond the key range are left out, each cuboid that has
-  /// some counted in skipped_out_of_range. Without clamping, maps built from two halves of a log fuse into the
+  /// placed by the rigid `pose` (its frame in this map's) and resampled into this lattice so that
+  /// its evidence is conserved: each cell receives, from each cuboid of `other`, (l2 - l0) times
+  /// the volume of the placed cuboid inside the cell over one cell of `other` (a coarser lattice
+  /// sums, a finer one divides, a turn spreads by the exact overlap). Cell for cell when the pose
+  /// is a shift by whole cells or a quarter turn of an equal lattice. Cells beyond the key range
+  /// (a far pose) are left out, each cuboid that has some counted in skipped_out_of_range.
+  /// Without clamping, maps built from two halves of a log fuse into the
   /// map of the whole log, up to float rounding of the sums. Throws std::invalid_argument, changing
   /// nothing, for a pose that is not rigid, threads < 1, or `other` being this map.
   InsertStats fuse(const OccupancyMap& other, const Eigen::Isometry3d& pose = Eigen::Isometry3d::Identity(),
@@ -128,8 +131,8 @@ class OccupancyMap {
   };
   /// fuse() with `other` placed by a pose that is uncertain (the seed's "additional covariance for
   /// registration uncertainty"): each cell takes the change of the mixture over `poses` of the
-  /// other map's P(occupied) there, a pose that puts the cell outside the other map's known cells
-  /// adding the prior. Its blurring is the pose-uncertainty insertion's. One pose of weight 1 is
+  /// other map's P(occupied) there, P_i = P(l0 + the evidence fuse(other, pose_i) resamples into
+  /// the cell), a pose that puts the cell outside the other map's known cells adding the prior. Its blurring is the pose-uncertainty insertion's. One pose of weight 1 is
   /// fuse(other, pose). Throws std::invalid_argument, changing nothing, for a pose that is not
   /// rigid, weights that are not positive or do not sum to 1, threads < 1, or `other` being this map.
   InsertStats fuse(const OccupancyMap& other, const std::vector<WeightedPose>& poses, int threads = defaultThreadCount());
