@@ -167,7 +167,7 @@ struct RawlogCheck {
   std::size_t entries = 0;    ///< read whole; with a problem, the index of the entry that failed
   std::uint64_t offset = 0;   ///< where that entry starts (bytes at the end: the whole log read)
   bool truncated = false;     ///< the file ends inside that entry
-  std::string problem;        ///< empty if every entry was read; else one line naming file and entry
+  std::string problem;        ///< empty if every entry was read; else one line naming the entry
 };
 /// Reads every entry of the rawlog in a child process, each under an address-space bound of
 /// twice the bytes left in the file (plus 64 MiB): a length field that the file cannot hold

@@ -108,16 +108,26 @@ void say(int fd, const std::string& s) {
       say(fd, "at " + std::to_string(entry) + " " + std::to_string(at) + "\n");
       // The soft limit only: it may rise again for the next entry.
       rlimit lim{};
-      getrlimit(RLIMIT_AS, &lim);
-      lim.rlim_cur = static_cast<rlim_t>(mappedBytes() + 2 * (total - at) + (std::uint64_t{64} << 20));
-      if (lim.rlim_max != RLIM_INFINITY && lim.rlim_cur > lim.rlim_max) lim.rlim_cur = lim.rlim_max;
-      setrlimit(RLIMIT_AS, &lim);
+      const std::uint64_t mapped = mappedBytes();
+      if (mapped > 0 && getrlimit(RLIMIT_AS, &lim) == 0) {
+        lim.rlim_cur = static_cast<rlim_t>(mapped + 2 * (total - at) + (std::uint64_t{64} << 20));
+        if (lim.rlim_max != RLIM_INFINITY && lim.rlim_cur > lim.rlim_max) lim.rlim_cur = lim.rlim_max;
+        setrlimit(RLIMIT_AS, &lim);
+      }
       try {
         ar.ReadObject();
       } catch (const std::bad_alloc&) {
         say(fd, "memory\n");
         _exit(1);
       } catch (const std::exception& e) {
+        // MRPT wraps what its readers throw: an allocation refused (or a size beyond a vector's
+        // max_size) is known by its text.
+        const std::string w = e.what();
+        if (w.find("bad_alloc") != std::string::npos || w.find("max_size") != std::string::npos ||
+            w.find("_M_default_append") != std::string::npos) {
+          say(fd, "memory\n");
+          _exit(1);
+        }
         const bool cut = f.getPosition() >= total;
         std::string r = reason(e.what());
         for (char& c : r)
@@ -183,24 +193,25 @@ RawlogCheck checkRawlog(const std::string& path) {
                             std::to_string(r.bytes) + ")";
   if (verdict.rfind("truncated ", 0) == 0) {
     r.truncated = true;
-    r.problem = "rawlog '" + path + "' is truncated: the file ends inside " + where + " (" + verdict.substr(10) + ")";
+    r.problem = "truncated: the file ends inside " + where + " (" + verdict.substr(10) + ")";
   } else if (verdict.rfind("corrupt ", 0) == 0) {
-    r.problem = "rawlog '" + path + "' is corrupt at " + where + ", " + std::to_string(r.bytes - r.offset) +
-                " bytes before the end: " + verdict.substr(8);
+    r.problem = "corrupt " + where + ", " + std::to_string(r.bytes - r.offset) + " bytes before the end: " +
+                verdict.substr(8);
   } else {
-    r.problem = "rawlog '" + path + "' is corrupt at " + where + ": it announces more data than the " +
-                std::to_string(r.bytes - r.offset) + " bytes left in the file (a damaged length field?)";
+    r.problem = where + " announces more data than the " + std::to_string(r.bytes - r.offset) +
+                " bytes left in the file (a damaged length field?)";
   }
   return r;
 }
 
 std::size_t readRawlog(const std::string& path, bool allow_truncated, mrpt::obs::CRawlog& log, std::ostream& out) {
   const RawlogCheck c = checkRawlog(path);
-  if (!c.problem.empty() && !(c.truncated && allow_truncated)) throw std::runtime_error(c.problem);
-  if (c.entries == 0) throw std::runtime_error("rawlog '" + path + "' holds no entry");
+  if (!c.problem.empty() && !(c.truncated && allow_truncated))
+    throw std::runtime_error("cannot read rawlog '" + path + "': " + c.problem);
+  if (c.entries == 0) throw std::runtime_error("cannot read rawlog '" + path + "': it holds no entry");
   if (c.truncated)
-    out << "warning: " << c.problem << "; --allow-truncated: reading its first " << c.entries << " entries, "
-        << (c.bytes - c.offset) << " bytes dropped\n";
+    out << "warning: rawlog '" << path << "' " << c.problem << "; --allow-truncated: reading its first " << c.entries
+        << " entries, " << (c.bytes - c.offset) << " bytes dropped\n";
   // The same bytes again, now known to be readable (they were, in the child).
   mrpt::io::CFileGZInputStream f(path);
   auto ar = mrpt::serialization::archiveFrom(f);
@@ -217,7 +228,7 @@ std::size_t readRawlog(const std::string& path, bool allow_truncated, mrpt::obs:
       try {
         log.insert(obj);
       } catch (const std::exception&) {
-        throw std::runtime_error("rawlog '" + path + "': entry " + std::to_string(i) + " is a " +
+        throw std::runtime_error("cannot read rawlog '" + path + "': entry " + std::to_string(i) + " is a " +
                                  (obj ? obj->GetRuntimeClass()->className : "null object") +
                                  ", not an action, a sensory frame or an observation");
       }

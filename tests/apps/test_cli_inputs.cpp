@@ -259,9 +259,9 @@ TEST(CliInputs, TruncatedOrCorruptRawlogIsAnError) {
   ASSERT_EQ(run("build --resolution 0.2 --rawlog '" + kSenaRawlog + "'", &out), 0) << out;
   EXPECT_NE(out.find(" from 225 scans "), std::string::npos) << out;
   for (const auto& [file, message] : std::vector<std::pair<std::string, std::string>>{
-           {"half.rawlog", "rawlog '" + d + "/half.rawlog' is truncated: the file ends inside entry 224 (byte 248416 of 249440)"},
-           {"half_gz.rawlog", "is truncated: the file ends inside entry "},
-           {"tail.rawlog", "is corrupt at entry 449 (byte 498881 of 498905), 24 bytes before the end"}}) {
+           {"half.rawlog", "cannot read rawlog '" + d + "/half.rawlog': truncated: the file ends inside entry 224 (byte 248416 of 249440)"},
+           {"half_gz.rawlog", "': truncated: the file ends inside entry "},
+           {"tail.rawlog", "': corrupt entry 449 (byte 498881 of 498905), 24 bytes before the end"}}) {
     EXPECT_EQ(run("build --resolution 0.2 --rawlog " + d + "/" + file + " --out " + d + "/out.rtog", &out), 1) << out;
     EXPECT_NE(out.find("rtog: error: " ), std::string::npos) << out;
     EXPECT_NE(out.find(message), std::string::npos) << out;
@@ -269,7 +269,8 @@ TEST(CliInputs, TruncatedOrCorruptRawlogIsAnError) {
     EXPECT_EQ(entries(d), (std::vector<std::string>{"half.rawlog", "half_gz.rawlog", "tail.rawlog"}));
   }
   EXPECT_EQ(run("build --resolution 0.2 --allow-truncated --rawlog " + d + "/half.rawlog", &out), 0) << out;
-  EXPECT_NE(out.find("warning: rawlog '" + d + "/half.rawlog' is truncated"), std::string::npos) << out;
+  EXPECT_NE(out.find("warning: rawlog '" + d + "/half.rawlog' truncated: the file ends inside entry 224"), std::string::npos)
+      << out;
   EXPECT_NE(out.find("reading its first 224 entries, 1024 bytes dropped"), std::string::npos) << out;
   EXPECT_NE(out.find(" from 112 scans "), std::string::npos) << out;
   // Bytes after the last entry are not a truncated entry: still refused.
@@ -293,8 +294,8 @@ TEST(CliInputs, RawlogLengthFieldsCannotExhaustMemory) {
   for (const std::string file : {"plain.rawlog", "gz.rawlog"}) {
     const Child c = spawn({"build", "--resolution", "0.2", "--rawlog", d + "/" + file, "--out", d + "/out.rtog"});
     EXPECT_EQ(c.rc, 1) << c.output;
-    EXPECT_NE(c.output.find("rawlog '" + d + "/" + file + "' is corrupt at entry 0 (byte 0 of " +
-                            std::to_string(plain.size()) + "): it announces more data than the"),
+    EXPECT_NE(c.output.find("cannot read rawlog '" + d + "/" + file + "': entry 0 (byte 0 of " +
+                            std::to_string(plain.size()) + ") announces more data than the"),
               std::string::npos)
         << c.output;
     std::cout << file << ": peak memory " << c.maxrss_kb / 1024 << " MiB\n";
