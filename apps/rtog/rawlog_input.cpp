@@ -20,6 +20,7 @@
 #include <sstream>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include <mrpt/io/CFileGZInputStream.h>
 #include <mrpt/obs/CObservationComment.h>
@@ -44,9 +45,9 @@ std::uint64_t logBytes(const std::string& path) {
   gzFile gz = gzopen(path.c_str(), "rb");
   if (!gz) throw std::runtime_error("cannot open rawlog '" + path + "'");
   std::uint64_t n = 0;
-  static char buf[1 << 16];
+  std::vector<char> buf(std::size_t{1} << 16);
   int got = 0;
-  while ((got = gzread(gz, buf, sizeof buf)) > 0) n += static_cast<std::uint64_t>(got);
+  while ((got = gzread(gz, buf.data(), static_cast<unsigned>(buf.size()))) > 0) n += static_cast<std::uint64_t>(got);
   gzclose(gz);
   return n;  // a damaged gzip stream counts up to the damage: the entry there is truncated
 }
