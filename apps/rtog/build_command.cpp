@@ -182,7 +182,9 @@ int build(const BuildOptions& o, std::ostream& out) {
     }
   } else {
     mrpt::obs::CRawlog log;
-    loadQuietly("rawlog", o.rawlog_path, [&] { return log.loadFromRawLogFile(o.rawlog_path) && log.size() > 0; });
+    // Entry by entry, checked first: a truncated, corrupt or hostile log is an error (or, truncated
+    // and --allow-truncated, read up to the cut with a warning), never a shorter log.
+    readRawlog(o.rawlog_path, o.allow_truncated, log, out);
     Progress progress(out, log.size(), o.progress_bar, "rawlog entries");
     std::size_t index = 0;  // of the observation, for --scans
     forEachOdometryObservation(log, [&](const mrpt::obs::CObservation::Ptr& obs, const mrpt::poses::CPose3D& robot,

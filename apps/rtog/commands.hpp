@@ -3,6 +3,7 @@
 
 #include <array>
 #include <cstddef>
+#include <cstdint>
 #include <iosfwd>
 #include <memory>
 #include <optional>
@@ -11,6 +12,10 @@
 
 #include "rtog/core/occupancy_map.hpp"
 #include "rtog/core/plan.hpp"
+
+namespace mrpt::obs {
+class CRawlog;
+}
 
 namespace rtog::cli {
 
@@ -38,6 +43,9 @@ struct BuildOptions {
   /// observations, counted from 0): chunks of one log built apart and joined by `rtog fuse`.
   /// (Default: all)
   std::size_t scans_from = 0, scans_to = static_cast<std::size_t>(-1);
+  /// --rawlog: a log whose file ends inside an entry is read up to it, with a warning that
+  /// counts what was dropped, instead of refused. (Default: false)
+  bool allow_truncated = false;
 };
 
 /// "A:B" (either may be empty: from the start, to the end) as [A, B); throws
@@ -153,6 +161,23 @@ OccupancyMap loadMap(const std::string& path);
 /// `n` bytes gzip-compressed into `out`, in memory. (MRPT's compress_gz_data_block goes through
 /// a file in /tmp named by the clock: two processes in the same microsecond share it.)
 void writeGzip(const void* data, std::size_t n, std::ostream& out);
+/// What a child process found reading a rawlog entry by entry (rawlog_input.cpp).
+struct RawlogCheck {
+  std::uint64_t bytes = 0;    ///< of the log as read (a gzip file decompressed)
+  std::size_t entries = 0;    ///< read whole; with a problem, the index of the entry that failed
+  std::uint64_t offset = 0;   ///< where that entry starts (bytes at the end: the whole log read)
+  bool truncated = false;     ///< the file ends inside that entry
+  std::string problem;        ///< empty if every entry was read; else one line naming the entry
+};
+/// Reads every entry of the rawlog in a child process, each under an address-space bound of
+/// twice the bytes left in the file (plus 64 MiB): a length field that the file cannot hold
+/// fails there, not in this process.
+RawlogCheck checkRawlog(const std::string& path);
+/// Reads a rawlog checked by checkRawlog into `log`: a truncated, corrupt or hostile one (or one
+/// with bytes after its last entry) throws std::runtime_error with checkRawlog's line, unless it
+/// is truncated and `allow_truncated` (then the entries before the cut, and a warning to `out`).
+/// Returns the number of entries.
+std::size_t readRawlog(const std::string& path, bool allow_truncated, mrpt::obs::CRawlog& log, std::ostream& out);
 /// Saves through an OutputSet: the old file stays intact unless the new one was written whole.
 void saveMap(const OccupancyMap& map, const std::string& path);
 

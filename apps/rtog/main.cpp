@@ -26,6 +26,9 @@ int main(int argc, char** argv) {
   auto* simplemap = b->add_option("--simplemap", build.simplemap_path, "MRPT simplemap (.simplemap[.gz])")->check(CLI::ExistingFile);
   tum->excludes(rawlog)->excludes(simplemap);
   rawlog->excludes(simplemap);
+  b->add_flag("--allow-truncated", build.allow_truncated,
+             "--rawlog: read a log whose file ends inside an entry up to that entry (warns, counts what is dropped)")
+      ->needs(rawlog);
   b->add_option("--ini", build.ini_path, "MRPT .ini with a CMultiMetricMap holding rtreeOccupancyGrid_count=1")->check(CLI::ExistingFile);
   b->add_option("--section", build.ini_section, "Section of the map definition in --ini")->capture_default_str();
   b->add_option("--out", build.out_path, "Output map (.rtog)")->check(path);

@@ -2,7 +2,14 @@
 // length fields that promise a terabyte, numbers that are not numbers.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <fstream>
 #include <sstream>
+
+#include <mrpt/io/CFileGZInputStream.h>
+#include <mrpt/io/CMemoryStream.h>
+#include <mrpt/obs/CObservation2DRangeScan.h>
+#include <mrpt/serialization/CArchive.h>
 
 #include "../mrpt/hostile_files.hpp"
 #include "cli_helpers.hpp"
@@ -189,4 +196,110 @@ TEST(CliInputs, PoseUncertaintyNeedsASimplemapAndUsesItsCovariances) {
   EXPECT_EQ(run("export " + plain + " --png-probability", &out), 2) << out;  // needs --png
   ASSERT_EQ(run("export " + plain + " --png " + png + " --slice-z 0.35 --png-probability", &out), 0) << out;
   EXPECT_NE(out.find("unknown light blue"), std::string::npos) << out;
+}
+
+namespace {
+
+const std::string kSenaRawlog =
+    std::string(RTOG_MRPT_DATASETS) + "/2006-01ENE-21-SENA_Telecom Faculty_one_loop_only.rawlog";
+
+/// A rawlog's bytes as MRPT reads them (the SENA log is gzip-compressed).
+std::string plainBytes(const std::string& path) {
+  mrpt::io::CFileGZInputStream f(path);
+  std::string out;
+  char buf[1 << 16];
+  for (std::size_t got; (got = f.Read(buf, sizeof buf)) > 0;) out.append(buf, got);
+  return out;
+}
+
+std::string gzipOf(const std::string& bytes) {
+  std::ostringstream os;
+  rtog::cli::writeGzip(bytes.data(), bytes.size(), os);
+  return os.str();
+}
+
+/// One valid 2D scan of one beam, as a rawlog entry, its beam count then set to `beams`.
+std::string scanAnnouncing(std::uint32_t beams) {
+  mrpt::obs::CObservation2DRangeScan scan;
+  scan.aperture = 3.0f;
+  scan.maxRange = 80.0f;
+  scan.resizeScan(1);
+  const float range = 12.345f;
+  scan.setScanRange(0, range);
+  scan.setScanRangeValidity(0, true);
+  mrpt::io::CMemoryStream mem;
+  auto ar = mrpt::serialization::archiveFrom(mem);
+  ar << scan;
+  std::string bytes(static_cast<const char*>(mem.getRawBufferData()), mem.getTotalBytesCount());
+  // The count is the uint32 just before the ranges (little-endian, as CArchive writes).
+  std::string needle(4, '\0');
+  needle[0] = 1;
+  needle.append(reinterpret_cast<const char*>(&range), 4);
+  const auto at = bytes.find(needle);
+  EXPECT_NE(at, std::string::npos);
+  EXPECT_EQ(bytes.find(needle, at + 1), std::string::npos);
+  for (int i = 0; i < 4; ++i) bytes[at + std::size_t(i)] = static_cast<char>((beams >> (8 * i)) & 0xff);
+  return bytes;
+}
+
+}  // namespace
+
+// Issue #37: a truncated or corrupt rawlog read as a shorter log (exit 0, no word: half of the
+// SENA log gave 111 of its 225 scans), and bytes after its last entry were ignored. Now: one
+// error line naming the file and the entry, exit 1, nothing written; --allow-truncated reads up
+// to the cut and says what it dropped.
+TEST(CliInputs, TruncatedOrCorruptRawlogIsAnError) {
+  const std::string d = scratch("rawlog_damage");
+  const std::string full = plainBytes(kSenaRawlog);
+  ASSERT_EQ(full.size(), 498881u);
+  writeAll(d + "/half.rawlog", full.substr(0, full.size() / 2));
+  writeAll(d + "/half_gz.rawlog", gzipOf(full).substr(0, readAll(kSenaRawlog).size() / 2));
+  writeAll(d + "/tail.rawlog", full + "some bytes after the log");
+  std::string out;
+  ASSERT_EQ(run("build --resolution 0.2 --rawlog '" + kSenaRawlog + "'", &out), 0) << out;
+  EXPECT_NE(out.find(" from 225 scans "), std::string::npos) << out;
+  for (const auto& [file, message] : std::vector<std::pair<std::string, std::string>>{
+           {"half.rawlog", "cannot read rawlog '" + d + "/half.rawlog': truncated: the file ends inside entry 224 (byte 248416 of 249440)"},
+           {"half_gz.rawlog", "': truncated: the file ends inside entry "},
+           {"tail.rawlog", "': corrupt entry 449 (byte 498881 of 498905), 24 bytes before the end"}}) {
+    EXPECT_EQ(run("build --resolution 0.2 --rawlog " + d + "/" + file + " --out " + d + "/out.rtog", &out), 1) << out;
+    EXPECT_NE(out.find("rtog: error: " ), std::string::npos) << out;
+    EXPECT_NE(out.find(message), std::string::npos) << out;
+    EXPECT_EQ(std::count(out.begin(), out.end(), '\n'), 1) << out;
+    EXPECT_EQ(entries(d), (std::vector<std::string>{"half.rawlog", "half_gz.rawlog", "tail.rawlog"}));
+  }
+  EXPECT_EQ(run("build --resolution 0.2 --allow-truncated --rawlog " + d + "/half.rawlog", &out), 0) << out;
+  EXPECT_NE(out.find("warning: rawlog '" + d + "/half.rawlog' truncated: the file ends inside entry 224"), std::string::npos)
+      << out;
+  EXPECT_NE(out.find("reading its first 224 entries, 1024 bytes dropped"), std::string::npos) << out;
+  EXPECT_NE(out.find(" from 112 scans "), std::string::npos) << out;
+  // Bytes after the last entry are not a truncated entry: still refused.
+  EXPECT_EQ(run("build --resolution 0.2 --allow-truncated --rawlog " + d + "/tail.rawlog", &out), 1) << out;
+}
+
+// Issue #37: a scan that announces 2^32 - 1 beams in a file of a few hundred bytes made MRPT's
+// rawlog reader zero-fill (or, the allocation refused, write through a null pointer) what it
+// announced, and rtog build died. Now a clear error, and nothing of it is allocated.
+TEST(CliInputs, RawlogLengthFieldsCannotExhaustMemory) {
+  const std::string d = scratch("rawlog_hostile");
+  const std::string plain = scanAnnouncing(0xFFFFFFFFu);
+  std::cout << "hostile rawlog: " << plain.size() << " bytes\n";
+  ASSERT_LT(plain.size(), 400u);
+  writeAll(d + "/plain.rawlog", plain);
+  writeAll(d + "/gz.rawlog", gzipOf(plain));
+  writeAll(d + "/one.rawlog", scanAnnouncing(1));  // the same scan as written: read
+  const Child ok = spawn({"build", "--resolution", "0.2", "--rawlog", d + "/one.rawlog"});
+  EXPECT_EQ(ok.rc, 0) << ok.output;
+  EXPECT_NE(ok.output.find(" from 1 scans "), std::string::npos) << ok.output;
+  for (const std::string file : {"plain.rawlog", "gz.rawlog"}) {
+    const Child c = spawn({"build", "--resolution", "0.2", "--rawlog", d + "/" + file, "--out", d + "/out.rtog"});
+    EXPECT_EQ(c.rc, 1) << c.output;
+    EXPECT_NE(c.output.find("cannot read rawlog '" + d + "/" + file + "': entry 0 (byte 0 of " +
+                            std::to_string(plain.size()) + ") announces more data than the"),
+              std::string::npos)
+        << c.output;
+    std::cout << file << ": peak memory " << c.maxrss_kb / 1024 << " MiB\n";
+    EXPECT_LT(c.maxrss_kb, 200 * 1024) << file << ": peak memory " << c.maxrss_kb / 1024 << " MiB";
+    EXPECT_FALSE(std::ifstream(d + "/out.rtog").good());
+  }
 }

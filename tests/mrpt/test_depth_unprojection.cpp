@@ -128,3 +128,39 @@ TEST(DepthUnprojection, FramesFromChangingSensorPosesLeaveNoTablesBehind) {
 }
 
 }  // namespace
+
+namespace {
+
+/// The points a map decodes for `d` at `decimation`, a fresh map each time (no cached points).
+std::vector<Eigen::Vector3f> pointsOf(const mrpt::obs::CObservation3DRangeScan& d, int decimation) {
+  return rtogPoints(d, decimation).points;
+}
+
+}  // namespace
+
+// Issue #37: MRPT's unprojectInto undistorts every pixel's ray through its camera model's
+// distortion (cv::undistortPoints on the table's pixels, whatever the decimation), so rtog does at
+// every decimation: the points are MRPT's, and a distorted camera's are not the undistorted one's.
+TEST(DepthUnprojection, DistortionIsAppliedAtEveryDecimation) {
+  auto d = rgbdFrame();
+  d->sensorPose = mrpt::poses::CPose3D();
+  mrpt::obs::CObservation3DRangeScan plain = *d;
+  plain.cameraParams.dist.fill(0.0);
+  d->cameraParams.distortion = mrpt::img::DistortionModel::plumb_bob;
+  d->cameraParams.dist = {{-0.25, 0.08, 0.001, -0.0005, 0.0, 0.0, 0.0, 0.0}};
+  for (int dec : {1, 2, 4}) {
+    SCOPED_TRACE("decimation " + std::to_string(dec));
+    const auto pm = mrptPoints(*d, dec);
+    const auto distorted = pointsOf(*d, dec), undistorted = pointsOf(plain, dec);
+    ASSERT_EQ(distorted.size(), pm.size());
+    std::size_t differ = 0, moved = 0;
+    for (std::size_t i = 0; i < pm.size(); ++i) {
+      float x, y, z;
+      pm.getPoint(i, x, y, z);
+      differ += distorted[i] != Eigen::Vector3f(x, y, z);
+      moved += i < undistorted.size() && (distorted[i] - undistorted[i]).norm() > 1e-3f;
+    }
+    EXPECT_EQ(differ, 0u);
+    EXPECT_GT(moved, pm.size() / 2);
+  }
+}

@@ -2,9 +2,12 @@
 // timestamps are reused by different scans.
 #include <gtest/gtest.h>
 
+#include <functional>
+
 #include <mrpt/io/CFileGZInputStream.h>
 #include <mrpt/io/CFileGZOutputStream.h>
 #include <mrpt/obs/CObservation2DRangeScan.h>
+#include <mrpt/obs/CObservation3DRangeScan.h>
 #include <mrpt/obs/CObservationVelodyneScan.h>
 #include <mrpt/serialization/CArchive.h>
 
@@ -137,4 +140,37 @@ TEST(MapPointCache, ClearForgetsDecodedPoints) {
   ASSERT_TRUE(m.insertObservation(obs));
   ASSERT_TRUE(ref.insertObservation(*scans[1]));
   expectSameMap(m, ref);
+}
+
+// Issue #37: the depth image's decoded points depend on the whole camera model (intrinsics,
+// distortion and its model, size), the range units and range_is_depth, not only on the image:
+// one object changed in place is decoded anew, at every decimation.
+TEST(MapPointCache, DepthCameraModelChangedInPlace) {
+  auto base = std::dynamic_pointer_cast<mrpt::obs::CObservation3DRangeScan>(firstObservation(dataset("tests_rgbd.rawlog")));
+  ASSERT_TRUE(base && base->hasRangeImage);
+  base->load();
+  base->sensorPose = mrpt::poses::CPose3D();
+  using Change = std::function<void(mrpt::obs::CObservation3DRangeScan&)>;
+  const std::vector<std::pair<std::string, Change>> changes = {
+      {"dist", [](auto& d) { d.cameraParams.dist = {{-0.25, 0.08, 0.001, -0.0005, 0.0, 0.0, 0.0, 0.0}}; }},
+      {"dist k3", [](auto& d) { d.cameraParams.dist[4] = 0.3; }},
+      {"fx", [](auto& d) { d.cameraParams.intrinsicParams(0, 0) *= 1.1; }},
+      {"cy", [](auto& d) { d.cameraParams.intrinsicParams(1, 2) += 7; }},
+      {"rangeUnits", [](auto& d) { d.rangeUnits *= 2; }},
+      {"range_is_depth", [](auto& d) { d.range_is_depth = !d.range_is_depth; }}};
+  for (int dec : {1, 2, 4})
+    for (const auto& [name, change] : changes) {
+      SCOPED_TRACE(name + ", decimation " + std::to_string(dec));
+      mrpt::obs::CObservation3DRangeScan d = *base;
+      CRTreeOccupancyGridMap m(0.05), fresh(0.05);
+      m.insertionOptions.decimation_3d_range = fresh.insertionOptions.decimation_3d_range = static_cast<uint16_t>(dec);
+      rtog::ObservationBeams before, after, expected;
+      ASSERT_TRUE(m.extractBeams(d, mrpt::poses::CPose3D(), before, true));
+      change(d);
+      ASSERT_TRUE(m.extractBeams(d, mrpt::poses::CPose3D(), after, true));
+      ASSERT_TRUE(fresh.extractBeams(d, mrpt::poses::CPose3D(), expected, true));
+      ASSERT_EQ(after.points.size(), expected.points.size());
+      EXPECT_TRUE(after.points == expected.points);
+      EXPECT_FALSE(after.points == before.points);
+    }
 }

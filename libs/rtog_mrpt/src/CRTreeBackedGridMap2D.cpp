@@ -2,6 +2,7 @@
 #include "rtog/mrpt/CRTreeBackedGridMap2D.h"
 
 #include "CRTreeOccupancyGridMap_grid2d.hpp"
+#include "finite_pose.hpp"
 #include "rtog/core/band.hpp"
 #include "mrpt_grid.hpp"
 #include "options_check.hpp"
@@ -127,6 +128,31 @@ bool CRTreeBackedGridMap2D::insertGridScan(const mrpt::obs::CObservation2DRangeS
   m_likelihoodCacheOutDated = true;
   m_is_empty = false;
   return true;
+}
+
+double CRTreeBackedGridMap2D::internal_computeObservationLikelihood(const mrpt::obs::CObservation& obs,
+                                                                   const mrpt::poses::CPose3D& takenFrom) const {
+  // Before the stock grid: its mean-information method inserts the scan into a copy of this map
+  // (which refuses a non-finite pose by an exception), the others read NaN cells.
+  if (!detail::finitePoses(obs, takenFrom)) return detail::kImpossibleLogLik;
+  // Else as COccupancyGridMap2D's own (private, so not callable): non-planar scans and scans off
+  // the map's altitude score -10, the rest by the selected method on the 2D pose.
+  if (const auto* scan = dynamic_cast<const mrpt::obs::CObservation2DRangeScan*>(&obs)) {
+    if (!scan->isPlanarScan(insertionOptions.horizontalTolerance)) return -10;
+    if (insertionOptions.useMapAltitude && std::fabs(insertionOptions.mapAltitude - scan->sensorPose.z()) > 0.01)
+      return -10;
+  }
+  const mrpt::poses::CPose2D pose(takenFrom);
+  switch (likelihoodOptions.likelihoodMethod) {
+    case lmMeanInformation: return computeObservationLikelihood_MI(obs, pose);
+    case lmConsensus: return computeObservationLikelihood_Consensus(obs, pose);
+    case lmCellsDifference: return computeObservationLikelihood_CellsDifference(obs, pose);
+    case lmLikelihoodField_Thrun: return computeObservationLikelihood_likelihoodField_Thrun(obs, pose);
+    case lmLikelihoodField_II: return computeObservationLikelihood_likelihoodField_II(obs, pose);
+    case lmConsensusOWA: return computeObservationLikelihood_ConsensusOWA(obs, pose);
+    case lmRayTracing:
+    default: return computeObservationLikelihood_rayTracing(obs, pose);
+  }
 }
 
 bool CRTreeBackedGridMap2D::internal_insertObservation(const mrpt::obs::CObservation& obs,

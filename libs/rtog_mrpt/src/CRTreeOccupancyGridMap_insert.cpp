@@ -77,8 +77,13 @@ std::uint64_t keyDepth(const mrpt::obs::CObservation3DRangeScan& d, std::size_t 
   f.bytes(d.rangeImage.data(), std::size_t(d.rangeImage.rows()) * std::size_t(d.rangeImage.cols()) * 2);
   f.value(d.rangeUnits);
   f.value(d.range_is_depth);
+  // The whole camera model the unprojection reads (MRPT's undistorts every ray through `dist`,
+  // at every decimation); the sensor pose is not in it: the points are in the sensor frame.
   const auto& c = d.cameraParams;
-  for (double v : {c.fx(), c.fy(), c.cx(), c.cy()}) f.value(v);
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) f.value(c.intrinsicParams(i, j));
+  for (double v : c.dist) f.value(v);
+  f.value(static_cast<int>(c.distortion));
   f.value(c.nrows);
   f.value(c.ncols);
   return f.digest();

@@ -125,14 +125,10 @@ void CRTreeOccupancyGridMap::serializeFrom(mrpt::serialization::CArchive& in, ui
   } catch (const std::invalid_argument& e) {
     throw std::runtime_error(std::string(kWho) + ": the stored options are invalid: " + e.what());
   }
+  // Parsed as it arrives: the block's magic and counts are checked before the rest is read.
   const uint64_t n = in.ReadAs<uint64_t>();
-  std::string bytes;
-  archive::readBytes(in, n, bytes, kWho, "map block");
-  std::istringstream is(bytes, std::ios::binary);
-  OccupancyMap map = OccupancyMap::read(is);
-  if (is.peek() != std::char_traits<char>::eof())
-    throw std::runtime_error(std::string(kWho) + ": corrupt stream (" + std::to_string(n - std::uint64_t(is.tellg())) +
-                             " trailing bytes after the map in its block)");
+  OccupancyMap map;
+  archive::parseBlock(in, n, kWho, "map block", [&](std::istream& is) { map = OccupancyMap::read(is); });
   if (version >= 2) mrpt_grid::checkFrame(frame, map.resolution());
 
   genericMapParams = generic;

@@ -10,21 +10,12 @@
 #include <mrpt/obs/CObservationRotatingScan.h>
 #include <mrpt/obs/CObservationVelodyneScan.h>
 
+#include "finite_pose.hpp"
 #include "rtog/mrpt/CRTreeOccupancyGridMap.h"
 
 namespace rtog {
 
-namespace {
-// The log-likelihood of an observation from a non-finite pose: impossible, below any real score
-// (a scan's sum is bounded by beams * log(LF_zRandom/LF_maxRange)), yet finite, because MRPT's
-// particle filters assert finite log-likelihoods and subtract the maximum before exp().
-constexpr double kImpossibleLogLik = -1e30;
-
-bool finitePose(const mrpt::poses::CPose3D& p) {
-  return std::isfinite(p.x()) && std::isfinite(p.y()) && std::isfinite(p.z()) && std::isfinite(p.yaw()) &&
-         std::isfinite(p.pitch()) && std::isfinite(p.roll());
-}
-}  // namespace
+using detail::kImpossibleLogLik;
 
 bool CRTreeOccupancyGridMap::internal_canComputeObservationLikelihood(const mrpt::obs::CObservation& obs) const {
   using namespace mrpt::obs;
@@ -36,8 +27,9 @@ bool CRTreeOccupancyGridMap::internal_canComputeObservationLikelihood(const mrpt
 
 double CRTreeOccupancyGridMap::internal_computeObservationLikelihood(const mrpt::obs::CObservation& obs,
                                                                      const mrpt::poses::CPose3D& takenFrom) const {
-  // First: a non-finite pose would also grow the 2D view without bound.
-  if (!finitePose(takenFrom)) return kImpossibleLogLik;
+  // First: a non-finite pose would also grow the 2D view without bound; a NaN angle of the
+  // sensor pose makes every end point NaN, and a sum without a beam would be the best score.
+  if (!detail::finitePoses(obs, takenFrom)) return kImpossibleLogLik;
   // Planar 2D scans: MRPT's own method on the 2D view (see scanLikelihoodOnGridView).
   if (const std::optional<double> l = gridViewLikelihood(obs, takenFrom)) return *l;
   // Per thread and kept: a particle filter calls this for every particle.

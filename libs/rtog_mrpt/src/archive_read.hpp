@@ -8,6 +8,8 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
+#include <istream>
 #include <string>
 #include <vector>
 
@@ -32,6 +34,17 @@ std::vector<float> readFloats(mrpt::serialization::CArchive& in, std::size_t max
 /// Throws "<who>: truncated stream (<what>: ...)" if the stream ends first.
 void readBytes(mrpt::serialization::CArchive& in, std::uint64_t n, std::string& out, const char* who,
                const char* what);
+
+/// A block of `n` announced bytes parsed by `parse` as a std::istream that pulls the bytes from
+/// `in` in chunks of 1 MiB as the parser asks for them: its magic, version and counts are checked
+/// as the first bytes arrive, and a false length costs what the parser reads before it fails,
+/// not n (a block buffered whole first cost 2 GiB for a 1 MB gzip file of zeros). Bytes the
+/// parser leaves are read in chunks too, to tell a truncated stream ("<who>: truncated stream
+/// (<what>: n bytes announced, the stream ends after m)") from bytes after the map ("<who>:
+/// corrupt stream (k trailing bytes after the map in its block)"). An error of the parser in a
+/// stream that ended early is reported as the truncation; else it is rethrown as it is.
+void parseBlock(mrpt::serialization::CArchive& in, std::uint64_t n, const char* who, const char* what,
+                const std::function<void(std::istream&)>& parse);
 
 /// A bool as CArchive writes it (one byte), read as a byte and checked: MRPT's operator>> copies
 /// the byte into the bool, and a byte other than 0 or 1 is then not a valid bool (undefined

@@ -52,6 +52,10 @@ class CRTreeBackedGridMap2D : public mrpt::maps::COccupancyGridMap2D {
   void internal_clear() override;
   bool internal_insertObservation(const mrpt::obs::CObservation& obs,
                                   const std::optional<const mrpt::poses::CPose3D>& robotPose) override;
+  /// The stock grid's likelihood, except for a robot or sensor pose with a non-finite component
+  /// (angles included): -1e30, the impossible score, as CRTreeOccupancyGridMap gives it.
+  double internal_computeObservationLikelihood(const mrpt::obs::CObservation& obs,
+                                               const mrpt::poses::CPose3D& takenFrom) const override;
 
  private:
   /// Refreshes the 2D cells within the metric rectangle (grows the grid to contain it).

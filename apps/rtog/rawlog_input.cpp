@@ -1,0 +1,241 @@
+// `rtog build --rawlog`: a rawlog read entry by entry, its damage found and named.
+//
+// MRPT's CRawlog::loadFromRawLogFile stops at the first entry it cannot read and keeps the ones
+// before: a truncated or corrupt log reads as a shorter one, silently. And each class's reader
+// sizes its buffers from the counts the file states before it reads a byte of them: a scan
+// announcing 2^32 - 1 beams in a 179-byte file makes MRPT zero-fill gigabytes (or write through
+// the null pointer its aligned allocator returns when that fails). rtog cannot check every
+// class's counts from outside, so a child process reads the log first, with its address space
+// bounded entry by entry by the bytes left in the file; a count the file cannot hold makes the
+// allocation fail there, and the child names the entry. The tool reads the log only if it passed.
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+#include <zlib.h>
+
+#include <cerrno>
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <mrpt/io/CFileGZInputStream.h>
+#include <mrpt/obs/CObservationComment.h>
+#include <mrpt/obs/CRawlog.h>
+#include <mrpt/serialization/CArchive.h>
+
+#include "commands.hpp"
+
+namespace rtog::cli {
+namespace {
+
+/// Bytes of the log as MRPT reads them: a gzip file decompressed (counted, not kept).
+std::uint64_t logBytes(const std::string& path) {
+  std::ifstream f(path, std::ios::binary);
+  unsigned char magic[2] = {0, 0};
+  f.read(reinterpret_cast<char*>(magic), 2);
+  if (!(magic[0] == 0x1f && magic[1] == 0x8b)) {
+    f.clear();
+    f.seekg(0, std::ios::end);
+    return static_cast<std::uint64_t>(f.tellg());
+  }
+  gzFile gz = gzopen(path.c_str(), "rb");
+  if (!gz) throw std::runtime_error("cannot open rawlog '" + path + "'");
+  std::uint64_t n = 0;
+  std::vector<char> buf(std::size_t{1} << 16);
+  int got = 0;
+  while ((got = gzread(gz, buf.data(), static_cast<unsigned>(buf.size()))) > 0) n += static_cast<std::uint64_t>(got);
+  gzclose(gz);
+  return n;  // a damaged gzip stream counts up to the damage: the entry there is truncated
+}
+
+/// What an MRPT exception says, in one line: the objects it was reading, outermost first, and
+/// the innermost message (its text nests one banner, message and backtrace per object).
+std::string reason(const std::string& what) {
+  std::istringstream in(what);
+  std::string line, chain, last;
+  const std::string typed = "Exception while parsing typed object '";
+  while (std::getline(in, line)) {
+    if (line.rfind("Message:", 0) != 0) continue;
+    const auto a = line.find_first_not_of(' ', 8);
+    if (a == std::string::npos) continue;
+    line = line.substr(a);
+    if (line.rfind(typed, 0) == 0) {
+      const std::string name = line.substr(typed.size(), line.find('\'', typed.size()) - typed.size());
+      if (name.find(' ') == std::string::npos) chain += (chain.empty() ? "" : " > ") + name;
+      continue;
+    }
+    last = line;
+  }
+  if (last.empty()) {  // not an MRPT exception: its first line
+    last = what.substr(0, what.find('\n'));
+  }
+  return chain.empty() ? last : "in " + chain + ": " + last;
+}
+
+/// The address space this process maps now [bytes].
+std::uint64_t mappedBytes() {
+  std::ifstream statm("/proc/self/statm");
+  std::uint64_t pages = 0;
+  statm >> pages;
+  return pages * static_cast<std::uint64_t>(sysconf(_SC_PAGESIZE));
+}
+
+void say(int fd, const std::string& s) {
+  std::size_t done = 0;
+  while (done < s.size()) {
+    const ssize_t w = write(fd, s.data() + done, s.size() - done);
+    if (w < 0 && errno == EINTR) continue;
+    if (w <= 0) return;
+    done += static_cast<std::size_t>(w);
+  }
+}
+
+/// In the child: every entry read under an address-space bound of what it may need (twice the
+/// bytes left, plus 64 MiB for MRPT's own tables), one line per entry to `fd` before it is read.
+[[noreturn]] void checkEntries(const std::string& path, std::uint64_t total, int fd) {
+  const rlimit no_core{0, 0};
+  setrlimit(RLIMIT_CORE, &no_core);  // a crash here is an answer, not something to keep
+  std::size_t entry = 0;
+  try {
+    mrpt::io::CFileGZInputStream f(path);
+    auto ar = mrpt::serialization::archiveFrom(f);
+    for (;; ++entry) {
+      const std::uint64_t at = f.getPosition();
+      if (at >= total) break;
+      say(fd, "at " + std::to_string(entry) + " " + std::to_string(at) + "\n");
+      // The soft limit only: it may rise again for the next entry.
+      rlimit lim{};
+      const std::uint64_t mapped = mappedBytes();
+      if (mapped > 0 && getrlimit(RLIMIT_AS, &lim) == 0) {
+        lim.rlim_cur = static_cast<rlim_t>(mapped + 2 * (total - at) + (std::uint64_t{64} << 20));
+        if (lim.rlim_max != RLIM_INFINITY && lim.rlim_cur > lim.rlim_max) lim.rlim_cur = lim.rlim_max;
+        setrlimit(RLIMIT_AS, &lim);
+      }
+      try {
+        ar.ReadObject();
+      } catch (const std::bad_alloc&) {
+        say(fd, "memory\n");
+        _exit(1);
+      } catch (const std::exception& e) {
+        // MRPT wraps what its readers throw: an allocation refused (or a size beyond a vector's
+        // max_size) is known by its text.
+        const std::string w = e.what();
+        if (w.find("bad_alloc") != std::string::npos || w.find("max_size") != std::string::npos ||
+            w.find("_M_default_append") != std::string::npos) {
+          say(fd, "memory\n");
+          _exit(1);
+        }
+        const bool cut = f.getPosition() >= total;
+        std::string r = reason(e.what());
+        for (char& c : r)
+          if (c == '\n') c = ' ';
+        say(fd, std::string(cut ? "truncated " : "corrupt ") + r + "\n");
+        _exit(1);
+      }
+    }
+  } catch (const std::exception& e) {
+    say(fd, std::string("corrupt ") + reason(e.what()) + "\n");
+    _exit(1);
+  }
+  say(fd, "entries " + std::to_string(entry) + "\n");
+  _exit(0);
+}
+
+}  // namespace
+
+RawlogCheck checkRawlog(const std::string& path) {
+  RawlogCheck r;
+  r.bytes = logBytes(path);
+  int fds[2];
+  if (pipe(fds) != 0) throw std::runtime_error("cannot check rawlog '" + path + "': no pipe");
+  std::cout.flush();
+  std::cerr.flush();
+  std::fflush(nullptr);
+  const pid_t pid = fork();
+  if (pid < 0) throw std::runtime_error("cannot check rawlog '" + path + "': cannot fork");
+  if (pid == 0) {
+    close(fds[0]);
+    checkEntries(path, r.bytes, fds[1]);
+  }
+  close(fds[1]);
+  std::string said;
+  char buf[4096];
+  for (ssize_t got; (got = read(fds[0], buf, sizeof buf)) != 0;) {
+    if (got < 0 && errno == EINTR) continue;
+    if (got < 0) break;
+    said.append(buf, static_cast<std::size_t>(got));
+  }
+  close(fds[0]);
+  int status = 0;
+  while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  }
+  // The last lines: where the child was, and what it found there (nothing if it was killed).
+  std::istringstream lines(said);
+  std::string line, verdict;
+  while (std::getline(lines, line)) {
+    if (line.rfind("at ", 0) == 0) {
+      std::istringstream at(line.substr(3));
+      at >> r.entries >> r.offset;
+      verdict.clear();
+    } else {
+      verdict = line;
+    }
+  }
+  if (verdict.rfind("entries ", 0) == 0 && WIFEXITED(status) && WEXITSTATUS(status) == 0) {
+    r.entries = std::stoull(verdict.substr(8));
+    r.offset = r.bytes;
+    return r;
+  }
+  const std::string where = "entry " + std::to_string(r.entries) + " (byte " + std::to_string(r.offset) + " of " +
+                            std::to_string(r.bytes) + ")";
+  if (verdict.rfind("truncated ", 0) == 0) {
+    r.truncated = true;
+    r.problem = "truncated: the file ends inside " + where + " (" + verdict.substr(10) + ")";
+  } else if (verdict.rfind("corrupt ", 0) == 0) {
+    r.problem = "corrupt " + where + ", " + std::to_string(r.bytes - r.offset) + " bytes before the end: " +
+                verdict.substr(8);
+  } else {
+    r.problem = where + " announces more data than the " + std::to_string(r.bytes - r.offset) +
+                " bytes left in the file (a damaged length field?)";
+  }
+  return r;
+}
+
+std::size_t readRawlog(const std::string& path, bool allow_truncated, mrpt::obs::CRawlog& log, std::ostream& out) {
+  const RawlogCheck c = checkRawlog(path);
+  if (!c.problem.empty() && !(c.truncated && allow_truncated))
+    throw std::runtime_error("cannot read rawlog '" + path + "': " + c.problem);
+  if (c.entries == 0) throw std::runtime_error("cannot read rawlog '" + path + "': it holds no entry");
+  if (c.truncated)
+    out << "warning: rawlog '" << path << "' " << c.problem << "; --allow-truncated: reading its first " << c.entries
+        << " entries, " << (c.bytes - c.offset) << " bytes dropped\n";
+  // The same bytes again, now known to be readable (they were, in the child).
+  mrpt::io::CFileGZInputStream f(path);
+  auto ar = mrpt::serialization::archiveFrom(f);
+  log.clear();
+  for (std::size_t i = 0; i < c.entries; ++i) {
+    const auto obj = ar.ReadObject();
+    // As CRawlog::loadFromRawLogFile takes them: a whole CRawlog, comments, actions, frames and
+    // observations (CRawlog::insert refuses anything else, as that reader stops at it).
+    if (const auto whole = std::dynamic_pointer_cast<mrpt::obs::CRawlog>(obj)) {
+      log.swap(*whole);
+    } else if (const auto comment = std::dynamic_pointer_cast<mrpt::obs::CObservationComment>(obj)) {
+      log.setCommentText(comment->text);
+    } else {
+      try {
+        log.insert(obj);
+      } catch (const std::exception&) {
+        throw std::runtime_error("cannot read rawlog '" + path + "': entry " + std::to_string(i) + " is a " +
+                                 (obj ? obj->GetRuntimeClass()->className : "null object") +
+                                 ", not an action, a sensory frame or an observation");
+      }
+    }
+  }
+  return log.size();
+}
+
+}  // namespace rtog::cli
