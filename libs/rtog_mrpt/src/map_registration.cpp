@@ -64,7 +64,7 @@ TMapRegistration registerMaps(const CRTreeOccupancyGridMap& a, const CRTreeOccup
     throw std::runtime_error("rtog::registerMaps: each map needs 10 occupied cells in the band to be registered (" +
                              std::to_string(pa.size()) + " and " + std::to_string(pb.size()) + ")");
   const double res = std::max(a.resolution(), b.resolution());
-  const double end = o.endDistance > 0.0 ? o.endDistance : res;
+  const double end = o.endDistance > 0.0 ? o.endDistance : 0.75 * res;
   mrpt::slam::CICP icp;
   icp.options.maxIterations = 200;
   icp.options.thresholdDist = std::max(o.startDistance, end);

@@ -25,9 +25,11 @@ struct TMapRegistrationOptions {
   double headingSpanDeg{360.0};
   /// The guess of the second map's frame in the first's (x, y [m], yaw [rad]). (Default: 0)
   double guessX{0.0}, guessY{0.0}, guessYaw{0.0};
-  /// Matching distance ICP starts with [m], and ends with; 0 ends with the coarser map's
-  /// resolution, the distance two samplings of one wall on different lattices keep. Cells of the
-  /// second map within endDistance of a cell of the first are the matched ones. (Default: 3, 0)
+  /// Matching distance ICP starts with [m], and ends with; 0 ends with 0.75 times the coarser
+  /// map's resolution: a point is within 0.71 cells of its nearest lattice point, so two samplings
+  /// of one wall on different lattices stay within it, while on one lattice a neighbouring cell
+  /// (1 cell away) does not pair. Cells of the second map within endDistance of a cell of the
+  /// first are the matched ones. (Default: 3, 0)
   double startDistance{3.0}, endDistance{0.0};
   /// Occupied cells used per map at most (taken evenly): ICP's cost. (Default: 20000)
   std::size_t maxPoints{20000};
