@@ -77,6 +77,11 @@ TMapRegistration registerMaps(const CRTreeOccupancyGridMap& a, const CRTreeOccup
   best.pointsA = pa.size(), best.pointsB = pb.size();
   // Each cell centre is its cell's points to within a uniform error of res^2 / 12 per axis.
   const double q = (a.resolution() * a.resolution() + b.resolution() * b.resolution()) / 12.0;
+  // The covariance's pairs: a cell of the second map and the nearest of the first within 1.5
+  // cells, the matched cell's 8-neighbourhood (at most sqrt(2) cells away): one wall placed a
+  // cell differently by the two maps, a disagreement endDistance leaves out of the matching but
+  // not out of the pose's uncertainty.
+  const double wide = std::max(end, 1.5 * res);
   detail::RegistrationFit fit;
   mrpt::poses::CPose2D found;
   bool any = false;
@@ -88,7 +93,7 @@ TMapRegistration registerMaps(const CRTreeOccupancyGridMap& a, const CRTreeOccup
     mrpt::poses::CPose2D mean;
     pdf->getMean(mean);
     // The start that matches most cells within the final distance, judged by one rule for all.
-    detail::RegistrationFit f = detail::registrationCovariance(pa, pb, mean, end, q, o.tileSize, kMinTiles);
+    detail::RegistrationFit f = detail::registrationCovariance(pa, pb, mean, end, wide, q, o.tileSize, kMinTiles);
     if (any && !(f.goodness > fit.goodness)) continue;
     any = true;
     fit = f, found = mean;

@@ -57,8 +57,8 @@ Eigen::Matrix3d upperBound(const Eigen::Matrix3d& c, const Eigen::Matrix3d& d) {
 }  // namespace
 
 RegistrationFit registrationCovariance(const mrpt::maps::CSimplePointsMap& a, const mrpt::maps::CSimplePointsMap& b,
-                                       const mrpt::poses::CPose2D& pose, double gate, double q, double tile,
-                                       std::size_t min_tiles) {
+                                       const mrpt::poses::CPose2D& pose, double gate, double wide, double q,
+                                       double tile, std::size_t min_tiles) {
   RegistrationFit fit;
   const double c = std::cos(pose.phi()), s = std::sin(pose.phi());
   Eigen::Matrix3d h = Eigen::Matrix3d::Zero();
@@ -73,17 +73,17 @@ RegistrationFit registrationCovariance(const mrpt::maps::CSimplePointsMap& a, co
     float ax = 0, ay = 0, d2 = 0;
     a.kdTreeClosestPoint2D(static_cast<float>(px), static_cast<float>(py), ax, ay, d2);
     const double dx = ax - px, dy = ay - py;
-    if (!(dx * dx + dy * dy <= gate * gate)) continue;
+    if (dx * dx + dy * dy <= gate * gate) ++fit.matched;
+    if (!(dx * dx + dy * dy <= wide * wide)) continue;
     Pair p{ax, ay, {}, Eigen::Vector2d(dx, dy)};
     p.j << 1, 0, -ry, 0, 1, rx;
     h += p.j.transpose() * p.j;
     sum_r2 += dx * dx + dy * dy;
     pairs.push_back(p);
   }
-  fit.matched = pairs.size();
   fit.goodness = xs.empty() ? 0.0 : double(fit.matched) / double(xs.size());
   if (pairs.empty()) return fit;
-  fit.rms = std::sqrt(sum_r2 / double(fit.matched));
+  fit.rms = std::sqrt(sum_r2 / double(pairs.size()));
   const Eigen::LDLT<Eigen::Matrix3d> hinv(h);
   const auto sandwich = [&](const Eigen::Matrix3d& meat) {
     const Eigen::Matrix3d left = hinv.solve(meat);
@@ -95,8 +95,8 @@ RegistrationFit registrationCovariance(const mrpt::maps::CSimplePointsMap& a, co
   // part common to all of them moves the optimum without showing in the residuals. Counted as
   // one pair's worth of information (N_eff = 1): per axis the residuals' variance plus the two
   // cell centres' quantization, the covariance N sigma^2 H^-1.
-  const double sigma2 = sum_r2 / (2.0 * double(fit.matched)) + q;
-  fit.cov = sandwich(double(fit.matched) * sigma2 * h);
+  const double sigma2 = sum_r2 / (2.0 * double(pairs.size())) + q;
+  fit.cov = sandwich(double(pairs.size()) * sigma2 * h);
   if (!fit.cov.allFinite() || Eigen::LLT<Eigen::Matrix3d>(fit.cov).info() != Eigen::Success) return fit;
   // Tiles of doubling side while there are enough of them to tell a spread: where the maps
   // disagree over a large region (drift between the poses that saw it), its pairs err together

@@ -53,9 +53,9 @@ struct TMapRegistration {
   /// endDistance at the result, of the best start.
   double goodness{0.0};
   std::size_t pointsA{0}, pointsB{0};  ///< occupied cells in the band, of each map
-  std::size_t matched{0};              ///< of them, the pairs the covariance is computed from
-  std::size_t tiles{0};                ///< the tiles those pairs fall in
-  double rmsResidual{0.0};             ///< of the matched pairs [m]
+  std::size_t matched{0};              ///< of the second map's, those matched within endDistance
+  std::size_t tiles{0};                ///< tiles (of tileSize) the covariance's pairs fall in
+  double rmsResidual{0.0};             ///< of the covariance's pairs (within 1.5 cells) [m]
 };
 
 /// Estimates the pose of `b`'s frame in `a`'s from their occupied cells in the band. Throws
