@@ -42,10 +42,6 @@ mrpt::maps::CSimplePointsMap bandPoints(const CRTreeOccupancyGridMap& m, const T
   return out;
 }
 
-/// Fewest tiles a spread is estimated from (the sum of a tile's J^T r over all tiles is about 0
-/// at the optimum, so G tiles give a spread of rank G - 1 at most: 3 parameters need 4 and more).
-constexpr std::size_t kMinTiles = 6;
-
 }  // namespace
 
 TMapRegistration registerMaps(const CRTreeOccupancyGridMap& a, const CRTreeOccupancyGridMap& b,
@@ -53,12 +49,12 @@ TMapRegistration registerMaps(const CRTreeOccupancyGridMap& a, const CRTreeOccup
   if (!(o.minZ <= o.maxZ) || !(o.headingStepDeg > 0.0 && o.headingStepDeg <= 360.0) ||
       !(o.headingSpanDeg > 0.0 && o.headingSpanDeg <= 360.0) || !(o.endDistance >= 0.0) ||
       !(o.startDistance > 0.0 && o.startDistance >= o.endDistance) || o.maxPoints < 10 ||
-      !(o.minGoodness >= 0.0 && o.minGoodness <= 1.0) || !(o.tileSize > 0.0 && std::isfinite(o.tileSize)) ||
+      !(o.minGoodness >= 0.0 && o.minGoodness <= 1.0) ||
       !std::isfinite(o.guessX + o.guessY + o.guessYaw + o.startDistance))
     throw std::invalid_argument(
         "rtog::registerMaps: need minZ <= maxZ, headingStepDeg and headingSpanDeg in (0, 360], "
-        "startDistance >= endDistance >= 0 (startDistance > 0), maxPoints >= 10, minGoodness in [0, 1], "
-        "tileSize > 0 and a finite guess");
+        "startDistance >= endDistance >= 0 (startDistance > 0), maxPoints >= 10, minGoodness in [0, 1] "
+        "and a finite guess");
   const auto pa = bandPoints(a, o, o.maxPoints), pb = bandPoints(b, o, o.maxPoints);
   if (pa.size() < 10 || pb.size() < 10)
     throw std::runtime_error("rtog::registerMaps: each map needs 10 occupied cells in the band to be registered (" +
@@ -93,12 +89,12 @@ TMapRegistration registerMaps(const CRTreeOccupancyGridMap& a, const CRTreeOccup
     mrpt::poses::CPose2D mean;
     pdf->getMean(mean);
     // The start that matches most cells within the final distance, judged by one rule for all.
-    detail::RegistrationFit f = detail::registrationCovariance(pa, pb, mean, end, wide, q, o.tileSize, kMinTiles);
+    detail::RegistrationFit f = detail::registrationCovariance(pa, pb, mean, end, wide, q);
     if (any && !(f.goodness > fit.goodness)) continue;
     any = true;
     fit = f, found = mean;
   }
-  best.goodness = fit.goodness, best.matched = fit.matched, best.tiles = fit.tiles, best.rmsResidual = fit.rms;
+  best.goodness = fit.goodness, best.matched = fit.matched, best.pairs = fit.pairs, best.rmsResidual = fit.rms;
   mrpt::poses::CPosePDFGaussian g(found, mrpt::math::CMatrixDouble33(fit.cov));
   best.pose = mrpt::poses::CPose3DPDFGaussian(g);
   const auto fail = [&](const std::string& why) {
@@ -113,9 +109,9 @@ TMapRegistration registerMaps(const CRTreeOccupancyGridMap& a, const CRTreeOccup
                 100.0 * fit.goodness, pb.size(), end, o.minGoodness);
   if (!any || fit.goodness < o.minGoodness) return fail(why);
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(fit.cov);
-  if (!fit.cov.allFinite() || !(eig.eigenvalues().minCoeff() > 0.0) || fit.tiles < kMinTiles)
+  if (!fit.cov.allFinite() || !(eig.eigenvalues().minCoeff() > 0.0))
     return fail("the registration is degenerate: its covariance is not finite and positive definite (" +
-                std::to_string(fit.matched) + " cells matched in " + std::to_string(fit.tiles) + " tiles)");
+                std::to_string(fit.pairs) + " cells paired)");
   best.converged = true;
   return best;
 }

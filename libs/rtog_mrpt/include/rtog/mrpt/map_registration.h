@@ -36,10 +36,6 @@ struct TMapRegistrationOptions {
   /// The least share of the second map's cells that must be matched at the result: below it the
   /// maps share too little for a registration. (Default: 0.25)
   double minGoodness{0.25};
-  /// Side of the square tiles [m] whose matched cells' residuals are taken as one correlated
-  /// group in the covariance (a stretch of wall seen from the same poses errs as one).
-  /// (Default: 2)
-  double tileSize{2.0};
 };
 
 struct TMapRegistration {
@@ -47,14 +43,15 @@ struct TMapRegistration {
   bool converged{false};
   std::string failure;
   /// The second map's frame in the first's, for fuse(); z, pitch and roll 0 and certain. Its
-  /// x, y, yaw covariance is the sandwich estimate of doc/fusion.md ("Registration").
+  /// x, y, yaw covariance is N sigma^2 H^-1 of doc/fusion.md ("Registration").
   mrpt::poses::CPose3DPDFGaussian pose;
   /// The fraction of the second map's cells in the band that have a cell of the first within
   /// endDistance at the result, of the best start.
   double goodness{0.0};
   std::size_t pointsA{0}, pointsB{0};  ///< occupied cells in the band, of each map
   std::size_t matched{0};              ///< of the second map's, those matched within endDistance
-  std::size_t tiles{0};                ///< tiles (of tileSize) the covariance's pairs fall in
+  std::size_t pairs{0};                ///< of the second map's, those paired within 1.5 cells
+                                       ///< (the covariance's pairs)
   double rmsResidual{0.0};             ///< of the covariance's pairs (within 1.5 cells) [m]
 };
 
