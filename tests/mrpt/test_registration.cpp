@@ -101,6 +101,10 @@ TEST(RegisterMaps, MapsThatDoNotOverlapAreNotRegistered) {
   EXPECT_THROW(rtog::registerMaps(*a, *b, bad), std::invalid_argument);
   bad = {}, bad.minGoodness = 2;
   EXPECT_THROW(rtog::registerMaps(*a, *b, bad), std::invalid_argument);
+  bad = {}, bad.headingSpanDeg = 0;
+  EXPECT_THROW(rtog::registerMaps(*a, *b, bad), std::invalid_argument);
+  bad = {}, bad.endDistance = -1;
+  EXPECT_THROW(rtog::registerMaps(*a, *b, bad), std::invalid_argument);
   EXPECT_THROW(rtog::registerMaps(*a, rtog::CRTreeOccupancyGridMap(0.05)), std::runtime_error);
 }
 
