@@ -76,13 +76,14 @@ int fuse(const FuseOptions& o, std::ostream& out) {
     ro.minZ = static_cast<float>(o.register_band[0]), ro.maxZ = static_cast<float>(o.register_band[1]);
     ro.guessX = o.pose[0], ro.guessY = o.pose[1], ro.guessYaw = o.pose[3] * M_PI / 180.0;
     const TMapRegistration r = registerMaps(wa, wb, ro);
+    // A failed registration fuses nothing: a wrong pose or a meaningless covariance would blur
+    // or misplace the second map without a sign in the output.
+    if (!r.converged) throw std::runtime_error("fuse --register: " + o.map_b + " not registered: " + r.failure);
     const auto& m = r.pose.mean;
     out << "registered " << o.map_b << " at x " << m.x() << " m, y " << m.y() << " m, yaw " << m.yaw() * 180.0 / M_PI
         << " deg (sigma " << std::sqrt(r.pose.cov(0, 0)) << " m, " << std::sqrt(r.pose.cov(1, 1)) << " m, "
-        << std::sqrt(r.pose.cov(3, 3)) * 180.0 / M_PI << " deg; " << r.goodness * 100.0 << " % of "
-        << r.pointsB << " occupied cells matched)\n";
-    if (r.goodness < 0.3)
-      out << "warning: under 30 % of the occupied cells matched: the maps may share too little to be registered\n";
+        << std::sqrt(r.pose.cov(3, 3)) * 180.0 / M_PI << " deg; " << r.goodness * 100.0 << " % of " << r.pointsB
+        << " occupied cells matched, rms " << r.rmsResidual << " m)\n";
     wa.insertionOptions.threads = o.threads;
     st = fuseUncertain(wa, wb, r.pose);
     a = std::move(wa.map());

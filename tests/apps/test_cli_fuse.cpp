@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -166,6 +167,73 @@ TEST(CliScans, ChunksFusedAreTheWholeBuildWithoutClamping) {
   }
   std::printf("chunks 0:4 and 4: fused vs one build: %zu cells, largest difference %.3g\n", got.size(), worst);
   EXPECT_LT(worst, 1e-6);
+}
+
+// Issue #37: `fuse --register` on maps that already agree, two overlapping chunks of one log (SENA
+// at 0.1 m, scans 0:150 and 75:, the chunk workflow). CICP's placeholder covariance (sigma
+// 1000 m, 57296 deg) blurred the second map over +-1.7 km (1.29 M leaves, bounds +-1.8 km); they
+// are found at the identity with a sigma of centimetres, and the fused map stays within the
+// chunks' bounds.
+TEST(CliFuseRegister, OverlappingChunksOfOneLogAreFoundAtTheIdentityAndStayInItsBounds) {
+  const std::string log = std::string(RTOG_MRPT_DATASETS) + "/2006-01ENE-21-SENA_Telecom Faculty_one_loop_only.rawlog";
+  const std::string a = tmp("sa.rtog"), b = tmp("sb.rtog"), c = tmp("sc.rtog");
+  std::string out;
+  ASSERT_EQ(run("build --rawlog '" + log + "' --resolution 0.1 --scans 0:150 --out " + a, &out), 0) << out;
+  ASSERT_EQ(run("build --rawlog '" + log + "' --resolution 0.1 --scans 75: --out " + b, &out), 0) << out;
+  ASSERT_EQ(run("fuse " + a + " " + b + " --register --out " + c, &out), 0) << out;
+  const std::size_t at = out.find("registered ");
+  ASSERT_NE(at, std::string::npos) << out;
+  double x = 1e9, y = 1e9, yaw = 1e9, sx = 1e9, sy = 1e9, syaw = 1e9;
+  ASSERT_EQ(std::sscanf(out.c_str() + at, "registered %*s at x %lf m, y %lf m, yaw %lf deg (sigma %lf m, %lf m, %lf deg",
+                        &x, &y, &yaw, &sx, &sy, &syaw),
+            6)
+      << out;
+  EXPECT_LT(std::hypot(x, y), 0.1) << out;
+  EXPECT_LT(std::fabs(yaw), 0.5) << out;
+  for (const double s : {sx, sy}) {
+    EXPECT_GT(s, 0.0) << out;
+    EXPECT_LT(s, 0.1) << out;
+  }
+  EXPECT_GT(syaw, 0.0) << out;
+  EXPECT_LT(syaw, 1.0) << out;
+  // The error (the chunks share one frame: the truth is the identity) within 2 sigma per axis.
+  EXPECT_LE(std::fabs(x), 2 * sx) << out;
+  EXPECT_LE(std::fabs(y), 2 * sy) << out;
+  // The fused map's bounds: those of the chunks, give or take a metre.
+  const auto bounds = [&](const std::string& map) {
+    std::string info;
+    EXPECT_EQ(run("info " + map, &info), 0) << info;
+    std::array<double, 6> v{};
+    const std::size_t p = info.find("bounds");
+    EXPECT_NE(p, std::string::npos) << info;
+    EXPECT_EQ(std::sscanf(info.c_str() + p, "bounds [%lf, %lf, %lf] .. [%lf, %lf, %lf]", &v[0], &v[1], &v[2], &v[3], &v[4],
+                          &v[5]),
+              6)
+        << info;
+    return v;
+  };
+  const auto ba = bounds(a), bb = bounds(b), bc = bounds(c);
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_GE(bc[i], std::min(ba[i], bb[i]) - 1.0) << i;
+    EXPECT_LE(bc[i + 3], std::max(ba[i + 3], bb[i + 3]) + 1.0) << i;
+  }
+}
+
+// Maps of two different places (the bundled TUM frames and the first half of Malaga) do not
+// register: one error line with the reason, exit 1 and no output (before, they were fused at
+// -180 degrees with a zero sigma, which nobody gave).
+TEST(CliFuseRegister, MapsOfDifferentPlacesAreOneErrorLineAndNoOutput) {
+  const std::string sm = std::string(RTOG_MRPT_DATASETS) + "/malaga-cs-fac-building.simplemap.gz";
+  const std::string a = tmp("ta.rtog"), b = tmp("ma.rtog"), c = tmp("tc.rtog");
+  std::string out;
+  ASSERT_EQ(run("build --tum " + std::string(RTOG_TEST_TUM_DIR) + " --resolution 0.1 --stride 4 --out " + a, &out), 0)
+      << out;
+  ASSERT_EQ(run("build --simplemap " + sm + " --scans 0:49 --resolution 0.1 --out " + b, &out), 0) << out;
+  std::remove(c.c_str());
+  EXPECT_EQ(run("fuse " + a + " " + b + " --register --out " + c, &out), 1) << out;
+  EXPECT_EQ(std::count(out.begin(), out.end(), '\n'), 1) << out;
+  EXPECT_NE(out.find("not registered: the maps share too little"), std::string::npos) << out;
+  EXPECT_FALSE(exists(c));
 }
 
 }  // namespace
