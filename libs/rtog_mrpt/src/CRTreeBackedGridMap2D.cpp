@@ -37,7 +37,7 @@ void CRTreeBackedGridMap2D::TMapDefinition::loadFromConfigFile_map_specific(
   loadError.clear();
   try {
     const std::string sec = prefix + "_creationOpts";
-    resolution = source.read_double(sec, "resolution", resolution);
+    resolution = readDouble(source, sec, "resolution", resolution);
     if (!(std::isfinite(resolution) && resolution >= 1e-3 && resolution <= 1e2))
       throw std::invalid_argument("rtog::CRTreeBackedGridMap2D: invalid option [" + sec +
                                   "] resolution: must lie in [1e-3, 1e2] m, got " + std::to_string(resolution));
@@ -50,7 +50,16 @@ void CRTreeBackedGridMap2D::TMapDefinition::loadFromConfigFile_map_specific(
     band.loadFromConfigFile(source, sec);
     gridView_minZ = band.gridView_minZ, gridView_maxZ = band.gridView_maxZ;
     insertionOpts.loadFromConfigFile(source, prefix + "_insertOpts");
-    // The grid's own struct, read by MRPT, which checks none of its values.
+    // The grid's own struct, read by MRPT, which checks none of its values: their syntax first
+    // (MRPT's read_bool takes "on" as false, read_float "0.1abc" as 0.1), then their values.
+    using V = IniValue;
+    checkIniValues(source, prefix + "_likelihoodOpts", "rtog::CRTreeBackedGridMap2D",
+                   {{"LF_stdHit", V::Real}, {"LF_zHit", V::Real}, {"LF_zRandom", V::Real}, {"LF_maxRange", V::Real},
+                    {"LF_decimation", V::Int}, {"LF_maxCorrsDistance", V::Real}, {"LF_useSquareDist", V::Bool},
+                    {"LF_alternateAverageMethod", V::Bool}, {"MI_exponent", V::Real}, {"MI_skip_rays", V::Int},
+                    {"MI_ratio_max_distance", V::Real}, {"rayTracing_useDistanceFilter", V::Bool},
+                    {"rayTracing_stdHit", V::Real}, {"consensus_takeEachRange", V::Int}, {"consensus_pow", V::Real},
+                    {"enableLikelihoodCache", V::Bool}});
     likelihoodOpts.loadFromConfigFile(source, prefix + "_likelihoodOpts");
     checkLikelihoodValues(likelihoodOpts, "rtog::CRTreeBackedGridMap2D", prefix + "_likelihoodOpts");
   } catch (const std::exception& e) {
