@@ -361,7 +361,17 @@ TEST(MapOptions, BooleansAreReadAsMeant) {
     for (const std::string v : {"on", "ON", "true", "True", "yes", "1", "on // a comment"})
       EXPECT_TRUE(discretizeOf(type, v)) << type << ": discretize = " << v;
     for (const std::string v : {"off", "OFF", "false", "no", "0"}) EXPECT_FALSE(discretizeOf(type, v)) << type << ": " << v;
-  }
+  }  // Where MRPT's own loaders read them: the generic map parameters of every _creationOpts, the
+  // backed grid's likelihood section.
+  auto mm = fromIni("[MappingApplication]\nrtreeGridMap2D_count=1\n[MappingApplication_rtreeGridMap2D_00_creationOpts]\n"
+                    "enableObservationInsertion = off\n[MappingApplication_rtreeGridMap2D_00_likelihoodOpts]\n"
+                    "LF_useSquareDist = on\nenableLikelihoodCache = Off\n");
+  const auto g = mm.mapByClass<rtog::CRTreeBackedGridMap2D>();
+  EXPECT_FALSE(g->genericMapParams.enableObservationInsertion);
+  EXPECT_TRUE(g->likelihoodOptions.LF_useSquareDist);
+  EXPECT_FALSE(g->likelihoodOptions.enableLikelihoodCache);
+  auto mr = fromIni(oneMap("rtreeOccupancyGrid", "creationOpts", "enableSaveAs3DObject = no"));
+  EXPECT_FALSE(mr.mapByClass<CRTreeOccupancyGridMap>()->genericMapParams.enableSaveAs3DObject);
 }
 
 // Any other word is refused, naming section, key and the words taken: in the sections rtog reads
@@ -375,7 +385,10 @@ TEST(MapOptions, OtherBooleanWordsAreRefused) {
            {"rtreeOccupancyGrid", "likelihoodOpts", "scanLikelihoodOnGridView = nope", "scanLikelihoodOnGridView"},
            {"rtreeGridMap2D", "insertOpts", "useMapAltitude = sometimes", "useMapAltitude"},
            {"rtreeGridMap2D", "likelihoodOpts", "LF_useSquareDist = si", "LF_useSquareDist"},
-           {"rtreeGridMap2D", "likelihoodOpts", "enableLikelihoodCache = enabled", "enableLikelihoodCache"}}) {
+           {"rtreeGridMap2D", "likelihoodOpts", "enableLikelihoodCache = enabled", "enableLikelihoodCache"},
+           // MRPT's own generic map parameters, read by it from every _creationOpts
+           {"rtreeOccupancyGrid", "creationOpts", "enableObservationInsertion = nein", "enableObservationInsertion"},
+           {"rtreeGridMap2D", "creationOpts", "enableSaveAs3DObject = on/off", "enableSaveAs3DObject"}}) {
     const std::string err = loadError(oneMap(type, section, line));
     SCOPED_TRACE(type + " " + line + ": " + err);
     EXPECT_NE(err.find("[MappingApplication_" + type + "_00_" + section + "] " + key + ":"), std::string::npos);

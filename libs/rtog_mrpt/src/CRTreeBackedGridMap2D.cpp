@@ -42,9 +42,11 @@ void CRTreeBackedGridMap2D::TMapDefinition::loadFromConfigFile_map_specific(
       throw std::invalid_argument("rtog::CRTreeBackedGridMap2D: invalid option [" + sec +
                                   "] resolution: must lie in [1e-3, 1e2] m, got " + std::to_string(resolution));
     readGridExtent(source, sec, min_x, max_x, min_y, max_y);
+    readGenericMapParams(source, sec, "rtog::CRTreeBackedGridMap2D", genericMapParams);
     reportUnknownKeys(source, sec,
                       {"resolution", "min_x", "max_x", "min_y", "max_y", "gridView_minZ", "gridView_maxZ",
-                       "disableSaveAs3DObject"});
+                       "disableSaveAs3DObject", "enableSaveAs3DObject", "enableObservationLikelihood",
+                       "enableObservationInsertion"});
     CRTreeOccupancyGridMap::TGridViewOptions band;  // the same keys and check as the R-tree map's
     band.gridView_minZ = gridView_minZ, band.gridView_maxZ = gridView_maxZ;
     band.loadFromConfigFile(source, sec);
@@ -61,6 +63,12 @@ void CRTreeBackedGridMap2D::TMapDefinition::loadFromConfigFile_map_specific(
                     {"rayTracing_stdHit", V::Real}, {"consensus_takeEachRange", V::Int}, {"consensus_pow", V::Real},
                     {"enableLikelihoodCache", V::Bool}});
     likelihoodOpts.loadFromConfigFile(source, prefix + "_likelihoodOpts");
+    // MRPT's read_bool took "on" as false: the booleans read again as everywhere in rtog.
+    for (auto [key, flag] : {std::pair{"LF_useSquareDist", &likelihoodOpts.LF_useSquareDist},
+                             std::pair{"LF_alternateAverageMethod", &likelihoodOpts.LF_alternateAverageMethod},
+                             std::pair{"rayTracing_useDistanceFilter", &likelihoodOpts.rayTracing_useDistanceFilter},
+                             std::pair{"enableLikelihoodCache", &likelihoodOpts.enableLikelihoodCache}})
+      *flag = readBool(source, prefix + "_likelihoodOpts", key, *flag);
     checkLikelihoodValues(likelihoodOpts, "rtog::CRTreeBackedGridMap2D", prefix + "_likelihoodOpts");
   } catch (const std::exception& e) {
     loadError = e.what();  // raised in internal_CreateFromMapDefinition

@@ -325,9 +325,11 @@ void CRTreeOccupancyGridMap::TMapDefinition::loadFromConfigFile_map_specific(
     if (!(std::isfinite(resolution) && resolution >= 1e-4 && resolution <= 1e3))
       badOption(sec, "resolution", "must lie in [1e-4, 1e3] m, got " + std::to_string(resolution));
     readGridExtent(source, sec, min_x, max_x, min_y, max_y);
+    readGenericMapParams(source, sec, "rtog::CRTreeOccupancyGridMap", genericMapParams);
     reportUnknownKeys(source, sec,
                       {"resolution", "min_x", "max_x", "min_y", "max_y", "gridView_minZ", "gridView_maxZ",
-                       "disableSaveAs3DObject", "priorMap", "priorConfidence", "priorResolution", "priorOriginX",
+                       "disableSaveAs3DObject", "enableSaveAs3DObject", "enableObservationLikelihood",
+                       "enableObservationInsertion", "priorMap", "priorConfidence", "priorResolution", "priorOriginX",
                        "priorOriginY"});
     insertionOpts.loadFromConfigFile(source, sectionNamePrefix + "_insertOpts");
     likelihoodOpts.loadFromConfigFile(source, sectionNamePrefix + "_likelihoodOpts");

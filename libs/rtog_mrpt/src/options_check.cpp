@@ -95,9 +95,10 @@ void reportInertKey(const std::string& section, const std::string& key, const st
   tellOnce(section + "/" + key, "rtog: warning: [" + section + "] " + key + " has no effect: " + why);
 }
 
-bool readBool(const mrpt::config::CConfigFileBase& s, const std::string& sec, const std::string& key, bool def) {
+bool readBool(const mrpt::config::CConfigFileBase& s, const std::string& sec, const std::string& key, bool def,
+              const std::string& who) {
   std::string v;
-  return valueOf(s, sec, key, v) ? parseBool(sec, key, v) : def;
+  return valueOf(s, sec, key, v) ? parseBool(sec, key, v, who) : def;
 }
 
 double readDouble(const mrpt::config::CConfigFileBase& s, const std::string& sec, const std::string& key, double def) {

@@ -8,6 +8,7 @@
 #include <utility>
 
 #include <mrpt/config/CConfigFileBase.h>
+#include <mrpt/maps/metric_map_types.h>
 
 namespace rtog {
 
@@ -27,7 +28,7 @@ void reportInertKey(const std::string& section, const std::string& key, const st
 /// "rtog: invalid option [SECTION] KEY: ...", naming the rule; an absent key gives `def`.
 /// Booleans: true/false, yes/no, on/off, 1/0, in any case.
 bool readBool(const mrpt::config::CConfigFileBase& source, const std::string& section, const std::string& key,
-              bool def);
+              bool def, const std::string& who = "rtog");
 /// A number, all of it: "nan" and "inf" are read (the options' checks refuse them where they
 /// must be finite); a value beyond the type's range is refused.
 double readDouble(const mrpt::config::CConfigFileBase& source, const std::string& section, const std::string& key,
@@ -44,6 +45,17 @@ enum class IniValue { Bool, Int, Real };
 /// such as COccupancyGridMap2D's likelihood options.
 void checkIniValues(const mrpt::config::CConfigFileBase& source, const std::string& section, const std::string& who,
                     std::initializer_list<std::pair<const char*, IniValue>> keys);
+
+/// The booleans MRPT's TMapGenericParams reads from every map's _creationOpts with its
+/// read_bool (which takes "on" for false), read again as readBool reads them.
+inline void readGenericMapParams(const mrpt::config::CConfigFileBase& source, const std::string& section,
+                                 const std::string& who, mrpt::maps::TMapGenericParams& p) {
+  p.enableSaveAs3DObject = readBool(source, section, "enableSaveAs3DObject", p.enableSaveAs3DObject, who);
+  p.enableObservationLikelihood =
+      readBool(source, section, "enableObservationLikelihood", p.enableObservationLikelihood, who);
+  p.enableObservationInsertion = readBool(source, section, "enableObservationInsertion", p.enableObservationInsertion, who);
+  readBool(source, section, "disableSaveAs3DObject", false, who);  // older MRPT's key: its syntax only
+}
 
 /// Throws std::invalid_argument naming `section` unless min_x < max_x and min_y < max_y, all
 /// finite: the check of an .ini's extent and of a loaded map's grid frame.
