@@ -492,10 +492,13 @@ TEST(MapOptions, ShippedAndStockSectionsStillLoad) {
     return maps;
   };
   int shipped = 0;
+  testing::internal::CaptureStderr();
   for (const char* f : {"icp-slam_rtog.ini", "icp-slam_rtog_gridmatch.ini", "observations2map_rtog.ini",
                         "pf-localization_rtog.ini", "pf-localization_rtog_grid2d.ini", "rbpf-slam_rtog.ini",
                         "rbpf-slam_rtog_grid2d.ini", "rtog_build.ini"})
     shipped += load(text(std::string(RTOG_CONFIG_DIR) + "/" + f), f);
+  const std::string told = testing::internal::GetCapturedStderr();
+  EXPECT_EQ(told.find("has no effect"), std::string::npos) << "a shipped key without effect: " << told;
   EXPECT_GE(shipped, 8);
   int stock = 0;
   const std::string list = ::testing::TempDir() + "/rtog_stock_grid_configs.txt";

@@ -34,7 +34,8 @@ void reportInertInsertKeys(const RTreeInsertionOptions& o, const mrpt::config::C
   if (o.mrptGrid())
     told({"clampingMin", "clampingMax"},
          "the mrpt_grid preset saturates at the grid's int8 range; only sensorModelPreset = octomap clamps there");
-  if (!o.useMapAltitude) told({"mapAltitude"}, "only useMapAltitude = true uses it");
+  // A stock section's mapAltitude = 0 beside useMapAltitude = 0 states nothing; another altitude does.
+  if (!o.useMapAltitude && o.mapAltitude != 0.0f) told({"mapAltitude"}, "only useMapAltitude = true uses it");
 }
 }  // namespace
 
