@@ -415,7 +415,8 @@ TEST(MapOptions, NumbersWithTrailingTextAreRefused) {
            {"rtreeOccupancyGrid", "matchingOpts", "matching2D_maxZ = 1e", "matching2D_maxZ"},
            {"rtreeGridMap2D", "insertOpts", "mapAltitude = 0.3.1", "mapAltitude"},
            {"rtreeGridMap2D", "likelihoodOpts", "LF_zHit = 0.9,", "LF_zHit"},
-           {"rtreeGridMap2D", "likelihoodOpts", "LF_decimation = 5five", "LF_decimation"}}) {
+           {"rtreeGridMap2D", "likelihoodOpts", "LF_decimation = 5five", "LF_decimation"},
+           {"rtreeGridMap2D", "likelihoodOpts", "MI_skip_rays = -1", "MI_skip_rays"}}) {
     const std::string err = loadError(oneMap(type, section, line));
     SCOPED_TRACE(type + " " + line + ": " + err);
     EXPECT_NE(err.find("[MappingApplication_" + type + "_00_" + section + "] " + key + ":"), std::string::npos);

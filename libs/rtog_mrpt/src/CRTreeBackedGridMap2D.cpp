@@ -57,10 +57,10 @@ void CRTreeBackedGridMap2D::TMapDefinition::loadFromConfigFile_map_specific(
     using V = IniValue;
     checkIniValues(source, prefix + "_likelihoodOpts", "rtog::CRTreeBackedGridMap2D",
                    {{"LF_stdHit", V::Real}, {"LF_zHit", V::Real}, {"LF_zRandom", V::Real}, {"LF_maxRange", V::Real},
-                    {"LF_decimation", V::Int}, {"LF_maxCorrsDistance", V::Real}, {"LF_useSquareDist", V::Bool},
-                    {"LF_alternateAverageMethod", V::Bool}, {"MI_exponent", V::Real}, {"MI_skip_rays", V::Int},
+                    {"LF_decimation", V::Count}, {"LF_maxCorrsDistance", V::Real}, {"LF_useSquareDist", V::Bool},
+                    {"LF_alternateAverageMethod", V::Bool}, {"MI_exponent", V::Real}, {"MI_skip_rays", V::Count},
                     {"MI_ratio_max_distance", V::Real}, {"rayTracing_useDistanceFilter", V::Bool},
-                    {"rayTracing_stdHit", V::Real}, {"consensus_takeEachRange", V::Int}, {"consensus_pow", V::Real},
+                    {"rayTracing_stdHit", V::Real}, {"consensus_takeEachRange", V::Count}, {"consensus_pow", V::Real},
                     {"enableLikelihoodCache", V::Bool}});
     likelihoodOpts.loadFromConfigFile(source, prefix + "_likelihoodOpts");
     // MRPT's read_bool took "on" as false: the booleans read again as everywhere in rtog.

@@ -123,6 +123,7 @@ void checkIniValues(const mrpt::config::CConfigFileBase& s, const std::string& s
     if (!valueOf(s, sec, key, v)) continue;
     if (kind == IniValue::Bool) parseBool(sec, key, v, who);
     if (kind == IniValue::Int) parseInt(sec, key, v, who);
+    if (kind == IniValue::Count && parseInt(sec, key, v, who) < 1) badValue(sec, key, "must be a whole number >= 1", v, who);
     if (kind == IniValue::Real) parseReal(sec, key, v, std::numeric_limits<float>::max(), who);
   }
 }

@@ -39,7 +39,8 @@ float readFloat(const mrpt::config::CConfigFileBase& source, const std::string& 
 int readInt(const mrpt::config::CConfigFileBase& source, const std::string& section, const std::string& key, int def);
 
 /// The kinds of value a section read by MRPT's own loader holds, checked before MRPT reads it.
-enum class IniValue { Bool, Int, Real };
+/// Count: a whole number >= 1 (a step MRPT keeps unsigned, where -1 would wrap to 4294967295).
+enum class IniValue { Bool, Int, Count, Real };
 /// Throws as the readers above (the message starting with `who`) for the first key of `keys`
 /// present in `section` whose value is not of its kind: for sections MRPT's own loader reads,
 /// such as COccupancyGridMap2D's likelihood options.
