@@ -2,6 +2,7 @@
 #include <sys/stat.h>
 
 #include <cmath>
+#include <cstdio>
 #include <ostream>
 #include <stdexcept>
 
@@ -27,6 +28,14 @@ bool sameFile(const std::string& a, const std::string& b) {
 Eigen::Isometry3d poseFromXyzYpr(const std::array<double, 6>& p) {
   for (double v : p)
     if (!std::isfinite(v)) throw std::invalid_argument("fuse: --pose needs six finite numbers: x y z [m] yaw pitch roll [deg]");
+  // The translation is turned into whole cells: 1e20 m left the integer keys' range and made the
+  // fusion loop for ever; 1e9 m is 1e13 cells at the finest resolution (1e-4 m), far inside it.
+  for (int i = 0; i < 3; ++i)
+    if (std::fabs(p[std::size_t(i)]) > 1e9) {
+      char got[32];
+      std::snprintf(got, sizeof(got), "%g", p[std::size_t(i)]);
+      throw std::invalid_argument(std::string("fuse: --pose: x y z must lie within +-1e9 m, got ") + got);
+    }
   constexpr double kDeg = M_PI / 180.0;
   // MRPT's CPose3D convention: R = Rz(yaw) Ry(pitch) Rx(roll).
   Eigen::Isometry3d t = Eigen::Isometry3d::Identity();

@@ -12,8 +12,10 @@
 #include "rtog/app/option_checks.hpp"
 
 int main(int argc, char** argv) {
+  using rtog::app::checks::kMaxCellLength;
   using rtog::app::checks::number;
   using rtog::app::checks::Sign;
+  using rtog::app::checks::within;
   const CLI::Validator path = rtog::app::checks::path();
   CLI::App app{"rtog: R-tree occupancy grids for MRPT"};
   app.require_subcommand(1);
@@ -32,46 +34,48 @@ int main(int argc, char** argv) {
   b->add_option("--ini", build.ini_path, "MRPT .ini with a CMultiMetricMap holding rtreeOccupancyGrid_count=1")->check(CLI::ExistingFile);
   b->add_option("--section", build.ini_section, "Section of the map definition in --ini")->capture_default_str();
   b->add_option("--out", build.out_path, "Output map (.rtog)")->check(path);
-  b->add_option("--resolution", build.map.resolution, "Cell size [m]")->capture_default_str()->check(number(Sign::Positive));
-  b->add_option("--model", model, "Sensor model: beam | endpoint | rangeNoise")->capture_default_str();
+  auto* bres = b->add_option("--resolution", build.map.resolution, "Cell size [m]")
+                   ->capture_default_str()
+                   ->check(number(Sign::Positive, 1e3));
+  auto* bmodel = b->add_option("--model", model, "Sensor model: beam | endpoint | rangeNoise")->capture_default_str();
   auto* noise = b->add_option("--range-noise-std", build.insert.range_noise_std,
-                              "rangeNoise: range sigma at 0 m [m]")->capture_default_str()->check(number(Sign::NonNegative));
+                              "rangeNoise: range sigma at 0 m [m]")->capture_default_str()->check(number(Sign::NonNegative, kMaxCellLength));
   auto* noise_m = b->add_option("--range-noise-std-per-meter", build.insert.range_noise_std_per_meter,
                                 "rangeNoise: growth of sigma with range [m per m]")
                       ->capture_default_str()
-                      ->check(number(Sign::NonNegative));
+                      ->check(number(Sign::NonNegative, kMaxCellLength));
   auto* noise_cut = b->add_option("--range-noise-cutoff", build.insert.range_noise_cutoff,
                                   "rangeNoise: cells beyond the reading + this many sigma stay untouched (0.5 to 10)")
                         ->capture_default_str()
-                        ->check(CLI::Range(0.5, 10.0));
-  b->add_option("--merge", merge, "Leaf merging: off | clamped | equal")->capture_default_str();
+                        ->check(within(0.5, 10.0));
+  auto* bmerge = b->add_option("--merge", merge, "Leaf merging: off | clamped | equal")->capture_default_str();
   build.insert.max_range = 0.0;
-  b->add_option("--max-range", build.insert.max_range,
+  auto* bmax_range = b->add_option("--max-range", build.insert.max_range,
                 "Cut beams longer than this [m] (0: no cut; beams longer than " +
                     std::to_string(rtog::InsertParams{}.max_ray_cells) + " cells are skipped and counted either way)")
       ->capture_default_str()
-      ->check(number(Sign::NonNegative));
+      ->check(number(Sign::NonNegative, 1e6));
   rtog::SensorChannel channel;
   auto* miss_rate = b->add_option("--miss-rate", channel.miss_rate,
                                   "The sensor as a channel: P(no detection | occupied), with --false-alarm-rate "
                                   "(replaces OctoMap's hit/miss probabilities)")
-                        ->check(number(Sign::Positive));
+                        ->check(number(Sign::Positive, 1.0));
   auto* false_alarm = b->add_option("--false-alarm-rate", channel.false_alarm_rate,
                                     "The sensor as a channel: P(detection | free), with --miss-rate")
-                          ->check(number(Sign::Positive));
+                          ->check(number(Sign::Positive, 1.0));
   miss_rate->needs(false_alarm);
   false_alarm->needs(miss_rate);
-  b->add_flag("--pose-uncertainty", build.pose_uncertainty,
+  auto* bpose_unc = b->add_flag("--pose-uncertainty", build.pose_uncertainty,
              "--simplemap: blur each frame by its pose covariance (poseUncertainty = on)");
-  b->add_option("--sonar-cone-weighting", build.sonar_cone_weighting,
+  auto* bsonar = b->add_option("--sonar-cone-weighting", build.sonar_cone_weighting,
                 "Sonar / IR readings: evidence across the cone, uniform | elfes (sonarConeWeighting)")
       ->capture_default_str()
       ->check(CLI::IsMember({"uniform", "elfes"}));
-  b->add_option("--threads", build.insert.threads, "Threads tracing beams")->capture_default_str()->check(rtog::app::checks::integer(1, 256));
-  b->add_flag("--discretize", build.insert.discretize, "Trace beams to end-cell centres, once per cell (OctoMap's discretize)");
+  auto* bthreads = b->add_option("--threads", build.insert.threads, "Threads tracing beams")->capture_default_str()->check(rtog::app::checks::integer(1, 256));
+  auto* bdiscretize = b->add_flag("--discretize", build.insert.discretize, "Trace beams to end-cell centres, once per cell (OctoMap's discretize)");
   std::string scan_range;
   b->add_option("--scans", scan_range, "Only scans A <= i < B of the log (A:B, counted from 0; either may be left out)");
-  b->add_option("--stride", build.stride, "Use every n-th pixel")->capture_default_str()->check(rtog::app::checks::integer(1, 1 << 16));
+  auto* bstride = b->add_option("--stride", build.stride, "Use every n-th pixel")->capture_default_str()->check(rtog::app::checks::integer(1, 1 << 16));
 
   std::string map_path;
   bool json = false;
@@ -123,13 +127,15 @@ int main(int argc, char** argv) {
   image->excludes(gridmap);
   auto* pres = p->add_option("--resolution", pr.resolution, "--image: metres per pixel")
                    ->capture_default_str()
-                   ->check(number(Sign::Positive));
-  auto* porigin = p->add_option("--origin", origin, "--image: map coordinates X Y [m] of its lower-left corner")->expected(2);
+                   ->check(number(Sign::Positive, 1e3));
+  auto* porigin = p->add_option("--origin", origin, "--image: map coordinates X Y [m] of its lower-left corner")
+                      ->expected(2)
+                      ->check(within(-1e6, 1e6));
   pres->needs(image);
   porigin->needs(image);
   p->add_option("--confidence", pr.confidence, "How far the prior is trusted, in (0.5, 1]: black starts at this P(occupied)")
       ->capture_default_str()
-      ->check(CLI::Range(0.5, 1.0));
+      ->check(within(0.5, 1.0));
   p->add_option("--out", pr.out_path, "Output map (.rtog)")->required()->check(path);
 
   rtog::cli::PlanCommandOptions pl;
@@ -142,10 +148,10 @@ int main(int argc, char** argv) {
   pn->add_option("--Ta", pl.plan.ta, "Weight of the length, per metre")->required()->check(number(Sign::NonNegative));
   pn->add_option("--unknown-cost", pl.plan.unknown_risk, "Risk of an unknown cell, in [0, 1]")
       ->capture_default_str()
-      ->check(CLI::Range(0.0, 1.0));
+      ->check(within(0.0, 1.0));
   pn->add_option("--radius", pl.plan.radius, "Robot radius [m]: the path keeps it from occupied cells")
       ->capture_default_str()
-      ->check(number(Sign::NonNegative));
+      ->check(number(Sign::NonNegative, kMaxCellLength));
   pn->add_option("--band", plan_band, "Height band ZMIN ZMAX [m] whose columns are planned on")->expected(2);
   pn->add_option("--out", pl.out_path, "The path (text, x y per line)")->required()->check(path);
   pn->add_option("--png", pl.png_path, "The planning grid with the path (.png; a 3D path seen from above)")->check(path);
@@ -161,12 +167,19 @@ int main(int argc, char** argv) {
   auto* iband = ig->add_option("--band", im_band, "The columns of ZMIN ZMAX [m] (their highest log-odds)")->expected(2);
   isz->excludes(iband);
   ig->add_option("--threshold", im.threshold, "Occupied at P >= this")->capture_default_str();
-  ig->add_option("--blur", im.blur_sigma, "Gaussian blur of the probabilities, sigma [m]")->check(number(Sign::Positive));
+  ig->add_option("--blur", im.blur_sigma, "Gaussian blur of the probabilities, sigma [m]")
+      ->check(number(Sign::Positive, kMaxCellLength));
   ig->add_option("--open", im.open_k, "Morphological opening of the occupied cells, K x K (odd)")->check(rtog::app::checks::integer(1, 1001));
   ig->add_option("--close", im.close_k, "Morphological closing of the occupied cells, K x K (odd)")->check(rtog::app::checks::integer(1, 1001));
-  ig->add_flag("--hough", im.hough, "Wall segments (Hough transform) in metres");
-  ig->add_option("--hough-min-length", im.hough_min_length, "Shortest segment [m]")->capture_default_str()->check(number(Sign::Positive));
-  ig->add_option("--hough-max-gap", im.hough_max_gap, "Longest gap a segment bridges [m]")->capture_default_str()->check(number(Sign::NonNegative));
+  auto* hough = ig->add_flag("--hough", im.hough, "Wall segments (Hough transform) in metres");
+  ig->add_option("--hough-min-length", im.hough_min_length, "Shortest segment [m]")
+      ->capture_default_str()
+      ->check(number(Sign::Positive, kMaxCellLength))
+      ->needs(hough);
+  ig->add_option("--hough-max-gap", im.hough_max_gap, "Longest gap a segment bridges [m]")
+      ->capture_default_str()
+      ->check(number(Sign::NonNegative, kMaxCellLength))
+      ->needs(hough);
   ig->add_flag("--segment", im.segment, "Connected free regions (rooms)");
   ig->add_option("--out", im.out_path, "Results (.json)")->required()->check(path);
   ig->add_option("--png", im.png_path, "The band with walls and regions drawn (.png)")->check(path);
@@ -179,6 +192,33 @@ int main(int argc, char** argv) {
     std::cerr << "rtog: error: " << err.what() << " (see --help)\n";
     return 2;
   }
+  // An option that would have no effect is a usage error, not dropped without a word: beside
+  // --ini, every map option (the .ini defines the map; its key named), and --stride without
+  // --tum (only depth images have pixels to skip).
+  if (b->parsed()) {
+    std::string inert;
+    if (!build.ini_path.empty())
+      for (const auto& [opt, key] : std::vector<std::pair<CLI::Option*, const char*>>{
+               {bres, "resolution in its _creationOpts"}, {bmodel, "sensorModel in its _insertOpts"},
+               {noise, "rangeNoiseStd in its _insertOpts"}, {noise_m, "rangeNoiseStdPerMeter in its _insertOpts"},
+               {noise_cut, "rangeNoiseCutoff in its _insertOpts"}, {bmerge, "mergePolicy in its _insertOpts"},
+               {bmax_range, "maxDistanceInsertion in its _insertOpts"},
+               {miss_rate, "missRate and falseAlarmRate in its _insertOpts"},
+               {false_alarm, "missRate and falseAlarmRate in its _insertOpts"},
+               {bpose_unc, "poseUncertainty = on in its _insertOpts"},
+               {bsonar, "sonarConeWeighting in its _insertOpts"}, {bthreads, "threads in its _insertOpts"},
+               {bdiscretize, "discretize in its _insertOpts"}})
+        if (opt->count() > 0) {
+          inert = opt->get_name() + " has no effect with --ini (the .ini defines the map): set " + key + " instead";
+          break;
+        }
+    if (inert.empty() && bstride->count() > 0 && build.tum_dir.empty())
+      inert = "--stride has no effect without --tum (it skips depth image pixels)";
+    if (!inert.empty()) {
+      std::cerr << "rtog: error: " << inert << " (see --help)\n";
+      return 2;
+    }
+  }
   try {
     if (b->parsed()) {
       build.insert.model = rtog::sensorModelFromString(model);
@@ -186,12 +226,7 @@ int main(int argc, char** argv) {
       const bool noise_flags = noise->count() + noise_m->count() + noise_cut->count() > 0;
       if (noise_flags && build.insert.model != rtog::SensorModel::RangeNoise)
         throw std::invalid_argument("--range-noise-*: only with --model rangeNoise");
-      if (noise_flags && !build.ini_path.empty())
-        throw std::invalid_argument("--range-noise-*: with --ini, set rangeNoiseStd, rangeNoiseStdPerMeter and rangeNoiseCutoff in its _insertOpts");
-      if (miss_rate->count() > 0) {
-        if (!build.ini_path.empty()) throw std::invalid_argument("--miss-rate/--false-alarm-rate: with --ini, set missRate and falseAlarmRate in its _insertOpts");
-        build.map.log_odds = rtog::withChannel(build.map.log_odds, channel);
-      }
+      if (miss_rate->count() > 0) build.map.log_odds = rtog::withChannel(build.map.log_odds, channel);
       if (!scan_range.empty()) std::tie(build.scans_from, build.scans_to) = rtog::cli::parseScanRange(scan_range);
       build.progress_bar = isatty(STDOUT_FILENO) != 0;
       return rtog::cli::build(build, std::cout);
@@ -229,7 +264,8 @@ int main(int argc, char** argv) {
     }
     return rtog::cli::info(map_path, json, std::cout);
   } catch (const std::exception& e) {
-    std::cerr << "rtog: error: " << e.what() << "\n";
+    // One line a person reads: MRPT's own exceptions carry a call stack (rtog::cli::oneLine).
+    std::cerr << "rtog: error: " << rtog::cli::oneLine(e) << "\n";
     return 1;
   }
 }

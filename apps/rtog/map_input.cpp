@@ -4,10 +4,13 @@
 #include <cerrno>
 #include <cstring>
 #include <fstream>
+#include <regex>
 #include <stdexcept>
 
 #include "commands.hpp"
 #include "rtog/mrpt/CRTreeOccupancyGridMap.h"
+
+#include <mrpt/core/exceptions.h>
 
 namespace rtog::cli {
 namespace {
@@ -17,19 +20,11 @@ std::runtime_error trailing(std::uint64_t n) {
                             " after the map (a damaged file, or not one map?)");
 }
 
-/// One line of what went wrong: MRPT wraps an exception thrown while reading an object in its
-/// own ("==== MRPT exception ====", the original, a location, a call stack).
+/// One line of what went wrong reading a map; a short stream in MRPT's words said plainly.
 std::string reason(const std::exception& e) {
-  std::string s = e.what();
-  for (std::size_t at; (at = s.find("Original exception:\n")) != std::string::npos;) s = s.substr(at + 20);
-  if (s.rfind("==== MRPT exception ====", 0) == 0) {
-    const std::size_t at = s.find("Message:");
-    s = at == std::string::npos ? std::string() : s.substr(at + 8);
-    s.erase(0, s.find_first_not_of(' '));
-  }
-  s = s.substr(0, s.find('\n'));
+  const std::string s = oneLine(e);
   if (s.find("Cannot read requested number of bytes") != std::string::npos) return "truncated stream (the archive ends early)";
-  return s.empty() ? "unreadable MRPT archive" : s;
+  return s == kNoReason ? "unreadable MRPT archive" : s;
 }
 
 /// The MRPT map type reads its own files (gzip, forward only, trailing bytes counted).
@@ -42,6 +37,33 @@ OccupancyMap readMrptMap(std::istream& in) {
 }
 
 }  // namespace
+
+std::string oneLine(const std::exception& e) {
+  // MRPT's exceptions keep the message they were made of: ours as thrown (wrapped by MRPT_END on
+  // the way out of MRPT's code), or MRPT's own "file:line: [function] message".
+  const auto* mrpt_error = dynamic_cast<const mrpt::ExceptionWithCallBackBase*>(&e);
+  std::string s = mrpt_error ? mrpt_error->originalWhat : e.what();
+  for (std::size_t at; (at = s.find("Original exception:\n")) != std::string::npos;) s = s.substr(at + 20);
+  if (s.rfind("==== MRPT exception ====", 0) == 0) {  // a what() of MRPT's, passed on as text
+    const std::size_t at = s.find("Message:");
+    s = at == std::string::npos ? std::string() : s.substr(at + 8);
+  }
+  s = s.substr(0, s.find('\n'));
+  static const std::regex mrpt_location(R"(^\S+:[0-9]+: \[)");
+  if (std::regex_search(s, mrpt_location)) {
+    int depth = 0;  // the function's name may hold brackets of its own (operator[], lambdas)
+    for (std::size_t i = s.find('['); i < s.size(); ++i) {
+      depth += s[i] == '[' ? 1 : s[i] == ']' ? -1 : 0;
+      if (depth == 0) {
+        s = s.substr(i + 1);
+        break;
+      }
+    }
+  }
+  s.erase(0, s.find_first_not_of(' '));
+  s.erase(s.find_last_not_of(" \t\r") + 1);
+  return s.empty() ? kNoReason : s;
+}
 
 OccupancyMap loadMap(const std::string& path) {
   struct stat st {};

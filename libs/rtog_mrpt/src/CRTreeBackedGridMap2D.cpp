@@ -38,21 +38,38 @@ void CRTreeBackedGridMap2D::TMapDefinition::loadFromConfigFile_map_specific(
   loadError.clear();
   try {
     const std::string sec = prefix + "_creationOpts";
-    resolution = source.read_double(sec, "resolution", resolution);
+    resolution = readDouble(source, sec, "resolution", resolution);
     if (!(std::isfinite(resolution) && resolution >= 1e-3 && resolution <= 1e2))
       throw std::invalid_argument("rtog::CRTreeBackedGridMap2D: invalid option [" + sec +
                                   "] resolution: must lie in [1e-3, 1e2] m, got " + std::to_string(resolution));
     readGridExtent(source, sec, min_x, max_x, min_y, max_y);
+    readGenericMapParams(source, sec, "rtog::CRTreeBackedGridMap2D", genericMapParams);
     reportUnknownKeys(source, sec,
                       {"resolution", "min_x", "max_x", "min_y", "max_y", "gridView_minZ", "gridView_maxZ",
-                       "disableSaveAs3DObject"});
+                       "disableSaveAs3DObject", "enableSaveAs3DObject", "enableObservationLikelihood",
+                       "enableObservationInsertion"});
     CRTreeOccupancyGridMap::TGridViewOptions band;  // the same keys and check as the R-tree map's
     band.gridView_minZ = gridView_minZ, band.gridView_maxZ = gridView_maxZ;
     band.loadFromConfigFile(source, sec);
     gridView_minZ = band.gridView_minZ, gridView_maxZ = band.gridView_maxZ;
     insertionOpts.loadFromConfigFile(source, prefix + "_insertOpts");
-    // The grid's own struct, read by MRPT, which checks none of its values.
+    // The grid's own struct, read by MRPT, which checks none of its values: their syntax first
+    // (MRPT's read_bool takes "on" as false, read_float "0.1abc" as 0.1), then their values.
+    using V = IniValue;
+    checkIniValues(source, prefix + "_likelihoodOpts", "rtog::CRTreeBackedGridMap2D",
+                   {{"LF_stdHit", V::Real}, {"LF_zHit", V::Real}, {"LF_zRandom", V::Real}, {"LF_maxRange", V::Real},
+                    {"LF_decimation", V::Count}, {"LF_maxCorrsDistance", V::Real}, {"LF_useSquareDist", V::Bool},
+                    {"LF_alternateAverageMethod", V::Bool}, {"MI_exponent", V::Real}, {"MI_skip_rays", V::Count},
+                    {"MI_ratio_max_distance", V::Real}, {"rayTracing_useDistanceFilter", V::Bool},
+                    {"rayTracing_stdHit", V::Real}, {"consensus_takeEachRange", V::Count}, {"consensus_pow", V::Real},
+                    {"enableLikelihoodCache", V::Bool}});
     likelihoodOpts.loadFromConfigFile(source, prefix + "_likelihoodOpts");
+    // MRPT's read_bool took "on" as false: the booleans read again as everywhere in rtog.
+    for (auto [key, flag] : {std::pair{"LF_useSquareDist", &likelihoodOpts.LF_useSquareDist},
+                             std::pair{"LF_alternateAverageMethod", &likelihoodOpts.LF_alternateAverageMethod},
+                             std::pair{"rayTracing_useDistanceFilter", &likelihoodOpts.rayTracing_useDistanceFilter},
+                             std::pair{"enableLikelihoodCache", &likelihoodOpts.enableLikelihoodCache}})
+      *flag = readBool(source, prefix + "_likelihoodOpts", key, *flag);
     checkLikelihoodValues(likelihoodOpts, "rtog::CRTreeBackedGridMap2D", prefix + "_likelihoodOpts");
   } catch (const std::exception& e) {
     loadError = e.what();  // raised in internal_CreateFromMapDefinition

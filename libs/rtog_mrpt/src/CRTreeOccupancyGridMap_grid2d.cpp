@@ -3,6 +3,7 @@
 #include "CRTreeOccupancyGridMap_grid2d.hpp"
 #include "rtog/core/band.hpp"
 #include "mrpt_grid.hpp"
+#include "options_check.hpp"
 
 #include <cmath>
 #include <limits>
@@ -53,15 +54,17 @@ bool likelihoodMethodFromString(const std::string& s, CRTreeOccupancyGridMap::TL
 
 void loadGridLikelihoodKeys(CRTreeOccupancyGridMap::TLikelihoodOptions& o, const mrpt::config::CConfigFileBase& s,
                             const std::string& sec) {
-  o.LF_alternateAverageMethod = s.read_bool(sec, "LF_alternateAverageMethod", o.LF_alternateAverageMethod);
-  o.MI_exponent = s.read_float(sec, "MI_exponent", o.MI_exponent);
-  o.MI_skip_rays = static_cast<uint32_t>(s.read_int(sec, "MI_skip_rays", static_cast<int>(o.MI_skip_rays)));
-  o.MI_ratio_max_distance = s.read_float(sec, "MI_ratio_max_distance", o.MI_ratio_max_distance);
-  o.rayTracing_useDistanceFilter = s.read_bool(sec, "rayTracing_useDistanceFilter", o.rayTracing_useDistanceFilter);
-  o.consensus_takeEachRange = s.read_int(sec, "consensus_takeEachRange", o.consensus_takeEachRange);
-  o.consensus_pow = s.read_float(sec, "consensus_pow", o.consensus_pow);
+  o.LF_alternateAverageMethod = readBool(s, sec, "LF_alternateAverageMethod", o.LF_alternateAverageMethod);
+  o.MI_exponent = readFloat(s, sec, "MI_exponent", o.MI_exponent);
+  const int skip = readInt(s, sec, "MI_skip_rays", static_cast<int>(o.MI_skip_rays));  // unsigned: -1 would wrap
+  if (skip < 1) throw std::invalid_argument("rtog: invalid option [" + sec + "] MI_skip_rays: must be >= 1, got " + std::to_string(skip));
+  o.MI_skip_rays = static_cast<uint32_t>(skip);
+  o.MI_ratio_max_distance = readFloat(s, sec, "MI_ratio_max_distance", o.MI_ratio_max_distance);
+  o.rayTracing_useDistanceFilter = readBool(s, sec, "rayTracing_useDistanceFilter", o.rayTracing_useDistanceFilter);
+  o.consensus_takeEachRange = readInt(s, sec, "consensus_takeEachRange", o.consensus_takeEachRange);
+  o.consensus_pow = readFloat(s, sec, "consensus_pow", o.consensus_pow);
   s.read_vector(sec, "OWA_weights", std::vector<float>(o.OWA_weights), o.OWA_weights);
-  o.scanLikelihoodOnGridView = s.read_bool(sec, "scanLikelihoodOnGridView", o.scanLikelihoodOnGridView);
+  o.scanLikelihoodOnGridView = readBool(s, sec, "scanLikelihoodOnGridView", o.scanLikelihoodOnGridView);
 }
 
 void saveGridLikelihoodKeys(const CRTreeOccupancyGridMap::TLikelihoodOptions& o, mrpt::config::CConfigFileBase& c,
@@ -79,8 +82,8 @@ void saveGridLikelihoodKeys(const CRTreeOccupancyGridMap::TLikelihoodOptions& o,
 
 void CRTreeOccupancyGridMap::TGridViewOptions::loadFromConfigFile(const mrpt::config::CConfigFileBase& s,
                                                                  const std::string& sec) {
-  gridView_minZ = s.read_float(sec, "gridView_minZ", gridView_minZ);
-  gridView_maxZ = s.read_float(sec, "gridView_maxZ", gridView_maxZ);
+  gridView_minZ = readFloat(s, sec, "gridView_minZ", gridView_minZ);
+  gridView_maxZ = readFloat(s, sec, "gridView_maxZ", gridView_maxZ);
   try {
     validate();
   } catch (const std::invalid_argument& e) {

@@ -1,6 +1,5 @@
 // rtog::CRTreeOccupancyGridMap: the .ini side — TInsertionOptions, TLikelihoodOptions,
 // TGridViewOptions, TMatchingOptions and TMapDefinition (read, written, validated by key).
-#include <cctype>
 #include <cmath>
 #include <memory>
 #include <sstream>
@@ -21,13 +20,22 @@ namespace {
   throw std::invalid_argument("rtog::CRTreeOccupancyGridMap: invalid option [" + section + "] " + key + ": " + why);
 }
 bool isProbability(float p) { return std::isfinite(p) && p > 0.0f && p < 1.0f; }
-/// off | on (false | true, 0 | 1 too, as MRPT's read_bool takes them), case-insensitive.
-bool readOnOff(const mrpt::config::CConfigFileBase& s, const std::string& sec, const std::string& key, bool def) {
-  std::string v = s.read_string(sec, key, def ? "on" : "off");
-  for (char& c : v) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  if (v == "on" || v == "true" || v == "1") return true;
-  if (v == "off" || v == "false" || v == "0") return false;
-  badOption(sec, key, "must be off or on, got '" + v + "'");
+/// Keys of the section that the other options make inert: told once (reportInertKey), as
+/// unknown keys are, for a value that would otherwise be dropped without a word.
+void reportInertInsertKeys(const RTreeInsertionOptions& o, const mrpt::config::CConfigFileBase& s,
+                           const std::string& sec) {
+  const auto told = [&](std::initializer_list<const char*> keys, const std::string& why) {
+    for (const char* k : keys)
+      if (s.keyExists(sec, k)) reportInertKey(sec, k, why);
+  };
+  if (sensorModelFromString(o.sensorModel) != SensorModel::RangeNoise)
+    told({"rangeNoiseStd", "rangeNoiseStdPerMeter", "rangeNoiseCutoff"},
+         "only sensorModel = rangeNoise uses it (sensorModel is " + o.sensorModel + ")");
+  if (o.mrptGrid())
+    told({"clampingMin", "clampingMax"},
+         "the mrpt_grid preset saturates at the grid's int8 range; only sensorModelPreset = octomap clamps there");
+  // A stock section's mapAltitude = 0 beside useMapAltitude = 0 states nothing; another altitude does.
+  if (!o.useMapAltitude && o.mapAltitude != 0.0f) told({"mapAltitude"}, "only useMapAltitude = true uses it");
 }
 }  // namespace
 
@@ -37,14 +45,14 @@ void CRTreeOccupancyGridMap::TInsertionOptions::loadFromConfigFile(const mrpt::c
                                                                   const std::string& sec) {
   sensorModelPreset = s.read_string(sec, "sensorModelPreset", sensorModelPreset);
   sensorModel = s.read_string(sec, "sensorModel", sensorModel);
-  rangeNoiseStd = s.read_float(sec, "rangeNoiseStd", rangeNoiseStd);
-  rangeNoiseStdPerMeter = s.read_float(sec, "rangeNoiseStdPerMeter", rangeNoiseStdPerMeter);
-  rangeNoiseCutoff = s.read_float(sec, "rangeNoiseCutoff", rangeNoiseCutoff);
-  maxOccupancyUpdateCertainty = s.read_float(sec, "maxOccupancyUpdateCertainty", maxOccupancyUpdateCertainty);
-  maxFreenessUpdateCertainty = s.read_float(sec, "maxFreenessUpdateCertainty", maxFreenessUpdateCertainty);
+  rangeNoiseStd = readFloat(s, sec, "rangeNoiseStd", rangeNoiseStd);
+  rangeNoiseStdPerMeter = readFloat(s, sec, "rangeNoiseStdPerMeter", rangeNoiseStdPerMeter);
+  rangeNoiseCutoff = readFloat(s, sec, "rangeNoiseCutoff", rangeNoiseCutoff);
+  maxOccupancyUpdateCertainty = readFloat(s, sec, "maxOccupancyUpdateCertainty", maxOccupancyUpdateCertainty);
+  maxFreenessUpdateCertainty = readFloat(s, sec, "maxFreenessUpdateCertainty", maxFreenessUpdateCertainty);
   // Read as 0 where absent: a section without them states the sensor by the certainties.
-  missRate = s.read_float(sec, "missRate", 0.0f);
-  falseAlarmRate = s.read_float(sec, "falseAlarmRate", 0.0f);
+  missRate = readFloat(s, sec, "missRate", 0.0f);
+  falseAlarmRate = readFloat(s, sec, "falseAlarmRate", 0.0f);
   if (missRate != 0.0f || falseAlarmRate != 0.0f) {
     // The sensor stated as a channel: the certainties follow from it, so they may not be given too.
     for (const char* k : {"maxOccupancyUpdateCertainty", "maxFreenessUpdateCertainty"})
@@ -53,31 +61,31 @@ void CRTreeOccupancyGridMap::TInsertionOptions::loadFromConfigFile(const mrpt::c
                   std::string("state the sensor by the rates or by the certainties, not both (") + k + " is set)");
     applySensorChannel(sec);
   }
-  maxFreenessInvalidRanges = s.read_float(sec, "maxFreenessInvalidRanges", maxFreenessInvalidRanges);
+  maxFreenessInvalidRanges = readFloat(s, sec, "maxFreenessInvalidRanges", maxFreenessInvalidRanges);
   considerInvalidRangesAsFreeSpace =
-      s.read_bool(sec, "considerInvalidRangesAsFreeSpace", considerInvalidRangesAsFreeSpace);
-  horizontalTolerance = mrpt::DEG2RAD(s.read_float(sec, "horizontalTolerance", mrpt::RAD2DEG(horizontalTolerance)));
-  useMapAltitude = s.read_bool(sec, "useMapAltitude", useMapAltitude);
-  mapAltitude = s.read_float(sec, "mapAltitude", mapAltitude);
-  wideningBeamsWithDistance = s.read_bool(sec, "wideningBeamsWithDistance", wideningBeamsWithDistance);
-  clampingMin = s.read_float(sec, "clampingMin", clampingMin);
-  clampingMax = s.read_float(sec, "clampingMax", clampingMax);
-  occupiedThreshold = s.read_float(sec, "occupiedThreshold", occupiedThreshold);
-  maxDistanceInsertion = s.read_float(sec, "maxDistanceInsertion", maxDistanceInsertion);
-  const int dec = s.read_int(sec, "decimation", decimation);
-  const int dec3 = s.read_int(sec, "decimation_3d_range", decimation_3d_range);
+      readBool(s, sec, "considerInvalidRangesAsFreeSpace", considerInvalidRangesAsFreeSpace);
+  horizontalTolerance = mrpt::DEG2RAD(readFloat(s, sec, "horizontalTolerance", mrpt::RAD2DEG(horizontalTolerance)));
+  useMapAltitude = readBool(s, sec, "useMapAltitude", useMapAltitude);
+  mapAltitude = readFloat(s, sec, "mapAltitude", mapAltitude);
+  wideningBeamsWithDistance = readBool(s, sec, "wideningBeamsWithDistance", wideningBeamsWithDistance);
+  clampingMin = readFloat(s, sec, "clampingMin", clampingMin);
+  clampingMax = readFloat(s, sec, "clampingMax", clampingMax);
+  occupiedThreshold = readFloat(s, sec, "occupiedThreshold", occupiedThreshold);
+  maxDistanceInsertion = readFloat(s, sec, "maxDistanceInsertion", maxDistanceInsertion);
+  const int dec = readInt(s, sec, "decimation", decimation);
+  const int dec3 = readInt(s, sec, "decimation_3d_range", decimation_3d_range);
   if (dec < 1 || dec > 65535) badOption(sec, "decimation", "must be an integer in [1, 65535], got " + std::to_string(dec));
   if (dec3 < 1 || dec3 > 255)
     badOption(sec, "decimation_3d_range", "must be an integer in [1, 255], got " + std::to_string(dec3));
   decimation = static_cast<uint16_t>(dec);
   decimation_3d_range = static_cast<uint16_t>(dec3);
   mergePolicy = s.read_string(sec, "mergePolicy", mergePolicy);
-  discretize = s.read_bool(sec, "discretize", discretize);
-  threads = s.read_int(sec, "threads", threads);
-  planarCache = s.read_bool(sec, "planarCache", planarCache);
-  rotatingScan_minElevation_deg = s.read_float(sec, "rotatingScan_minElevation_deg", rotatingScan_minElevation_deg);
-  rotatingScan_maxElevation_deg = s.read_float(sec, "rotatingScan_maxElevation_deg", rotatingScan_maxElevation_deg);
-  poseUncertainty = readOnOff(s, sec, "poseUncertainty", poseUncertainty);
+  discretize = readBool(s, sec, "discretize", discretize);
+  threads = readInt(s, sec, "threads", threads);
+  planarCache = readBool(s, sec, "planarCache", planarCache);
+  rotatingScan_minElevation_deg = readFloat(s, sec, "rotatingScan_minElevation_deg", rotatingScan_minElevation_deg);
+  rotatingScan_maxElevation_deg = readFloat(s, sec, "rotatingScan_maxElevation_deg", rotatingScan_maxElevation_deg);
+  poseUncertainty = readBool(s, sec, "poseUncertainty", poseUncertainty);
   sonarConeWeighting = s.read_string(sec, "sonarConeWeighting", sonarConeWeighting);
   // COccupancyGridMap2D's keys that concern what rtog does not build (its CFD features).
   reportUnknownKeys(s, sec,
@@ -89,6 +97,7 @@ void CRTreeOccupancyGridMap::TInsertionOptions::loadFromConfigFile(const mrpt::c
                      "discretize", "threads", "planarCache", "rotatingScan_minElevation_deg",
                      "rotatingScan_maxElevation_deg", "poseUncertainty", "sonarConeWeighting", "CFD_features_gaussian_size", "CFD_features_median_size"});
   validateInSection(sec, [this] { validate(); });
+  reportInertInsertKeys(*this, s, sec);
 }
 
 void CRTreeOccupancyGridMap::TInsertionOptions::saveToConfigFile(mrpt::config::CConfigFileBase& c,
@@ -240,18 +249,18 @@ void CRTreeOccupancyGridMap::TLikelihoodOptions::loadFromConfigFile(const mrpt::
   if (!m.empty() && !likelihoodMethodFromString(m, likelihoodMethod))
     badOption(sec, "likelihoodMethod", "unknown method '" + m + "' (expected one of COccupancyGridMap2D's: " +
                                            kLikelihoodMethodNames + ")");
-  LF_stdHit = s.read_float(sec, "LF_stdHit", LF_stdHit);
-  LF_zHit = s.read_float(sec, "LF_zHit", LF_zHit);
-  LF_zRandom = s.read_float(sec, "LF_zRandom", LF_zRandom);
-  LF_maxRange = s.read_float(sec, "LF_maxRange", LF_maxRange);
-  const int lfd = s.read_int(sec, "LF_decimation", static_cast<int>(LF_decimation));
+  LF_stdHit = readFloat(s, sec, "LF_stdHit", LF_stdHit);
+  LF_zHit = readFloat(s, sec, "LF_zHit", LF_zHit);
+  LF_zRandom = readFloat(s, sec, "LF_zRandom", LF_zRandom);
+  LF_maxRange = readFloat(s, sec, "LF_maxRange", LF_maxRange);
+  const int lfd = readInt(s, sec, "LF_decimation", static_cast<int>(LF_decimation));
   if (lfd < 1) badOption(sec, "LF_decimation", "must be >= 1, got " + std::to_string(lfd));
   LF_decimation = static_cast<uint32_t>(lfd);
-  LF_maxCorrsDistance = s.read_float(sec, "LF_maxCorrsDistance", LF_maxCorrsDistance);
-  LF_useSquareDist = s.read_bool(sec, "LF_useSquareDist", LF_useSquareDist);
-  enableLikelihoodCache = s.read_bool(sec, "enableLikelihoodCache", enableLikelihoodCache);
-  rayTracing_decimation = s.read_int(sec, "rayTracing_decimation", rayTracing_decimation);
-  rayTracing_stdHit = s.read_float(sec, "rayTracing_stdHit", rayTracing_stdHit);
+  LF_maxCorrsDistance = readFloat(s, sec, "LF_maxCorrsDistance", LF_maxCorrsDistance);
+  LF_useSquareDist = readBool(s, sec, "LF_useSquareDist", LF_useSquareDist);
+  enableLikelihoodCache = readBool(s, sec, "enableLikelihoodCache", enableLikelihoodCache);
+  rayTracing_decimation = readInt(s, sec, "rayTracing_decimation", rayTracing_decimation);
+  rayTracing_stdHit = readFloat(s, sec, "rayTracing_stdHit", rayTracing_stdHit);
   loadGridLikelihoodKeys(*this, s, sec);
   reportUnknownKeys(s, sec,
                     {"likelihoodMethod", "LF_stdHit", "LF_zHit", "LF_zRandom", "LF_maxRange", "LF_decimation",
@@ -288,8 +297,8 @@ void CRTreeOccupancyGridMap::TLikelihoodOptions::validate() const {
 
 void CRTreeOccupancyGridMap::TMatchingOptions::loadFromConfigFile(const mrpt::config::CConfigFileBase& s,
                                                                  const std::string& sec) {
-  matching2D_minZ = s.read_float(sec, "matching2D_minZ", matching2D_minZ);
-  matching2D_maxZ = s.read_float(sec, "matching2D_maxZ", matching2D_maxZ);
+  matching2D_minZ = readFloat(s, sec, "matching2D_minZ", matching2D_minZ);
+  matching2D_maxZ = readFloat(s, sec, "matching2D_maxZ", matching2D_maxZ);
   validateInSection(sec, [this] { validate(); });
 }
 
@@ -313,13 +322,15 @@ void CRTreeOccupancyGridMap::TMapDefinition::loadFromConfigFile_map_specific(
   loadError.clear();
   try {
     const std::string sec = sectionNamePrefix + "_creationOpts";
-    resolution = source.read_double(sec, "resolution", resolution);
+    resolution = readDouble(source, sec, "resolution", resolution);
     if (!(std::isfinite(resolution) && resolution >= 1e-4 && resolution <= 1e3))
       badOption(sec, "resolution", "must lie in [1e-4, 1e3] m, got " + std::to_string(resolution));
     readGridExtent(source, sec, min_x, max_x, min_y, max_y);
+    readGenericMapParams(source, sec, "rtog::CRTreeOccupancyGridMap", genericMapParams);
     reportUnknownKeys(source, sec,
                       {"resolution", "min_x", "max_x", "min_y", "max_y", "gridView_minZ", "gridView_maxZ",
-                       "disableSaveAs3DObject", "priorMap", "priorConfidence", "priorResolution", "priorOriginX",
+                       "disableSaveAs3DObject", "enableSaveAs3DObject", "enableObservationLikelihood",
+                       "enableObservationInsertion", "priorMap", "priorConfidence", "priorResolution", "priorOriginX",
                        "priorOriginY"});
     insertionOpts.loadFromConfigFile(source, sectionNamePrefix + "_insertOpts");
     likelihoodOpts.loadFromConfigFile(source, sectionNamePrefix + "_likelihoodOpts");

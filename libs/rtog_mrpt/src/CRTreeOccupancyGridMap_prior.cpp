@@ -25,11 +25,18 @@ bool endsWith(const std::string& s, const std::string& tail) {
 
 void TPriorMapOptions::loadFromConfigFile(const mrpt::config::CConfigFileBase& s, const std::string& sec) {
   priorMap = s.read_string(sec, "priorMap", priorMap);
-  priorConfidence = s.read_double(sec, "priorConfidence", priorConfidence);
-  priorResolution = s.read_double(sec, "priorResolution", priorResolution);
-  priorOriginX = s.read_double(sec, "priorOriginX", priorOriginX);
-  priorOriginY = s.read_double(sec, "priorOriginY", priorOriginY);
+  priorConfidence = readDouble(s, sec, "priorConfidence", priorConfidence);
+  priorResolution = readDouble(s, sec, "priorResolution", priorResolution);
+  priorOriginX = readDouble(s, sec, "priorOriginX", priorOriginX);
+  priorOriginY = readDouble(s, sec, "priorOriginY", priorOriginY);
   validateInSection(sec, [this] { validate(); });
+  const bool gridmap = isGridmap();
+  for (const char* k : {"priorConfidence", "priorResolution", "priorOriginX", "priorOriginY"}) {
+    if (!s.keyExists(sec, k)) continue;
+    if (priorMap.empty()) reportInertKey(sec, k, "no priorMap is set");
+    else if (gridmap && k != std::string("priorConfidence"))
+      reportInertKey(sec, k, "a .gridmap prior has its own geometry (" + std::string(k) + " is for an image)");
+  }
 }
 
 void TPriorMapOptions::saveToConfigFile(mrpt::config::CConfigFileBase& c, const std::string& sec) const {

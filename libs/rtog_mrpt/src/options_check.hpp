@@ -5,8 +5,10 @@
 #include <initializer_list>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 #include <mrpt/config/CConfigFileBase.h>
+#include <mrpt/maps/metric_map_types.h>
 
 namespace rtog {
 
@@ -14,6 +16,47 @@ namespace rtog {
 /// pasted from another map's section, or misspelt, would otherwise be dropped without a word.
 void reportUnknownKeys(const mrpt::config::CConfigFileBase& source, const std::string& section,
                        std::initializer_list<const char*> known);
+
+/// Warns once per process (stderr, one line) that `key` of `section`, a key this project knows,
+/// has no effect under the other options of the section (`why`): a rangeNoise sigma under
+/// another sensorModel, a prior's geometry without a prior. Shares the unknown keys' memory.
+void reportInertKey(const std::string& section, const std::string& key, const std::string& why);
+
+/// Typed values of an .ini key, read strictly: MRPT's read_bool takes any word ("on" is false)
+/// and read_float / read_int the leading number of any text ("0.1abc" is 0.1). These take the
+/// whole value (after MRPT's trimming and its " //" comment) or throw std::invalid_argument
+/// "rtog: invalid option [SECTION] KEY: ...", naming the rule; an absent key gives `def`.
+/// Booleans: true/false, yes/no, on/off, 1/0, in any case.
+bool readBool(const mrpt::config::CConfigFileBase& source, const std::string& section, const std::string& key,
+              bool def, const std::string& who = "rtog");
+/// A number, all of it: "nan" and "inf" are read (the options' checks refuse them where they
+/// must be finite); a value beyond the type's range is refused.
+double readDouble(const mrpt::config::CConfigFileBase& source, const std::string& section, const std::string& key,
+                  double def);
+float readFloat(const mrpt::config::CConfigFileBase& source, const std::string& section, const std::string& key,
+                float def);
+/// A whole number in int's range.
+int readInt(const mrpt::config::CConfigFileBase& source, const std::string& section, const std::string& key, int def);
+
+/// The kinds of value a section read by MRPT's own loader holds, checked before MRPT reads it.
+/// Count: a whole number >= 1 (a step MRPT keeps unsigned, where -1 would wrap to 4294967295).
+enum class IniValue { Bool, Int, Count, Real };
+/// Throws as the readers above (the message starting with `who`) for the first key of `keys`
+/// present in `section` whose value is not of its kind: for sections MRPT's own loader reads,
+/// such as COccupancyGridMap2D's likelihood options.
+void checkIniValues(const mrpt::config::CConfigFileBase& source, const std::string& section, const std::string& who,
+                    std::initializer_list<std::pair<const char*, IniValue>> keys);
+
+/// The booleans MRPT's TMapGenericParams reads from every map's _creationOpts with its
+/// read_bool (which takes "on" for false), read again as readBool reads them.
+inline void readGenericMapParams(const mrpt::config::CConfigFileBase& source, const std::string& section,
+                                 const std::string& who, mrpt::maps::TMapGenericParams& p) {
+  p.enableSaveAs3DObject = readBool(source, section, "enableSaveAs3DObject", p.enableSaveAs3DObject, who);
+  p.enableObservationLikelihood =
+      readBool(source, section, "enableObservationLikelihood", p.enableObservationLikelihood, who);
+  p.enableObservationInsertion = readBool(source, section, "enableObservationInsertion", p.enableObservationInsertion, who);
+  readBool(source, section, "disableSaveAs3DObject", false, who);  // older MRPT's key: its syntax only
+}
 
 /// Throws std::invalid_argument naming `section` unless min_x < max_x and min_y < max_y, all
 /// finite: the check of an .ini's extent and of a loaded map's grid frame.

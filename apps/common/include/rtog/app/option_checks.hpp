@@ -6,6 +6,7 @@
 
 #include <cerrno>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <string>
 
@@ -15,11 +16,26 @@ namespace rtog::app::checks {
 
 enum class Sign { Any, NonNegative, Positive };
 
-/// A finite number of the given sign; the whole value must be the number.
-inline CLI::Validator number(Sign sign) {
-  const char* desc = sign == Sign::Positive ? "POSITIVE" : sign == Sign::NonNegative ? "NON-NEGATIVE" : "FINITE";
+/// A bound as the messages print it (1e+04 as 10000, 1e-04 as 0.0001).
+inline std::string bound(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof(buf), "%.10g", v);
+  return buf;
+}
+
+/// The largest length [m] the tools turn into a count of cells or pixels (an int): 1e4 m is
+/// 1e8 cells at the finest resolution a map may have (1e-4 m), well inside int; a longer
+/// --radius, --blur or Hough length would wrap (--hough-min-length 1e9 became a negative
+/// number of pixels) or describe nothing a map can hold.
+constexpr double kMaxCellLength = 1e4;
+
+/// A finite number of the given sign, at most `max` (given: the option converts to an int or
+/// a float, or has a stated range); the whole value must be the number.
+inline CLI::Validator number(Sign sign, double max = HUGE_VAL) {
+  std::string desc = sign == Sign::Positive ? "POSITIVE" : sign == Sign::NonNegative ? "NON-NEGATIVE" : "FINITE";
+  if (max != HUGE_VAL) desc += " <= " + bound(max);
   return CLI::Validator(
-      [sign](std::string& s) -> std::string {
+      [sign, max](std::string& s) -> std::string {
         errno = 0;
         char* end = nullptr;
         const double v = std::strtod(s.c_str(), &end);
@@ -28,9 +44,23 @@ inline CLI::Validator number(Sign sign) {
         if (!std::isfinite(v)) return "must be a finite number, got '" + s + "'";
         if (sign == Sign::Positive && !(v > 0)) return "must be > 0, got " + s;
         if (sign == Sign::NonNegative && !(v >= 0)) return "must be >= 0, got " + s;
+        if (v > max) return "must be at most " + bound(max) + ", got " + s;
         return {};
       },
       desc);
+}
+
+/// A finite number in [lo, hi]. (CLI11's own Range lets "nan" through: NaN compares false.)
+inline CLI::Validator within(double lo, double hi) {
+  return CLI::Validator(
+      [lo, hi](std::string& s) -> std::string {
+        const std::string finite = number(Sign::Any)(s);
+        if (!finite.empty()) return finite;
+        const double v = std::strtod(s.c_str(), nullptr);
+        if (v < lo || v > hi) return "must lie in [" + bound(lo) + ", " + bound(hi) + "], got " + s;
+        return {};
+      },
+      "NUMBER in [" + bound(lo) + " - " + bound(hi) + "]");
 }
 
 /// A whole number in [lo, hi].
