@@ -162,6 +162,8 @@ int build(const BuildOptions& o, std::ostream& out) {
     }
   } else if (!o.simplemap_path.empty()) {
     mrpt::maps::CSimpleMap sm;
+    // Checked first, as rawlogs are: MRPT's loader sizes buffers from the counts the file states.
+    checkSimplemap(o.simplemap_path);
     loadQuietly("simplemap", o.simplemap_path, [&] { return sm.loadFromFile(o.simplemap_path) && !sm.empty(); });
     Progress progress(out, sm.size(), o.progress_bar);
     for (std::size_t i = 0; i < sm.size(); ++i) {

@@ -168,23 +168,27 @@ OccupancyMap loadMap(const std::string& path);
 /// `n` bytes gzip-compressed into `out`, in memory. (MRPT's compress_gz_data_block goes through
 /// a file in /tmp named by the clock: two processes in the same microsecond share it.)
 void writeGzip(const void* data, std::size_t n, std::ostream& out);
-/// What a child process found reading a rawlog entry by entry (rawlog_input.cpp).
-struct RawlogCheck {
+/// What a child process found reading an MRPT archive file (a rawlog, a simplemap) entry by
+/// entry (rawlog_input.cpp).
+struct ArchiveCheck {
   std::uint64_t bytes = 0;    ///< of the log as read (a gzip file decompressed)
   std::size_t entries = 0;    ///< read whole; with a problem, the index of the entry that failed
   std::uint64_t offset = 0;   ///< where that entry starts (bytes at the end: the whole log read)
   bool truncated = false;     ///< the file ends inside that entry
   std::string problem;        ///< empty if every entry was read; else one line naming the entry
 };
-/// Reads every entry of the rawlog in a child process, each under an address-space bound of
-/// twice the bytes left in the file (plus 64 MiB): a length field that the file cannot hold
-/// fails there, not in this process.
-RawlogCheck checkRawlog(const std::string& path);
-/// Reads a rawlog checked by checkRawlog into `log`: a truncated, corrupt or hostile one (or one
-/// with bytes after its last entry) throws std::runtime_error with checkRawlog's line, unless it
+/// Reads every entry of the file (`what`: "rawlog" or "simplemap", for messages) in a child
+/// process, each under an address-space bound of twice the bytes left in the file (plus 64 MiB):
+/// a length field that the file cannot hold fails there, not in this process.
+ArchiveCheck checkArchive(const std::string& path, const char* what);
+/// Reads a rawlog checked by checkArchive into `log`: a truncated, corrupt or hostile one (or one
+/// with bytes after its last entry) throws std::runtime_error with checkArchive's line, unless it
 /// is truncated and `allow_truncated` (then the entries before the cut, and a warning to `out`).
 /// Returns the number of entries.
 std::size_t readRawlog(const std::string& path, bool allow_truncated, mrpt::obs::CRawlog& log, std::ostream& out);
+/// Checks a simplemap file by checkArchive before MRPT's loader reads it: a truncated, corrupt or
+/// hostile one, or one of other than one object, throws std::runtime_error with one line.
+void checkSimplemap(const std::string& path);
 /// Saves through an OutputSet: the old file stays intact unless the new one was written whole.
 void saveMap(const OccupancyMap& map, const std::string& path);
 

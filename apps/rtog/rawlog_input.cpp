@@ -1,4 +1,5 @@
-// `rtog build --rawlog`: a rawlog read entry by entry, its damage found and named.
+// `rtog build --rawlog` / `--simplemap`: an MRPT archive file read entry by entry, its damage
+// found and named.
 //
 // MRPT's CRawlog::loadFromRawLogFile stops at the first entry it cannot read and keeps the ones
 // before: a truncated or corrupt log reads as a shorter one, silently. And each class's reader
@@ -8,6 +9,7 @@
 // class's counts from outside, so a child process reads the log first, with its address space
 // bounded entry by entry by the bytes left in the file; a count the file cannot hold makes the
 // allocation fail there, and the child names the entry. The tool reads the log only if it passed.
+// A simplemap file is the same kind of file (one entry: the whole CSimpleMap), checked the same way.
 #include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -33,7 +35,7 @@ namespace rtog::cli {
 namespace {
 
 /// Bytes of the log as MRPT reads them: a gzip file decompressed (counted, not kept).
-std::uint64_t logBytes(const std::string& path) {
+std::uint64_t logBytes(const std::string& path, const char* what) {
   std::ifstream f(path, std::ios::binary);
   unsigned char magic[2] = {0, 0};
   f.read(reinterpret_cast<char*>(magic), 2);
@@ -43,7 +45,7 @@ std::uint64_t logBytes(const std::string& path) {
     return static_cast<std::uint64_t>(f.tellg());
   }
   gzFile gz = gzopen(path.c_str(), "rb");
-  if (!gz) throw std::runtime_error("cannot open rawlog '" + path + "'");
+  if (!gz) throw std::runtime_error(std::string("cannot open ") + what + " '" + path + "'");
   std::uint64_t n = 0;
   std::vector<char> buf(std::size_t{1} << 16);
   int got = 0;
@@ -147,16 +149,17 @@ void say(int fd, const std::string& s) {
 
 }  // namespace
 
-RawlogCheck checkRawlog(const std::string& path) {
-  RawlogCheck r;
-  r.bytes = logBytes(path);
+ArchiveCheck checkArchive(const std::string& path, const char* what) {
+  ArchiveCheck r;
+  r.bytes = logBytes(path, what);
+  const std::string name = std::string(what) + " '" + path + "'";
   int fds[2];
-  if (pipe(fds) != 0) throw std::runtime_error("cannot check rawlog '" + path + "': no pipe");
+  if (pipe(fds) != 0) throw std::runtime_error("cannot check " + name + ": no pipe");
   std::cout.flush();
   std::cerr.flush();
   std::fflush(nullptr);
   const pid_t pid = fork();
-  if (pid < 0) throw std::runtime_error("cannot check rawlog '" + path + "': cannot fork");
+  if (pid < 0) throw std::runtime_error("cannot check " + name + ": cannot fork");
   if (pid == 0) {
     close(fds[0]);
     checkEntries(path, r.bytes, fds[1]);
@@ -206,7 +209,7 @@ RawlogCheck checkRawlog(const std::string& path) {
 }
 
 std::size_t readRawlog(const std::string& path, bool allow_truncated, mrpt::obs::CRawlog& log, std::ostream& out) {
-  const RawlogCheck c = checkRawlog(path);
+  const ArchiveCheck c = checkArchive(path, "rawlog");
   if (!c.problem.empty() && !(c.truncated && allow_truncated))
     throw std::runtime_error("cannot read rawlog '" + path + "': " + c.problem);
   if (c.entries == 0) throw std::runtime_error("cannot read rawlog '" + path + "': it holds no entry");
@@ -236,6 +239,16 @@ std::size_t readRawlog(const std::string& path, bool allow_truncated, mrpt::obs:
     }
   }
   return log.size();
+}
+
+void checkSimplemap(const std::string& path) {
+  const ArchiveCheck c = checkArchive(path, "simplemap");
+  const std::string name = "cannot read simplemap '" + path + "': ";
+  if (!c.problem.empty()) throw std::runtime_error(name + c.problem);
+  if (c.entries == 0) throw std::runtime_error(name + "it holds no entry");
+  // MRPT's loader reads the first object and ignores the rest: the rest would be lost silently.
+  if (c.entries > 1)
+    throw std::runtime_error(name + "it holds " + std::to_string(c.entries) + " objects, a simplemap file one");
 }
 
 }  // namespace rtog::cli

@@ -8,7 +8,10 @@
 
 #include <mrpt/io/CFileGZInputStream.h>
 #include <mrpt/io/CMemoryStream.h>
+#include <mrpt/maps/CSimpleMap.h>
 #include <mrpt/obs/CObservation2DRangeScan.h>
+#include <mrpt/obs/CSensoryFrame.h>
+#include <mrpt/poses/CPose3DPDFGaussian.h>
 #include <mrpt/serialization/CArchive.h>
 
 #include "../mrpt/hostile_files.hpp"
@@ -218,20 +221,22 @@ std::string gzipOf(const std::string& bytes) {
   return os.str();
 }
 
-/// One valid 2D scan of one beam, as a rawlog entry, its beam count then set to `beams`.
-std::string scanAnnouncing(std::uint32_t beams) {
-  mrpt::obs::CObservation2DRangeScan scan;
-  scan.aperture = 3.0f;
-  scan.maxRange = 80.0f;
-  scan.resizeScan(1);
-  const float range = 12.345f;
-  scan.setScanRange(0, range);
-  scan.setScanRangeValidity(0, true);
-  mrpt::io::CMemoryStream mem;
-  auto ar = mrpt::serialization::archiveFrom(mem);
-  ar << scan;
+/// One valid 2D scan of one beam.
+mrpt::obs::CObservation2DRangeScan::Ptr oneBeamScan() {
+  auto scan = mrpt::obs::CObservation2DRangeScan::Create();
+  scan->aperture = 3.0f;
+  scan->maxRange = 80.0f;
+  scan->resizeScan(1);
+  scan->setScanRange(0, 12.345f);
+  scan->setScanRangeValidity(0, true);
+  return scan;
+}
+
+/// Serialized bytes holding oneBeamScan() once, its beam count then set to `beams`.
+std::string announcing(const mrpt::io::CMemoryStream& mem, std::uint32_t beams) {
   std::string bytes(static_cast<const char*>(mem.getRawBufferData()), mem.getTotalBytesCount());
   // The count is the uint32 just before the ranges (little-endian, as CArchive writes).
+  const float range = 12.345f;
   std::string needle(4, '\0');
   needle[0] = 1;
   needle.append(reinterpret_cast<const char*>(&range), 4);
@@ -240,6 +245,26 @@ std::string scanAnnouncing(std::uint32_t beams) {
   EXPECT_EQ(bytes.find(needle, at + 1), std::string::npos);
   for (int i = 0; i < 4; ++i) bytes[at + std::size_t(i)] = static_cast<char>((beams >> (8 * i)) & 0xff);
   return bytes;
+}
+
+/// The scan as a rawlog entry, announcing `beams`.
+std::string scanAnnouncing(std::uint32_t beams) {
+  mrpt::io::CMemoryStream mem;
+  auto ar = mrpt::serialization::archiveFrom(mem);
+  ar << *oneBeamScan();
+  return announcing(mem, beams);
+}
+
+/// A simplemap of one frame holding the scan, announcing `beams`.
+std::string simplemapAnnouncing(std::uint32_t beams) {
+  mrpt::maps::CSimpleMap sm;
+  auto sf = mrpt::obs::CSensoryFrame::Create();
+  sf->insert(oneBeamScan());
+  sm.insert(mrpt::poses::CPose3DPDFGaussian::Create(), sf);
+  mrpt::io::CMemoryStream mem;
+  auto ar = mrpt::serialization::archiveFrom(mem);
+  ar << sm;
+  return announcing(mem, beams);
 }
 
 }  // namespace
@@ -302,4 +327,48 @@ TEST(CliInputs, RawlogLengthFieldsCannotExhaustMemory) {
     EXPECT_LT(c.maxrss_kb, 200 * 1024) << file << ": peak memory " << c.maxrss_kb / 1024 << " MiB";
     EXPECT_FALSE(std::ifstream(d + "/out.rtog").good());
   }
+}
+
+// Issue #37: a simplemap went to MRPT's loader unchecked: a scan in it announcing 2^32 - 1 beams
+// (a file of a few hundred bytes) was zero-filled or written through a null pointer, as in a
+// rawlog. Now checked by the rawlogs' reader: one error line, exit 1, the memory bounded; and a
+// truncated simplemap says so.
+TEST(CliInputs, SimplemapLengthFieldsCannotExhaustMemory) {
+  const std::string d = scratch("simplemap_hostile");
+  const std::string plain = simplemapAnnouncing(0xFFFFFFFFu);
+  std::cout << "hostile simplemap: " << plain.size() << " bytes\n";
+  ASSERT_LT(plain.size(), 1000u);
+  writeAll(d + "/plain.simplemap", plain);
+  writeAll(d + "/gz.simplemap", gzipOf(plain));
+  writeAll(d + "/one.simplemap", simplemapAnnouncing(1));  // the same simplemap as written: read
+  const std::string malaga = plainBytes(std::string(RTOG_MRPT_DATASETS) + "/malaga-cs-fac-building.simplemap.gz");
+  writeAll(d + "/half.simplemap", malaga.substr(0, malaga.size() / 2));
+  // MRPT's loader reads the first of two simplemaps and drops the other silently.
+  writeAll(d + "/two.simplemap", simplemapAnnouncing(1) + simplemapAnnouncing(1));
+  const Child ok = spawn({"build", "--resolution", "0.2", "--simplemap", d + "/one.simplemap"});
+  EXPECT_EQ(ok.rc, 0) << ok.output;
+  EXPECT_NE(ok.output.find(" from 1 scans "), std::string::npos) << ok.output;
+  for (const std::string file : {"plain.simplemap", "gz.simplemap"}) {
+    const Child c = spawn({"build", "--resolution", "0.2", "--simplemap", d + "/" + file, "--out", d + "/out.rtog"});
+    EXPECT_EQ(c.rc, 1) << c.output;
+    EXPECT_NE(c.output.find("rtog: error: cannot read simplemap '" + d + "/" + file + "': entry 0 (byte 0 of " +
+                            std::to_string(plain.size()) + ") announces more data than the"),
+              std::string::npos)
+        << c.output;
+    EXPECT_EQ(std::count(c.output.begin(), c.output.end(), '\n'), 1) << c.output;
+    std::cout << file << ": peak memory " << c.maxrss_kb / 1024 << " MiB\n";
+    EXPECT_LT(c.maxrss_kb, 200 * 1024) << file << ": peak memory " << c.maxrss_kb / 1024 << " MiB";
+    EXPECT_FALSE(std::ifstream(d + "/out.rtog").good());
+  }
+  std::string out;
+  EXPECT_EQ(run("build --resolution 0.2 --simplemap " + d + "/half.simplemap --out " + d + "/out.rtog", &out), 1) << out;
+  EXPECT_NE(out.find("rtog: error: cannot read simplemap '" + d + "/half.simplemap': truncated: the file ends inside entry 0"),
+            std::string::npos)
+      << out;
+  EXPECT_EQ(std::count(out.begin(), out.end(), '\n'), 1) << out;
+  EXPECT_EQ(run("build --resolution 0.2 --simplemap " + d + "/two.simplemap --out " + d + "/out.rtog", &out), 1) << out;
+  EXPECT_NE(out.find("rtog: error: cannot read simplemap '" + d + "/two.simplemap': it holds 2 objects, a simplemap file one"),
+            std::string::npos)
+      << out;
+  EXPECT_FALSE(std::ifstream(d + "/out.rtog").good());
 }

@@ -12,6 +12,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <limits>
 #include <random>
 #include <vector>
 
@@ -297,4 +298,76 @@ TEST(Sonar, OptionsAndBadReadings) {
   EXPECT_THROW(uniform->insertObservation(bad, CPose3D()), std::invalid_argument);
   EXPECT_EQ(uniform->map().cellCount(), cells);
   EXPECT_EQ(uniform->map().checkInvariants(), "");
+}
+
+// Issue #37: every reading of a CObservationRange has its own sensor pose, but only the first
+// one's (what getSensorPose returns) was checked for non-finite values up front. A NaN or
+// infinite component of another reading's pose left that reading's end point NaN, and the
+// observation scored as if the reading were not there. Now impossible (-1e30, finite) for every
+// method, on the 2D view and on the native path, whichever reading it is.
+TEST(Sonar, NonFiniteSensorPoseOfAnyReadingIsImpossible) {
+  const MalagaFixture& fx = uwbFixture();
+  mrpt::random::getRandomGenerator().randomize(7);
+  const CPose2D p = freePoses(fx.grid, 1, 4242, 0.4).front();
+  const CObservationRange o = simulate(fx.grid, p);
+  const double nan = std::numeric_limits<double>::quiet_NaN(), inf = std::numeric_limits<double>::infinity();
+  int checked = 0;
+  for (int method = 0; method <= 6; ++method)
+    for (bool view : {true, false}) {
+      rtog::CRTreeOccupancyGridMap map = fx.map;
+      map.likelihoodOptions.likelihoodMethod = static_cast<rtog::CRTreeOccupancyGridMap::TLikelihoodMethod>(method);
+      map.likelihoodOptions.scanLikelihoodOnGridView = view;
+      const std::string what = "method " + std::to_string(method) + (view ? ", 2D view" : ", native");
+      EXPECT_GT(map.computeObservationLikelihood(o, CPose3D(p)), -1e29) << what;
+      for (std::size_t k : {std::size_t{0}, std::size_t{5}, std::size_t{kSonars - 1}})
+        for (int c = 0; c < 6; ++c)
+          for (double v : {nan, inf}) {
+            CObservationRange bad = o;
+            double d[6];
+            for (int i = 0; i < 6; ++i) d[i] = bad.sensedData[k].sensorPose[i];
+            d[c] = v;
+            bad.sensedData[k].sensorPose = mrpt::math::TPose3D(d[0], d[1], d[2], d[3], d[4], d[5]);
+            const double l = map.computeObservationLikelihood(bad, CPose3D(p));
+            EXPECT_TRUE(std::isfinite(l)) << what << ", reading " << k << ", component " << c << " = " << v;
+            EXPECT_LE(l, -1e29) << what << ", reading " << k << ", component " << c << " = " << v;
+            ++checked;
+          }
+    }
+  EXPECT_EQ(checked, 7 * 2 * 3 * 12);
+}
+
+// Issue #37: inserted, a reading with a non-finite sensor pose was refused for some components
+// and presets ("the origin is not finite", naming the index among the kept readings), and
+// dropped or inserted silently for others (a NaN pitch with the octomap preset, a NaN roll with
+// any). Now a bad sensor description as a bad aperture is: an error naming the reading, before
+// any change.
+TEST(Sonar, NonFiniteSensorPoseOfAnyReadingIsRefusedOnInsertion) {
+  const MalagaFixture& fx = uwbFixture();
+  mrpt::random::getRandomGenerator().randomize(7);
+  const CPose2D p = freePoses(fx.grid, 1, 4242, 0.4).front();
+  const CObservationRange o = simulate(fx.grid, p);
+  for (const std::string preset : {"", "sensorModelPreset=octomap\n"}) {
+    auto map = mapFromIni(preset);
+    for (int c = 0; c < 6; ++c)
+      for (double v : {std::numeric_limits<double>::quiet_NaN(), -std::numeric_limits<double>::infinity()}) {
+        CObservationRange bad = o;
+        double d[6];
+        for (int i = 0; i < 6; ++i) d[i] = bad.sensedData[5].sensorPose[i];
+        d[c] = v;
+        bad.sensedData[5].sensorPose = mrpt::math::TPose3D(d[0], d[1], d[2], d[3], d[4], d[5]);
+        const std::string what = "preset '" + preset + "', component " + std::to_string(c) + " = " + std::to_string(v);
+        try {
+          map->insertObservation(bad, CPose3D(p));
+          ADD_FAILURE() << what << ": inserted";
+        } catch (const std::invalid_argument& e) {
+          EXPECT_NE(std::string(e.what()).find("reading 5 has a non-finite sensor pose"), std::string::npos)
+              << what << ": " << e.what();
+        } catch (const std::exception& e) {
+          ADD_FAILURE() << what << ": " << e.what();
+        }
+        EXPECT_EQ(map->map().cellCount(), 0u) << what;
+      }
+    ASSERT_TRUE(map->insertObservation(o, CPose3D(p)));
+    EXPECT_GT(map->map().cellCount(), 0u);
+  }
 }

@@ -3,6 +3,7 @@
 
 #include "CRTreeOccupancyGridMap_grid2d.hpp"
 #include "finite_pose.hpp"
+#include "grid_consensus.hpp"
 #include "rtog/core/band.hpp"
 #include "mrpt_grid.hpp"
 #include "options_check.hpp"
@@ -162,7 +163,12 @@ double CRTreeBackedGridMap2D::internal_computeObservationLikelihood(const mrpt::
   const mrpt::poses::CPose2D pose(takenFrom);
   switch (likelihoodOptions.likelihoodMethod) {
     case lmMeanInformation: return computeObservationLikelihood_MI(obs, pose);
-    case lmConsensus: return computeObservationLikelihood_Consensus(obs, pose);
+    case lmConsensus: {
+      // MRPT's reads the cells of end points beyond the grid unchecked (SIGSEGV): bounded, the
+      // same double wherever MRPT's reads the grid's cells.
+      const std::optional<double> l = boundedConsensusLikelihood(*this, obs, pose);
+      return l ? *l : computeObservationLikelihood_Consensus(obs, pose);
+    }
     case lmCellsDifference: return computeObservationLikelihood_CellsDifference(obs, pose);
     case lmLikelihoodField_Thrun: return computeObservationLikelihood_likelihoodField_Thrun(obs, pose);
     case lmLikelihoodField_II: return computeObservationLikelihood_likelihoodField_II(obs, pose);

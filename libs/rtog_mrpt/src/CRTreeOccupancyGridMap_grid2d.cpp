@@ -1,6 +1,7 @@
 // rtog::CRTreeOccupancyGridMap: the 2D view (a COccupancyGridMap2D of a height band), the
 // likelihood of planar scans on it, and the grid queries MRPT users call on a 2D grid.
 #include "CRTreeOccupancyGridMap_grid2d.hpp"
+#include "grid_consensus.hpp"
 #include "rtog/core/band.hpp"
 #include "mrpt_grid.hpp"
 #include "options_check.hpp"
@@ -340,6 +341,10 @@ std::optional<double> CRTreeOccupancyGridMap::gridViewLikelihood(const mrpt::obs
   // The stock grid's likelihood field, its terms and their logarithms kept per cell.
   if (method == lmLikelihoodField_Thrun && v->grid.genericMapParams.enableObservationLikelihood)
     return v->field.scanLogLikelihood(v->grid, *scan, pose);
+  // Consensus as rtreeGridMap2D scores it (one implementation): the view holds every end point,
+  // so this is MRPT's value; the bounds check stands should it not.
+  if (method == lmConsensus && v->grid.genericMapParams.enableObservationLikelihood)
+    if (const std::optional<double> l = boundedConsensusLikelihood(v->grid, *scored, mrpt::poses::CPose2D(pose))) return *l;
   return v->grid.computeObservationLikelihood(*scored, pose);
 }
 

@@ -32,6 +32,13 @@ std::vector<ConeReading> CRTreeOccupancyGridMap::sonarReadings(const mrpt::obs::
   if (!(max_sensor > 0.0 && std::isfinite(max_sensor)))
     throw std::invalid_argument("rtog::CRTreeOccupancyGridMap: a CObservationRange's maxSensorDistance must be "
                                 "positive and finite, got " + std::to_string(max_sensor));
+  // Each reading has its own sensor pose: a non-finite one (any component: a NaN roll still
+  // tilts the cone) is a bad sensor description, as a bad aperture is, refused before any change.
+  for (std::size_t k = 0; k < o.sensedData.size(); ++k)
+    for (int i = 0; i < 6; ++i)
+      if (!std::isfinite(o.sensedData[k].sensorPose[i]))
+        throw std::invalid_argument("rtog::CRTreeOccupancyGridMap: a CObservationRange's reading " + std::to_string(k) +
+                                    " has a non-finite sensor pose (" + o.sensedData[k].sensorPose.asString() + ")");
   const TInsertionOptions& io = insertionOptions;
   const double cut = io.maxDistanceInsertion > 0.0f ? static_cast<double>(io.maxDistanceInsertion)
                                                     : std::numeric_limits<double>::infinity();
