@@ -223,3 +223,29 @@ TEST(CliOutputs, EmptyPathsAreRefused) {
 }
 
 }  // namespace
+
+namespace {
+
+// A FIFO with no reader as an output, and a request that fails on an argument or an input checked
+// only once the map is read: the tool exits at once with the error (before: it blocked opening the
+// FIFO for writing, waiting for a reader, before looking at anything else). The FIFO stays, and
+// nothing else is written. The tool must finish within 60 s.
+TEST(CliOutputs, AFifoWithNoReaderDoesNotHoldUpABadRequest) {
+  const std::string d = scratch("fifo_no_reader");
+  ASSERT_EQ(mkfifo((d + "/pipe").c_str(), 0644), 0);
+  std::string out;
+  for (const auto& [args, error] : std::vector<std::pair<std::string, std::string>>{
+           {"export " + smallMap() + " --ply " + d + "/pipe --png " + d + "/s.png --slice-z 99",
+            "--slice-z 99 m is outside the map's height range"},
+           {"export " + d + "/missing.rtog --ply " + d + "/pipe", "cannot open map file"},
+           {"image " + d + "/missing.rtog --out " + d + "/pipe", "cannot open map file"}}) {
+    EXPECT_EQ(run(args, &out, "timeout 60 "), 1) << args << "\n" << out;
+    EXPECT_NE(out.find(error), std::string::npos) << args << "\n" << out;
+    struct stat st {};
+    ASSERT_EQ(lstat((d + "/pipe").c_str(), &st), 0);
+    EXPECT_TRUE(S_ISFIFO(st.st_mode)) << "the FIFO was replaced";
+    EXPECT_EQ(entries(d), std::vector<std::string>{"pipe"}) << args;
+  }
+}
+
+}  // namespace

@@ -25,9 +25,14 @@ std::runtime_error systemError(const std::string& what, int err) {
 /// A stream buffer on a file descriptor that throws, naming the file and the system's reason
 /// (ENOSPC, EFBIG, EIO, ...), at the first failed write: with badbit in the stream's exception
 /// mask the reason reaches the command through whatever writer was filling the stream.
+///
+/// A stream output (a FIFO, a device) is opened at the first write or flush, from `open_path`:
+/// opening a FIFO blocks until a reader comes, so every argument and input is checked first (a
+/// bad option then fails at once, not after a reader came or never).
 class FdBuf : public std::streambuf {
  public:
-  FdBuf(int fd, std::string what, std::string note) : fd_(fd), what_(std::move(what)), note_(std::move(note)) {
+  FdBuf(int& fd, std::string open_path, std::string what, std::string note)
+      : fd_(fd), open_path_(std::move(open_path)), what_(std::move(what)), note_(std::move(note)) {
     setp(buf_, buf_ + sizeof(buf_));
   }
 
@@ -47,6 +52,10 @@ class FdBuf : public std::streambuf {
 
  private:
   void drain() {
+    if (fd_ < 0) {
+      fd_ = ::open(open_path_.c_str(), O_WRONLY | O_NOCTTY | O_CLOEXEC);
+      if (fd_ < 0) throw std::runtime_error("cannot write " + what_ + ": " + std::strerror(errno) + note_);
+    }
     const char* p = pbase();
     std::size_t n = static_cast<std::size_t>(pptr() - pbase());
     while (n > 0) {
@@ -63,8 +72,8 @@ class FdBuf : public std::streambuf {
     setp(buf_, buf_ + sizeof(buf_));
   }
 
-  int fd_;
-  std::string what_, note_;
+  int& fd_;
+  std::string open_path_, what_, note_;
   char buf_[1 << 16];
 };
 
@@ -121,6 +130,11 @@ OutputSet::OutputSet(std::vector<InputFile> inputs) : inputs_(std::move(inputs))
 OutputSet::~OutputSet() {
   for (auto& o : outputs_) {
     o->os.reset();
+    // A FIFO never opened (the command failed first): a reader waiting on it is given its end of
+    // file if there is one; none, and the open fails at once (ENXIO) instead of blocking.
+    struct stat st {};
+    if (o->special && o->fd < 0 && ::stat(o->path.c_str(), &st) == 0 && S_ISFIFO(st.st_mode))
+      o->fd = ::open(o->path.c_str(), O_WRONLY | O_NOCTTY | O_CLOEXEC | O_NONBLOCK);
     if (o->fd >= 0) ::close(o->fd);
     if (!o->tmp.empty()) ::unlink(o->tmp.c_str());
   }
@@ -178,8 +192,11 @@ std::ostream& OutputSet::add(const std::string& option, const std::string& path)
   if (o->special) {
     // A stream (a terminal, /dev/null, a pipe, the caller's stdout): there is nothing to
     // replace, and writing beside it would replace the node itself.
-    o->fd = held >= 0 ? ::fcntl(held, F_DUPFD_CLOEXEC, 0) : ::open(path.c_str(), O_WRONLY | O_NOCTTY | O_CLOEXEC);
-    if (o->fd < 0) throw systemError(what, errno);
+    // The caller's own stdout or stderr now; any other node at the first write (FdBuf).
+    if (held >= 0) {
+      o->fd = ::fcntl(held, F_DUPFD_CLOEXEC, 0);
+      if (o->fd < 0) throw systemError(what, errno);
+    }
   } else {
     if (exists && ::access(o->target.c_str(), W_OK) != 0) throw systemError(what, errno);
     const std::string dir = directoryOf(o->target);
@@ -194,7 +211,7 @@ std::ostream& OutputSet::add(const std::string& option, const std::string& path)
     ::fchmod(o->fd, exists ? (st.st_mode & 07777) : (0666 & ~currentUmask()));
     note = exists ? " (the old file is left as it was)" : "";
   }
-  o->buf = std::make_unique<FdBuf>(o->fd, what, note);
+  o->buf = std::make_unique<FdBuf>(o->fd, o->special ? path : std::string(), what, note);
   o->os = std::make_unique<std::ostream>(o->buf.get());
   o->os->exceptions(std::ios::badbit);
   outputs_.push_back(std::move(o));
