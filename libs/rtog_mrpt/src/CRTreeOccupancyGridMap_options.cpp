@@ -75,6 +75,7 @@ void CRTreeOccupancyGridMap::TInsertionOptions::loadFromConfigFile(const mrpt::c
   discretize = s.read_bool(sec, "discretize", discretize);
   threads = s.read_int(sec, "threads", threads);
   planarCache = s.read_bool(sec, "planarCache", planarCache);
+  maxScanCells = s.read_double(sec, "maxScanCells", maxScanCells);
   rotatingScan_minElevation_deg = s.read_float(sec, "rotatingScan_minElevation_deg", rotatingScan_minElevation_deg);
   rotatingScan_maxElevation_deg = s.read_float(sec, "rotatingScan_maxElevation_deg", rotatingScan_maxElevation_deg);
   poseUncertainty = readOnOff(s, sec, "poseUncertainty", poseUncertainty);
@@ -87,6 +88,7 @@ void CRTreeOccupancyGridMap::TInsertionOptions::loadFromConfigFile(const mrpt::c
                      "useMapAltitude", "mapAltitude", "wideningBeamsWithDistance", "clampingMin", "clampingMax",
                      "occupiedThreshold", "maxDistanceInsertion", "decimation", "decimation_3d_range", "mergePolicy",
                      "discretize", "threads", "planarCache", "rotatingScan_minElevation_deg",
+                     "maxScanCells",
                      "rotatingScan_maxElevation_deg", "poseUncertainty", "sonarConeWeighting", "CFD_features_gaussian_size", "CFD_features_median_size"});
   validateInSection(sec, [this] { validate(); });
 }
@@ -121,6 +123,7 @@ void CRTreeOccupancyGridMap::TInsertionOptions::saveToConfigFile(mrpt::config::C
   c.write(sec, "discretize", discretize);
   c.write(sec, "threads", threads);
   c.write(sec, "planarCache", planarCache);
+  c.write(sec, "maxScanCells", maxScanCells);
   if (!std::isnan(rotatingScan_minElevation_deg)) {  // unset is no key: a written "nan" may not read back
     c.write(sec, "rotatingScan_minElevation_deg", rotatingScan_minElevation_deg);
     c.write(sec, "rotatingScan_maxElevation_deg", rotatingScan_maxElevation_deg);
@@ -150,6 +153,7 @@ InsertParams CRTreeOccupancyGridMap::TInsertionOptions::toInsertParams() const {
   ip.discretize = discretize;
   ip.threads = threads;
   ip.planar_cache = planarCache;
+  ip.max_scan_cells = static_cast<std::uint64_t>(maxScanCells);
   ip.range_noise_std = rangeNoiseStd;
   ip.range_noise_std_per_meter = rangeNoiseStdPerMeter;
   ip.range_noise_cutoff = rangeNoiseCutoff;
@@ -205,6 +209,8 @@ void CRTreeOccupancyGridMap::TInsertionOptions::validate() const {
   if (decimation < 1) badOption(sec, "decimation", "must be >= 1");
   if (decimation_3d_range < 1 || decimation_3d_range > 255) badOption(sec, "decimation_3d_range", "must be in [1, 255]");
   if (threads < 1 || threads > 256) badOption(sec, "threads", "must be in [1, 256]");
+  if (!(maxScanCells >= 0.0 && maxScanCells <= 4e18 && maxScanCells == std::floor(maxScanCells)))
+    badOption(sec, "maxScanCells", "must be a whole number of cells, 0 (no bound) to 4e18");
   const bool minSet = !std::isnan(rotatingScan_minElevation_deg), maxSet = !std::isnan(rotatingScan_maxElevation_deg);
   if (minSet != maxSet)
     badOption(sec, "rotatingScan_min/maxElevation_deg", "set both (explicit ring elevations) or neither");
