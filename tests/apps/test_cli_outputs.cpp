@@ -249,3 +249,42 @@ TEST(CliOutputs, AFifoWithNoReaderDoesNotHoldUpABadRequest) {
 }
 
 }  // namespace
+
+namespace {
+
+// Interrupted (SIGINT, SIGTERM, SIGHUP) while it builds, the tool removes its hidden temporary
+// (.m.rtog.rtog-XXXXXX) and dies of the signal, as the caller expects (before: the temporary was
+// left behind at every interruption).
+TEST(CliOutputs, AnInterruptedRunLeavesNoTemporary) {
+  for (const int sig : {SIGINT, SIGTERM, SIGHUP}) {
+    SCOPED_TRACE(strsignal(sig));
+    const std::string d = scratch("interrupted");
+    std::cout.flush();
+    std::fflush(nullptr);
+    const pid_t pid = fork();
+    if (pid == 0) {
+      if (!freopen("/dev/null", "w", stdout)) _exit(126);
+      const std::string e = exe(), out = d + "/m.rtog";
+      // SENA at 1 cm: tens of seconds of work, interrupted within the first.
+      execl(e.c_str(), e.c_str(), "build", "--rawlog", kSena.c_str(), "--resolution", "0.01", "--out", out.c_str(),
+            static_cast<char*>(nullptr));
+      _exit(127);
+    }
+    ASSERT_GT(pid, 0);
+    // Once the temporary exists, the run is under way.
+    bool started = false;
+    for (int i = 0; i < 600 && !started; ++i) {
+      for (const auto& name : entries(d)) started = started || name.rfind(".m.rtog.rtog-", 0) == 0;
+      if (!started) usleep(50000);
+    }
+    EXPECT_TRUE(started) << "no temporary appeared";
+    usleep(200000);
+    kill(pid, sig);
+    int status = 0;
+    ASSERT_EQ(waitpid(pid, &status, 0), pid);
+    EXPECT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == sig) << "status " << status;
+    EXPECT_EQ(entries(d), std::vector<std::string>{}) << "left behind";
+  }
+}
+
+}  // namespace

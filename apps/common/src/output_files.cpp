@@ -11,6 +11,8 @@
 #include <stdexcept>
 #include <streambuf>
 
+#include "temporaries.hpp"
+
 namespace rtog::app {
 namespace {
 
@@ -136,7 +138,10 @@ OutputSet::~OutputSet() {
     if (o->special && o->fd < 0 && ::stat(o->path.c_str(), &st) == 0 && S_ISFIFO(st.st_mode))
       o->fd = ::open(o->path.c_str(), O_WRONLY | O_NOCTTY | O_CLOEXEC | O_NONBLOCK);
     if (o->fd >= 0) ::close(o->fd);
-    if (!o->tmp.empty()) ::unlink(o->tmp.c_str());
+    if (!o->tmp.empty()) {
+      ::unlink(o->tmp.c_str());
+      temporaries::forget(o->tmp);
+    }
   }
 }
 
@@ -202,7 +207,8 @@ std::ostream& OutputSet::add(const std::string& option, const std::string& path)
     const std::string dir = directoryOf(o->target);
     // Hidden, and unique: a user's own FILE.partial (or any name) is never touched.
     std::string tmpl = dir + "/." + fs::path(o->target).filename().string() + ".rtog-XXXXXX";
-    o->fd = ::mkostemp(tmpl.data(), O_CLOEXEC);
+    // Registered as it is created: SIGINT, SIGTERM or SIGHUP remove it (temporaries.hpp).
+    o->fd = temporaries::create(tmpl, O_CLOEXEC);
     if (o->fd < 0)
       throw std::runtime_error("cannot write " + what + ": cannot create a temporary file in '" + dir +
                                "': " + std::strerror(errno));
@@ -229,7 +235,9 @@ void OutputSet::commit() {
     if (::close(fd) != 0) throw systemError(quoted(o->option, o->path), errno);
   }
   // 2. Into place. An existing target is exchanged with its temporary (atomically), so that it
-  // can be put back if a later rename fails; a new one is renamed.
+  // can be put back if a later rename fails; a new one is renamed. Signals wait until the
+  // renames are all done or all undone.
+  const temporaries::HoldSignals hold;
   std::vector<Output*> done;
   try {
     for (auto& o : outputs_) {
@@ -240,6 +248,7 @@ void OutputSet::commit() {
         throw std::runtime_error("cannot rename the temporary of " + quoted(o->option, o->path) + ": " +
                                  std::strerror(errno) + " (no output was replaced)");
       } else {
+        temporaries::forget(o->tmp);
         o->tmp.clear();
       }
       done.push_back(o.get());
@@ -260,6 +269,7 @@ void OutputSet::commit() {
   std::vector<std::string> dirs;
   for (auto& o : outputs_) {
     if (o->swapped) ::unlink(o->tmp.c_str());
+    temporaries::forget(o->tmp);
     o->tmp.clear();
     if (o->special) continue;
     const std::string d = directoryOf(o->target);
