@@ -46,7 +46,7 @@ TEST(CliScanBudget, AFarScanIsCutByTheDefaultRange) {
 }
 
 // With no range cut (--max-range 0) the per-scan cell budget skips such scans whole and counts
-// their beams (before: two such scans ran out of memory past 11 GB).
+// their beams (before: 3.2 GB, as with one: the second scan touches the same cells).
 TEST(CliScanBudget, WithNoRangeCutTheCellBudgetSkipsTheScans) {
   const std::string d = scratch("far_scans");
   const std::string log = farScans(d + "/far.rawlog", 2, 3276.0f);
