@@ -319,3 +319,28 @@ TEST(MapOptions, MapCountsAreBoundedBeforeMrptReadsThem) {
   }
   EXPECT_NO_THROW(counts("rtreeOccupancyGrid_count=2 // two maps\noccupancyGrid_count=0\nresolution=-1"));
 }
+
+// maxScanCells (InsertParams::max_scan_cells) goes to the core as given, survives a save and a
+// load whole (MRPT writes doubles with "%e", six digits), and is refused unless a whole number.
+TEST(MapOptions, MaxScanCellsReachesTheCoreAndRoundTrips) {
+  rtog::CRTreeOccupancyGridMap::TInsertionOptions io;
+  EXPECT_EQ(io.toInsertParams().max_scan_cells, std::uint64_t{1} << 30);
+  mrpt::config::CConfigFileMemory in("[s]\nmaxScanCells = 123456789\n");
+  io.loadFromConfigFile(in, "s");
+  EXPECT_EQ(io.toInsertParams().max_scan_cells, 123456789u);
+  mrpt::config::CConfigFileMemory out;
+  io.saveToConfigFile(out, "s");
+  rtog::CRTreeOccupancyGridMap::TInsertionOptions back;
+  back.loadFromConfigFile(out, "s");
+  EXPECT_EQ(back.toInsertParams().max_scan_cells, 123456789u);
+  for (const std::string bad : {"-1", "1.5", "nan", "1e30"}) {
+    mrpt::config::CConfigFileMemory c("[s]\nmaxScanCells = " + bad + "\n");
+    rtog::CRTreeOccupancyGridMap::TInsertionOptions o;
+    try {
+      o.loadFromConfigFile(c, "s");
+      ADD_FAILURE() << "accepted " << bad;
+    } catch (const std::exception& e) {
+      EXPECT_NE(std::string(e.what()).find("maxScanCells"), std::string::npos) << e.what();
+    }
+  }
+}

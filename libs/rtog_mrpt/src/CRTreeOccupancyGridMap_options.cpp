@@ -123,7 +123,7 @@ void CRTreeOccupancyGridMap::TInsertionOptions::saveToConfigFile(mrpt::config::C
   c.write(sec, "discretize", discretize);
   c.write(sec, "threads", threads);
   c.write(sec, "planarCache", planarCache);
-  c.write(sec, "maxScanCells", maxScanCells);
+  c.write(sec, "maxScanCells", std::to_string(static_cast<std::uint64_t>(maxScanCells)));  // whole: "%e" would round it
   if (!std::isnan(rotatingScan_minElevation_deg)) {  // unset is no key: a written "nan" may not read back
     c.write(sec, "rotatingScan_minElevation_deg", rotatingScan_minElevation_deg);
     c.write(sec, "rotatingScan_maxElevation_deg", rotatingScan_maxElevation_deg);
