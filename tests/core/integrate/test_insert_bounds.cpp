@@ -128,3 +128,45 @@ TEST(InsertBounds, TheCellBudgetDecidesAlikeForAnyThreadCountAndLeavesScansUnder
 }
 
 }  // namespace
+
+namespace {
+
+// A scan inserted with pose uncertainty (insertBlurred: one trace per pose) is held to the same
+// budget, pose by pose: over it, skipped whole and its beams counted once; under it, the map is
+// the one inserted without a budget.
+TEST(InsertBounds, APoseBlurredScanOverTheCellBudgetIsSkippedWholeAndCounted) {
+  const Eigen::Vector3d origin(0.02, 0.02, 0.02);
+  const std::vector<Eigen::Vector3f> scan = fan(origin, 20000, 60.0, false);
+  const auto poses = [&](const Eigen::Vector3d& o) {
+    rtog::WeightedScan a, b;
+    a.weight = b.weight = 0.5;
+    a.origin = o, b.origin = o + Eigen::Vector3d(0.1, 0.0, 0.0);
+    a.points = b.points = scan.data();
+    a.count = b.count = scan.size();
+    return std::vector<rtog::WeightedScan>{a, b};
+  };
+  std::string unbounded;
+  {
+    rtog::OccupancyMap map(rtog::MapParams{});
+    rtog::InsertParams none;
+    none.max_scan_cells = 0;
+    EXPECT_EQ(map.insertBlurred(poses(origin), none).skipped_over_budget, 0u);
+    unbounded = bytesOf(map);
+  }
+  for (const int threads : {1, 2}) {
+    SCOPED_TRACE(threads);
+    rtog::InsertParams small, large;
+    small.threads = large.threads = threads;
+    small.max_scan_cells = std::uint64_t{1} << 22;
+    large.max_scan_cells = std::uint64_t{1} << 27;
+    rtog::OccupancyMap map(rtog::MapParams{});
+    const rtog::InsertStats st = map.insertBlurred(poses(origin), small);
+    EXPECT_EQ(st.skipped_over_budget, scan.size());
+    EXPECT_EQ(st.raysTotal(), scan.size());
+    EXPECT_EQ(map.leafCount(), 0u);
+    EXPECT_EQ(map.insertBlurred(poses(origin), large).skipped_over_budget, 0u);
+    EXPECT_TRUE(bytesOf(map) == unbounded) << "not the map inserted without a budget";
+  }
+}
+
+}  // namespace

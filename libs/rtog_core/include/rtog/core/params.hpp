@@ -59,7 +59,8 @@ struct InsertParams {
   /// the map unchanged. 2^30 cells are 262,144 bricks, 256 MiB: a 2D scan of 361 beams reaching
   /// 3 km touches 1.85 million; a depth image or a VLP-16 sweep within 100 m, a few thousand to
   /// tens of thousands. Planar scans (one z-layer) are bounded by their batch's own size (2^26
-  /// cells) and reach it only if it is set lower; RangeNoise scans are not counted. 0: no bound.
+  /// cells) and reach it only if it is set lower; a pose-blurred scan (insertBlurred) is skipped
+  /// if any of its poses' traces goes over; RangeNoise scans are not counted. 0: no bound.
   /// (Default: 2^30)
   std::uint64_t max_scan_cells = std::uint64_t{1} << 30;
   /// Trace each beam to the centre of its end cell and beams ending in the same cell once
