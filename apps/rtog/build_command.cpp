@@ -214,7 +214,9 @@ int build(const BuildOptions& o, std::ostream& out) {
   out.unsetf(std::ios::floatfield);
   out << "skipped: " << st.skipped_non_finite << " non-finite, " << st.skipped_zero_length << " zero-length, "
       << st.skipped_out_of_range << " out of range, " << map->invalidRangesSkipped << " invalid ranges, "
-      << st.skipped_too_long << " too long (over " << InsertParams{}.max_ray_cells << " cells)\n";
+      << st.skipped_too_long << " too long (over " << InsertParams{}.max_ray_cells << " cells), "
+      << st.skipped_over_budget << " in scans over the cell budget (" << map->insertionOptions.toInsertParams().max_scan_cells
+      << " cells); " << st.rays_truncated << " cut at the range limit or without a return\n";
   printStatistics(map->map(), out);
   if (saved) {
     map->map().write(*saved);

@@ -49,10 +49,12 @@ int main(int argc, char** argv) {
                         ->capture_default_str()
                         ->check(within(0.5, 10.0));
   auto* bmerge = b->add_option("--merge", merge, "Leaf merging: off | clamped | equal")->capture_default_str();
-  build.insert.max_range = 0.0;
+  // Beyond the lidars the tool reads (VLP-16 100 m, SICK LMS 80 m): a bound on one scan's reach.
+  build.insert.max_range = 120.0;
   auto* bmax_range = b->add_option("--max-range", build.insert.max_range,
                 "Cut beams longer than this [m] (0: no cut; beams longer than " +
-                    std::to_string(rtog::InsertParams{}.max_ray_cells) + " cells are skipped and counted either way)")
+                    std::to_string(rtog::InsertParams{}.max_ray_cells) +
+                    " cells, and scans over the cell budget, are skipped and counted either way)")
       ->capture_default_str()
       ->check(number(Sign::NonNegative, 1e6));
   rtog::SensorChannel channel;

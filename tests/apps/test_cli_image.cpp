@@ -120,3 +120,18 @@ TEST(CliImage, BadRequestsAreOneErrorLineAndNoOutput) {
   }
   EXPECT_EQ(entries(d), before);
 }
+
+// A blur of 1 km on a map some 40 m wide: the known cells' mean, nearly, computed with the kernel
+// clipped to the image (before: a kernel of 120,001 taps a row, minutes). The tool must finish
+// within 60 s, with the library's result.
+TEST(CliImage, AHugeBlurFinishesWithTheLibrarysResult) {
+  const std::string d = scratch("image_huge_blur");
+  std::string out;
+  ASSERT_EQ(run("build --rawlog '" + kSena + "' --resolution 0.05 --out " + d + "/m.rtog", &out), 0) << out;
+  ASSERT_EQ(run("image " + d + "/m.rtog --blur 1000 --threshold 0.3 --out " + d + "/r.json", &out, "timeout 60 "), 0) << out;
+  const rtog::image::GridImage g =
+      rtog::image::blur(rtog::image::bandImage(rtog::cli::loadMap(d + "/m.rtog"), -1000, 1000), 1000);
+  std::ifstream in(d + "/r.json");
+  const nlohmann::json j = nlohmann::json::parse(in);
+  EXPECT_EQ(j["occupied_cells"].get<int>(), cv::countNonZero(rtog::image::threshold(g, 0.3)));
+}

@@ -223,3 +223,68 @@ TEST(CliOutputs, EmptyPathsAreRefused) {
 }
 
 }  // namespace
+
+namespace {
+
+// A FIFO with no reader as an output, and a request that fails on an argument or an input checked
+// only once the map is read: the tool exits at once with the error (before: it blocked opening the
+// FIFO for writing, waiting for a reader, before looking at anything else). The FIFO stays, and
+// nothing else is written. The tool must finish within 60 s.
+TEST(CliOutputs, AFifoWithNoReaderDoesNotHoldUpABadRequest) {
+  const std::string d = scratch("fifo_no_reader");
+  ASSERT_EQ(mkfifo((d + "/pipe").c_str(), 0644), 0);
+  std::string out;
+  for (const auto& [args, error] : std::vector<std::pair<std::string, std::string>>{
+           {"export " + smallMap() + " --ply " + d + "/pipe --png " + d + "/s.png --slice-z 99",
+            "--slice-z 99 m is outside the map's height range"},
+           {"export " + d + "/missing.rtog --ply " + d + "/pipe", "cannot open map file"},
+           {"image " + d + "/missing.rtog --out " + d + "/pipe", "cannot open map file"}}) {
+    EXPECT_EQ(run(args, &out, "timeout 60 "), 1) << args << "\n" << out;
+    EXPECT_NE(out.find(error), std::string::npos) << args << "\n" << out;
+    struct stat st {};
+    ASSERT_EQ(lstat((d + "/pipe").c_str(), &st), 0);
+    EXPECT_TRUE(S_ISFIFO(st.st_mode)) << "the FIFO was replaced";
+    EXPECT_EQ(entries(d), std::vector<std::string>{"pipe"}) << args;
+  }
+}
+
+}  // namespace
+
+namespace {
+
+// Interrupted (SIGINT, SIGTERM, SIGHUP) while it builds, the tool removes its hidden temporary
+// (.m.rtog.rtog-XXXXXX) and dies of the signal, as the caller expects (before: the temporary was
+// left behind at every interruption).
+TEST(CliOutputs, AnInterruptedRunLeavesNoTemporary) {
+  for (const int sig : {SIGINT, SIGTERM, SIGHUP}) {
+    SCOPED_TRACE(strsignal(sig));
+    const std::string d = scratch("interrupted");
+    std::cout.flush();
+    std::fflush(nullptr);
+    const pid_t pid = fork();
+    if (pid == 0) {
+      if (!freopen("/dev/null", "w", stdout)) _exit(126);
+      const std::string e = exe(), out = d + "/m.rtog";
+      // SENA at 1 cm: tens of seconds of work, interrupted within the first.
+      execl(e.c_str(), e.c_str(), "build", "--rawlog", kSena.c_str(), "--resolution", "0.01", "--out", out.c_str(),
+            static_cast<char*>(nullptr));
+      _exit(127);
+    }
+    ASSERT_GT(pid, 0);
+    // Once the temporary exists, the run is under way.
+    bool started = false;
+    for (int i = 0; i < 600 && !started; ++i) {
+      for (const auto& name : entries(d)) started = started || name.rfind(".m.rtog.rtog-", 0) == 0;
+      if (!started) usleep(50000);
+    }
+    EXPECT_TRUE(started) << "no temporary appeared";
+    usleep(200000);
+    kill(pid, sig);
+    int status = 0;
+    ASSERT_EQ(waitpid(pid, &status, 0), pid);
+    EXPECT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == sig) << "status " << status;
+    EXPECT_EQ(entries(d), std::vector<std::string>{}) << "left behind";
+  }
+}
+
+}  // namespace

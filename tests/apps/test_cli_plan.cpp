@@ -163,3 +163,38 @@ TEST(CliPlan, BadRequestsAreOneErrorLineAndNoOutput) {
   }
   EXPECT_EQ(entries(d), before);
 }
+
+// Radii of more cells than the bound: one error line naming the radius and the bound, 2D and 3D
+// (before: 1e18 planned as radius 0 in 2D and crashed in 3D; 1e9 to 1e17 failed allocating).
+TEST(CliPlan, HugeRadiiAreOneErrorLineNamingTheBound) {
+  const std::string d = scratch("plan_huge_radius");
+  std::string out;
+  ASSERT_EQ(run("build --simplemap " + kMalaga + " --resolution 0.2 --scans 0:10 --out " + d + "/m.rtog", &out), 0) << out;
+  const std::string a = xy(robotPositions().front());
+  for (const auto& [ends, radius] : std::vector<std::pair<std::string, std::string>>{
+           {a + " --to " + a, "1e18"}, {a + " --to " + a, "1e12"}, {a + " --to " + a, "1e5"},
+           {a + " 0.3 --to " + a + " 0.3", "1e18"}, {a + " 0.3 --to " + a + " 0.3", "1e3"}}) {
+    const std::string args = "plan " + d + "/m.rtog --from " + ends + " --Te 1 --Ta 1 --radius " + radius + " --out " + d + "/p.txt";
+    EXPECT_EQ(run(args, &out, "timeout 60 "), 1) << args << "\n" << out;
+    EXPECT_EQ(std::count(out.begin(), out.end(), '\n'), 1) << args << "\n" << out;
+    EXPECT_EQ(out.rfind("rtog: error: ", 0), 0u) << out;
+    EXPECT_NE(out.find("the radius"), std::string::npos) << out;
+    EXPECT_NE(out.find(", more than the bound of"), std::string::npos) << out;
+  }
+  EXPECT_EQ(entries(d), std::vector<std::string>{"m.rtog"});
+}
+
+// A start kept off by a large radius (75 m at 5 cm: 1,500 cells, within the bound) is refused at
+// once, from the map's leaves near it (before: a disc of 7 million cells stamped about each of the
+// map's 7,312 occupied cells first, minutes). The tool must finish within 60 s.
+TEST(CliPlan, ALargeRadiusRefusesABlockedStartPromptly) {
+  const std::string d = scratch("plan_large_radius");
+  std::string out;
+  ASSERT_EQ(run("build --simplemap " + kMalaga + " --resolution 0.05 --out " + d + "/m.rtog", &out), 0) << out;
+  const std::string a = xy(robotPositions().front());
+  const int rc = run("plan " + d + "/m.rtog --from " + a + " --to " + a + " --Te 1 --Ta 1 --radius 75 --out " + d + "/p.txt",
+                     &out, "timeout 60 ");
+  EXPECT_EQ(rc, 1) << out;
+  EXPECT_NE(out.find("the start is occupied or nearer than the radius to an occupied cell"), std::string::npos) << out;
+  EXPECT_EQ(entries(d), std::vector<std::string>{"m.rtog"});
+}

@@ -247,3 +247,31 @@ TEST(GridImage, BlurBySigmaIsInsertionWithPositionCovarianceSigmaSquared) {
   EXPECT_LT(worst_blur, 0.05);
   EXPECT_LT(d_blur, 0.1 * d_plain);
 }
+
+// A sigma far beyond the image (1 km) and one whose 3 sigma just pass it: the kernel clipped to the
+// image gives the weighted means of the known cells with the whole Gaussian's weights (the brute
+// force here, in double), at the cost of a kernel the image's size.
+TEST(GridImage, ABlurBeyondTheImageIsTheWholeGaussiansWeightedMean) {
+  const auto frames = loadOdometryFrames(dataset(kSena), 6);
+  auto m = mapFromIni("");
+  for (const auto& f : frames)
+    for (const auto& obs : *f.sf) m->insertObservation(*obs, f.pose);
+  const GridImage g = rtog::image::bandImage(m->map(), -1000, 1000);
+  ASSERT_GT(g.p.cols, 50);
+  std::vector<std::pair<int, int>> known;
+  for (int r = 0; r < g.p.rows; ++r)
+    for (int c = 0; c < g.p.cols; ++c)
+      if (!std::isnan(g.p.at<float>(r, c))) known.emplace_back(r, c);
+  for (const double sigma_px : {20.0, 40.0, 100.0, double(std::max(g.p.rows, g.p.cols)) / 2.5, 20000.0}) {
+    const GridImage b = rtog::image::blur(g, sigma_px * g.resolution);
+    for (std::size_t k = 0; k < known.size(); k += known.size() / 25) {
+      const auto [r, c] = known[k];
+      double num = 0, den = 0;
+      for (const auto& [qr, qc] : known) {
+        const double w = std::exp(-0.5 * (double((qr - r) * (qr - r)) + double((qc - c) * (qc - c))) / (sigma_px * sigma_px));
+        num += w * g.p.at<float>(qr, qc), den += w;
+      }
+      EXPECT_NEAR(b.p.at<float>(r, c), num / den, 1e-3) << "sigma " << sigma_px << " px at (" << r << ", " << c << ")";
+    }
+  }
+}

@@ -295,3 +295,100 @@ TEST(Planning, BadRequestsAreRefusedClearly) {
   ASSERT_TRUE(found);
   EXPECT_TRUE(refused(o, a, wall));
 }
+
+// A radius of more cells than the stated bound (kPlanMaxRadiusCells2D / 3D) is refused, naming the
+// radius and the bound, however large: never a radius of 0 (an overflowed cell count), never a
+// failed allocation or a crash.
+TEST(Planning, RadiiBeyondTheBoundAreRefusedNamingIt) {
+  const RealMap r = sena(1, 4);
+  const rtog::OccupancyMap& m = r.map->map();
+  const Eigen::Vector2d a = r.robot.front();
+  const double res = m.resolution();
+  for (const double radius : {1e18, 1e12, 1e9, 1e6, (rtog::kPlanMaxRadiusCells2D + 1) * res}) {
+    rtog::PlanOptions o;
+    o.radius = radius;
+    try {
+      (void)rtog::planPath2D(m, a, a, o);
+      ADD_FAILURE() << "radius " << radius << " m was taken";
+    } catch (const std::invalid_argument& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find("the radius"), std::string::npos) << what;
+      EXPECT_NE(what.find("bound of 4000 cells"), std::string::npos) << what;
+    }
+  }
+}
+
+TEST(Planning, RadiiBeyondTheBoundAreRefusedNamingItIn3D) {
+  const RealMap r = sena(1, 4);
+  const rtog::OccupancyMap& m = r.map->map();
+  const Eigen::Vector3d a(r.robot.front().x(), r.robot.front().y(), 0.1);
+  for (const double radius : {1e18, 1e12, 1e9, (rtog::kPlanMaxRadiusCells3D + 1) * m.resolution()}) {
+    rtog::PlanOptions o;
+    o.radius = radius;
+    try {
+      (void)rtog::planPath3D(m, a, a, o);
+      ADD_FAILURE() << "radius " << radius << " m was taken";
+    } catch (const std::invalid_argument& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find("the radius"), std::string::npos) << what;
+      EXPECT_NE(what.find("bound of 200 cells"), std::string::npos) << what;
+    }
+  }
+}
+
+// The radius keeps off exactly the cells a disc stamped about every occupied cell's centre keeps
+// off (the brute force here), for radii of a fraction of a cell to many cells.
+TEST(Planning, TheRadiusBlocksTheCellsOfADiscAboutEveryOccupiedCell) {
+  const RealMap r = sena(1, 4);
+  const Eigen::Vector2d c = r.robot.front();
+  rtog::PlanOptions o;
+  o.margin_cells = 30;
+  const rtog::PlanGrid occupied = rtog::buildPlanGrid(r.map->map(), c, c, o);
+  for (const double radius : {0.02, 0.05, 0.07, 0.12, 0.3, 1.0}) {
+    o.radius = radius;
+    o.margin_cells = 30 - static_cast<int>(std::ceil(radius / occupied.resolution));
+    const rtog::PlanGrid g = rtog::buildPlanGrid(r.map->map(), c, c, o);
+    ASSERT_EQ(g.nx, occupied.nx);
+    ASSERT_EQ(g.ny, occupied.ny);
+    std::vector<std::uint8_t> want = occupied.blocked;
+    const double rc = radius / g.resolution;
+    const auto reach = static_cast<std::int32_t>(std::ceil(rc));
+    for (std::int32_t y = 0; y < g.ny; ++y)
+      for (std::int32_t x = 0; x < g.nx; ++x) {
+        if (!occupied.blocked[occupied.index(x, y)]) continue;
+        for (std::int32_t dy = -reach; dy <= reach; ++dy)
+          for (std::int32_t dx = -reach; dx <= reach; ++dx)
+            if (x + dx >= 0 && y + dy >= 0 && x + dx < g.nx && y + dy < g.ny && double(dx * dx + dy * dy) < rc * rc)
+              want[g.index(x + dx, y + dy)] = 1;
+      }
+    std::size_t differ = 0, blocked = 0;
+    for (std::size_t i = 0; i < want.size(); ++i) differ += want[i] != g.blocked[i], blocked += want[i];
+    EXPECT_EQ(differ, 0u) << "radius " << radius << ": " << blocked << " cells blocked";
+  }
+}
+
+// A start kept off by a large radius (150 m: 3,000 cells, within the bound) is refused from the
+// map's leaves near it, before a grid of tens of millions of nodes is built.
+TEST(Planning, ALargeRadiusRefusesABlockedStartFromTheMapsLeaves) {
+  const RealMap r = sena(1, 4);
+  rtog::PlanOptions o;
+  ASSERT_TRUE(rtog::planPath2D(r.map->map(), r.robot.front(), r.robot.front(), o).found);  // free at radius 0
+  ASSERT_TRUE(rtog::planPath3D(r.map->map(), Eigen::Vector3d(r.robot.front().x(), r.robot.front().y(), 0.1),
+                               Eigen::Vector3d(r.robot.front().x(), r.robot.front().y(), 0.1), o).found);
+  o.radius = 150.0;
+  for (const bool three_d : {false, true}) {
+    try {
+      if (three_d) {
+        const Eigen::Vector3d a(r.robot.front().x(), r.robot.front().y(), 0.1);
+        rtog::PlanOptions o3 = o;
+        o3.radius = 9.0;  // 180 cells: within the 3D bound
+        (void)rtog::planPath3D(r.map->map(), a, a, o3);
+      } else {
+        (void)rtog::planPath2D(r.map->map(), r.robot.front(), r.robot.front(), o);
+      }
+      ADD_FAILURE() << (three_d ? "3D" : "2D") << ": planned";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find("the start is occupied or nearer than the radius"), std::string::npos) << e.what();
+    }
+  }
+}

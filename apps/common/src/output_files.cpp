@@ -11,6 +11,8 @@
 #include <stdexcept>
 #include <streambuf>
 
+#include "temporaries.hpp"
+
 namespace rtog::app {
 namespace {
 
@@ -25,9 +27,14 @@ std::runtime_error systemError(const std::string& what, int err) {
 /// A stream buffer on a file descriptor that throws, naming the file and the system's reason
 /// (ENOSPC, EFBIG, EIO, ...), at the first failed write: with badbit in the stream's exception
 /// mask the reason reaches the command through whatever writer was filling the stream.
+///
+/// A stream output (a FIFO, a device) is opened at the first write or flush, from `open_path`:
+/// opening a FIFO blocks until a reader comes, so every argument and input is checked first (a
+/// bad option then fails at once, not after a reader came or never).
 class FdBuf : public std::streambuf {
  public:
-  FdBuf(int fd, std::string what, std::string note) : fd_(fd), what_(std::move(what)), note_(std::move(note)) {
+  FdBuf(int& fd, std::string open_path, std::string what, std::string note)
+      : fd_(fd), open_path_(std::move(open_path)), what_(std::move(what)), note_(std::move(note)) {
     setp(buf_, buf_ + sizeof(buf_));
   }
 
@@ -47,6 +54,10 @@ class FdBuf : public std::streambuf {
 
  private:
   void drain() {
+    if (fd_ < 0) {
+      fd_ = ::open(open_path_.c_str(), O_WRONLY | O_NOCTTY | O_CLOEXEC);
+      if (fd_ < 0) throw std::runtime_error("cannot write " + what_ + ": " + std::strerror(errno) + note_);
+    }
     const char* p = pbase();
     std::size_t n = static_cast<std::size_t>(pptr() - pbase());
     while (n > 0) {
@@ -63,8 +74,8 @@ class FdBuf : public std::streambuf {
     setp(buf_, buf_ + sizeof(buf_));
   }
 
-  int fd_;
-  std::string what_, note_;
+  int& fd_;
+  std::string open_path_, what_, note_;
   char buf_[1 << 16];
 };
 
@@ -121,8 +132,16 @@ OutputSet::OutputSet(std::vector<InputFile> inputs) : inputs_(std::move(inputs))
 OutputSet::~OutputSet() {
   for (auto& o : outputs_) {
     o->os.reset();
+    // A FIFO never opened (the command failed first): a reader waiting on it is given its end of
+    // file if there is one; none, and the open fails at once (ENXIO) instead of blocking.
+    struct stat st {};
+    if (o->special && o->fd < 0 && ::stat(o->path.c_str(), &st) == 0 && S_ISFIFO(st.st_mode))
+      o->fd = ::open(o->path.c_str(), O_WRONLY | O_NOCTTY | O_CLOEXEC | O_NONBLOCK);
     if (o->fd >= 0) ::close(o->fd);
-    if (!o->tmp.empty()) ::unlink(o->tmp.c_str());
+    if (!o->tmp.empty()) {
+      ::unlink(o->tmp.c_str());
+      temporaries::forget(o->tmp);
+    }
   }
 }
 
@@ -178,14 +197,18 @@ std::ostream& OutputSet::add(const std::string& option, const std::string& path)
   if (o->special) {
     // A stream (a terminal, /dev/null, a pipe, the caller's stdout): there is nothing to
     // replace, and writing beside it would replace the node itself.
-    o->fd = held >= 0 ? ::fcntl(held, F_DUPFD_CLOEXEC, 0) : ::open(path.c_str(), O_WRONLY | O_NOCTTY | O_CLOEXEC);
-    if (o->fd < 0) throw systemError(what, errno);
+    // The caller's own stdout or stderr now; any other node at the first write (FdBuf).
+    if (held >= 0) {
+      o->fd = ::fcntl(held, F_DUPFD_CLOEXEC, 0);
+      if (o->fd < 0) throw systemError(what, errno);
+    }
   } else {
     if (exists && ::access(o->target.c_str(), W_OK) != 0) throw systemError(what, errno);
     const std::string dir = directoryOf(o->target);
     // Hidden, and unique: a user's own FILE.partial (or any name) is never touched.
     std::string tmpl = dir + "/." + fs::path(o->target).filename().string() + ".rtog-XXXXXX";
-    o->fd = ::mkostemp(tmpl.data(), O_CLOEXEC);
+    // Registered as it is created: SIGINT, SIGTERM or SIGHUP remove it (temporaries.hpp).
+    o->fd = temporaries::create(tmpl, O_CLOEXEC);
     if (o->fd < 0)
       throw std::runtime_error("cannot write " + what + ": cannot create a temporary file in '" + dir +
                                "': " + std::strerror(errno));
@@ -194,7 +217,7 @@ std::ostream& OutputSet::add(const std::string& option, const std::string& path)
     ::fchmod(o->fd, exists ? (st.st_mode & 07777) : (0666 & ~currentUmask()));
     note = exists ? " (the old file is left as it was)" : "";
   }
-  o->buf = std::make_unique<FdBuf>(o->fd, what, note);
+  o->buf = std::make_unique<FdBuf>(o->fd, o->special ? path : std::string(), what, note);
   o->os = std::make_unique<std::ostream>(o->buf.get());
   o->os->exceptions(std::ios::badbit);
   outputs_.push_back(std::move(o));
@@ -212,7 +235,9 @@ void OutputSet::commit() {
     if (::close(fd) != 0) throw systemError(quoted(o->option, o->path), errno);
   }
   // 2. Into place. An existing target is exchanged with its temporary (atomically), so that it
-  // can be put back if a later rename fails; a new one is renamed.
+  // can be put back if a later rename fails; a new one is renamed. Signals wait until the
+  // renames are all done or all undone.
+  const temporaries::HoldSignals hold;
   std::vector<Output*> done;
   try {
     for (auto& o : outputs_) {
@@ -223,6 +248,7 @@ void OutputSet::commit() {
         throw std::runtime_error("cannot rename the temporary of " + quoted(o->option, o->path) + ": " +
                                  std::strerror(errno) + " (no output was replaced)");
       } else {
+        temporaries::forget(o->tmp);
         o->tmp.clear();
       }
       done.push_back(o.get());
@@ -243,6 +269,7 @@ void OutputSet::commit() {
   std::vector<std::string> dirs;
   for (auto& o : outputs_) {
     if (o->swapped) ::unlink(o->tmp.c_str());
+    temporaries::forget(o->tmp);
     o->tmp.clear();
     if (o->special) continue;
     const std::string d = directoryOf(o->target);

@@ -41,6 +41,39 @@ cv::Mat threshold(const GridImage& g, double p) {
   return m;
 }
 
+namespace {
+
+/// Gaussian blur of sigma s [pixels] with a zero border, the kernel reaching 3 sigma but no further
+/// than across the image: beyond it there is only the zero border, so the weights kept are the
+/// whole Gaussian's up to one scale, which cancels in a normalized convolution's num / den.
+cv::Mat clippedGaussian(const cv::Mat& m, double s) {
+  const double reach = std::ceil(3.0 * s);
+  const int kx = 2 * static_cast<int>(std::min(reach, double(m.cols - 1))) + 1;
+  const int ky = 2 * static_cast<int>(std::min(reach, double(m.rows - 1))) + 1;
+  cv::Mat out;
+  cv::GaussianBlur(m, out, cv::Size(kx, ky), s, s, cv::BORDER_CONSTANT);
+  return out;
+}
+
+/// Above this sigma [pixels] the blur runs on blocks of cells (kPooledSigma / 16 a side, their
+/// means), then is interpolated back: the field is smooth at that scale, and the cost is the
+/// image's once over plus a kernel of at most 97 taps on the blocks, whatever the sigma.
+constexpr double kPooledSigma = 32.0;
+
+/// The blur of `m` at s > kPooledSigma pixels: pooled by f = floor(s / 16) (box means), blurred
+/// at s / f, back to the cells by bilinear interpolation (each block's value at its centre).
+cv::Mat pooledGaussian(const cv::Mat& m, double s) {
+  const int f = static_cast<int>(std::floor(s / 16.0));
+  const int sw = (m.cols + f - 1) / f, sh = (m.rows + f - 1) / f;
+  cv::Mat padded, small, back;
+  cv::copyMakeBorder(m, padded, 0, sh * f - m.rows, 0, sw * f - m.cols, cv::BORDER_CONSTANT, cv::Scalar(0));
+  cv::resize(padded, small, cv::Size(sw, sh), 0, 0, cv::INTER_AREA);
+  cv::resize(clippedGaussian(small, s / f), back, cv::Size(sw * f, sh * f), 0, 0, cv::INTER_LINEAR);
+  return back(cv::Rect(0, 0, m.cols, m.rows)).clone();
+}
+
+}  // namespace
+
 GridImage blur(const GridImage& g, double sigma) {
   if (!(std::isfinite(sigma) && sigma > 0.0)) throw std::invalid_argument("the blur's sigma must be a positive number of metres");
   const double s = sigma / g.resolution;
@@ -51,10 +84,9 @@ GridImage blur(const GridImage& g, double sigma) {
       known.at<float>(r, c) = std::isnan(v) ? 0.0f : 1.0f;
       value.at<float>(r, c) = std::isnan(v) ? 0.0f : v;
     }
-  cv::Mat num, den;
-  const int k = 2 * static_cast<int>(std::ceil(3.0 * s)) + 1;
-  cv::GaussianBlur(value, num, cv::Size(k, k), s, s, cv::BORDER_CONSTANT);
-  cv::GaussianBlur(known, den, cv::Size(k, k), s, s, cv::BORDER_CONSTANT);
+  const bool pooled = s > kPooledSigma;
+  const cv::Mat num = pooled ? pooledGaussian(value, s) : clippedGaussian(value, s);
+  const cv::Mat den = pooled ? pooledGaussian(known, s) : clippedGaussian(known, s);
   GridImage out = g;
   out.p = g.p.clone();
   for (int r = 0; r < g.p.rows; ++r)

@@ -83,6 +83,7 @@ void CRTreeOccupancyGridMap::TInsertionOptions::loadFromConfigFile(const mrpt::c
   discretize = readBool(s, sec, "discretize", discretize);
   threads = readInt(s, sec, "threads", threads);
   planarCache = readBool(s, sec, "planarCache", planarCache);
+  maxScanCells = readDouble(s, sec, "maxScanCells", maxScanCells);
   rotatingScan_minElevation_deg = readFloat(s, sec, "rotatingScan_minElevation_deg", rotatingScan_minElevation_deg);
   rotatingScan_maxElevation_deg = readFloat(s, sec, "rotatingScan_maxElevation_deg", rotatingScan_maxElevation_deg);
   poseUncertainty = readBool(s, sec, "poseUncertainty", poseUncertainty);
@@ -95,6 +96,7 @@ void CRTreeOccupancyGridMap::TInsertionOptions::loadFromConfigFile(const mrpt::c
                      "useMapAltitude", "mapAltitude", "wideningBeamsWithDistance", "clampingMin", "clampingMax",
                      "occupiedThreshold", "maxDistanceInsertion", "decimation", "decimation_3d_range", "mergePolicy",
                      "discretize", "threads", "planarCache", "rotatingScan_minElevation_deg",
+                     "maxScanCells",
                      "rotatingScan_maxElevation_deg", "poseUncertainty", "sonarConeWeighting", "CFD_features_gaussian_size", "CFD_features_median_size"});
   validateInSection(sec, [this] { validate(); });
   reportInertInsertKeys(*this, s, sec);
@@ -130,6 +132,7 @@ void CRTreeOccupancyGridMap::TInsertionOptions::saveToConfigFile(mrpt::config::C
   c.write(sec, "discretize", discretize);
   c.write(sec, "threads", threads);
   c.write(sec, "planarCache", planarCache);
+  c.write(sec, "maxScanCells", std::to_string(static_cast<std::uint64_t>(maxScanCells)));  // whole: "%e" would round it
   if (!std::isnan(rotatingScan_minElevation_deg)) {  // unset is no key: a written "nan" may not read back
     c.write(sec, "rotatingScan_minElevation_deg", rotatingScan_minElevation_deg);
     c.write(sec, "rotatingScan_maxElevation_deg", rotatingScan_maxElevation_deg);
@@ -159,6 +162,7 @@ InsertParams CRTreeOccupancyGridMap::TInsertionOptions::toInsertParams() const {
   ip.discretize = discretize;
   ip.threads = threads;
   ip.planar_cache = planarCache;
+  ip.max_scan_cells = static_cast<std::uint64_t>(maxScanCells);
   ip.range_noise_std = rangeNoiseStd;
   ip.range_noise_std_per_meter = rangeNoiseStdPerMeter;
   ip.range_noise_cutoff = rangeNoiseCutoff;
@@ -214,6 +218,8 @@ void CRTreeOccupancyGridMap::TInsertionOptions::validate() const {
   if (decimation < 1) badOption(sec, "decimation", "must be >= 1");
   if (decimation_3d_range < 1 || decimation_3d_range > 255) badOption(sec, "decimation_3d_range", "must be in [1, 255]");
   if (threads < 1 || threads > 256) badOption(sec, "threads", "must be in [1, 256]");
+  if (!(maxScanCells >= 0.0 && maxScanCells <= 4e18 && maxScanCells == std::floor(maxScanCells)))
+    badOption(sec, "maxScanCells", "must be a whole number of cells, 0 (no bound) to 4e18");
   const bool minSet = !std::isnan(rotatingScan_minElevation_deg), maxSet = !std::isnan(rotatingScan_maxElevation_deg);
   if (minSet != maxSet)
     badOption(sec, "rotatingScan_min/maxElevation_deg", "set both (explicit ring elevations) or neither");

@@ -3,6 +3,7 @@
 // the mixture is entered once as a graded change (doc/pose-uncertainty.md).
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <memory>
 #include <cmath>
 #include <stdexcept>
@@ -188,8 +189,14 @@ InsertStats ScanIntegrator::insertBlurred(const WeightedScan* scans, std::size_t
   std::vector<InsertStats> part(n);
   const std::size_t threads = std::min<std::size_t>(static_cast<std::size_t>(ip.threads), n);
   parallel::ChunkClaims claims(n, threads);
+  // InsertParams::max_scan_cells bounds each pose's batch (each a copy of the one scan): a pose
+  // over it skips the scan, whatever the thread count (each pose is traced by one thread).
+  const std::size_t max_bricks =
+      ip.max_scan_cells == 0 ? 0 : static_cast<std::size_t>(std::max<std::uint64_t>(1, ip.max_scan_cells / kBrickCells));
+  std::atomic<bool> over{false};
   parallel::run(threads, [&](std::size_t t) {
     for (std::size_t i; (i = claims.next(t)) != parallel::ChunkClaims::kNone;) {
+      if (over.load(std::memory_order_relaxed)) break;
       const WeightedScan& s = scans[i];
       if (graded) {
         GradedScan& g = scratch.graded[i];
@@ -199,11 +206,21 @@ InsertStats ScanIntegrator::insertBlurred(const WeightedScan* scans, std::size_t
       } else {
         UpdateBatch& b = scratch.batches[i];
         b.clear();
-        traceBeams(store_.lattice, s.origin, s.points, s.count, ip, s.is_hit, b, part[i]);
+        if (!traceBeams(store_.lattice, s.origin, s.points, s.count, ip, s.is_hit, b, part[i], max_bricks)) {
+          over.store(true, std::memory_order_relaxed);
+          break;
+        }
         b.finalize();
+        if (max_bricks > 0 && b.brickCodes().size() > max_bricks) over.store(true, std::memory_order_relaxed);
       }
     }
   });
+  if (over.load()) {
+    for (std::size_t i = 0; i < n; ++i) scratch.batches[i].clear();
+    InsertStats skipped;
+    skipped.skipped_over_budget = scans[0].count;
+    return skipped;
+  }
   std::vector<double> weights(n);
   for (std::size_t i = 0; i < n; ++i) weights[i] = scans[i].weight / total;
   GradedScan& out = scratch.graded[graded ? n : 0];

@@ -2,6 +2,7 @@
 #include "integrate/scan_integrator.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <mutex>
 #include <stdexcept>
 
@@ -98,9 +99,11 @@ InsertStats ScanIntegrator::insert(const Eigen::Vector3d& origin, const Eigen::V
   if (ip.planar_cache && preparePlanarBeams(origin, points, count, ip, is_hit, lo, hi, stats))
     return insertPlanar(origin, count, ip, lo, hi, stats);
   flush_pending();
-  return traceAndApply(count, ip, [&](UpdateBatch& batch, std::size_t first, std::size_t n, InsertStats& own) {
-    traceBeams(store_.lattice, origin, points + first, n, ip, is_hit ? is_hit + first : nullptr, batch, own);
-  });
+  return traceAndApply(count, ip,
+                       [&](UpdateBatch& batch, std::size_t first, std::size_t n, InsertStats& own, std::size_t max_bricks) {
+                         return traceBeams(store_.lattice, origin, points + first, n, ip,
+                                           is_hit ? is_hit + first : nullptr, batch, own, max_bricks);
+                       });
 }
 
 InsertStats ScanIntegrator::insert(const Eigen::Vector3d& origin, const PointSource& source, const InsertParams& ip,
@@ -113,13 +116,16 @@ InsertStats ScanIntegrator::insert(const Eigen::Vector3d& origin, const PointSou
     return insert(origin, points.data(), points.size(), ip, nullptr, flush_pending);
   }
   flush_pending();
-  return traceAndApply(source.count, ip, [&](UpdateBatch& batch, std::size_t first, std::size_t n, InsertStats& own) {
-    Eigen::Vector3f piece[kSourcePiece];
-    for (std::size_t at = first; at < first + n; at += kSourcePiece) {
-      const std::size_t kept = source.read(at, std::min(kSourcePiece, first + n - at), piece);
-      traceBeams(store_.lattice, origin, piece, kept, ip, nullptr, batch, own);
-    }
-  });
+  return traceAndApply(source.count, ip,
+                       [&](UpdateBatch& batch, std::size_t first, std::size_t n, InsertStats& own, std::size_t max_bricks) {
+                         Eigen::Vector3f piece[kSourcePiece];
+                         for (std::size_t at = first; at < first + n; at += kSourcePiece) {
+                           const std::size_t kept = source.read(at, std::min(kSourcePiece, first + n - at), piece);
+                           if (!traceBeams(store_.lattice, origin, piece, kept, ip, nullptr, batch, own, max_bricks))
+                             return false;
+                         }
+                         return true;
+                       });
 }
 
 bool ScanIntegrator::mayBePlanar(const Eigen::Vector3d& origin, const PointSource& source, const InsertParams& ip) {
@@ -155,6 +161,26 @@ std::size_t threadsFor(std::size_t count, const InsertParams& ip) {
   return std::min<std::size_t>(static_cast<std::size_t>(ip.threads), 1 + count / 4096);
 }
 
+/// InsertParams::max_scan_cells in bricks (0: no bound).
+std::size_t maxScanBricks(const InsertParams& ip) {
+  if (ip.max_scan_cells == 0) return 0;
+  return static_cast<std::size_t>(std::max<std::uint64_t>(1, ip.max_scan_cells / std::uint64_t(kBrickCells)));
+}
+
+/// Whether the batches together touch more than `max_bricks` bricks (each batch's bricks are
+/// distinct; across batches they may repeat).
+bool overBudget(const std::vector<const UpdateBatch*>& batches, std::size_t max_bricks) {
+  std::size_t sum = 0;
+  for (const UpdateBatch* b : batches) sum += b->brickCodes().size();
+  if (max_bricks == 0 || sum <= max_bricks) return false;
+  if (batches.size() == 1) return true;
+  std::vector<std::uint64_t> all;
+  all.reserve(sum);
+  for (const UpdateBatch* b : batches) all.insert(all.end(), b->brickCodes().begin(), b->brickCodes().end());
+  std::sort(all.begin(), all.end());
+  return std::size_t(std::unique(all.begin(), all.end()) - all.begin()) > max_bricks;
+}
+
 }  // namespace
 
 InsertStats ScanIntegrator::traceAndApply(std::size_t count, const InsertParams& ip, const TraceChunk& trace) {
@@ -164,19 +190,35 @@ InsertStats ScanIntegrator::traceAndApply(std::size_t count, const InsertParams&
   std::vector<InsertStats> part(threads);
   const std::size_t chunk = chunkSize(count, threads, ip);
   parallel::ChunkClaims claims((count + chunk - 1) / chunk, threads);
+  // A thread whose own batch goes over the budget stops them all: the scan's bricks are at least
+  // its own, so the scan is skipped whatever the others hold (the same decision for any thread
+  // count or timing); else the batches' bricks together decide.
+  const std::size_t max_bricks = maxScanBricks(ip);
+  std::atomic<bool> over{false};
   parallel::run(threads, [&](std::size_t t) {
     InsertStats own;  // counted locally: neighbouring entries of `part` share a cache line
     UpdateBatch& batch = scratch.batches[t];
     batch.clear();
-    for (std::size_t c; (c = claims.next(t)) != parallel::ChunkClaims::kNone;)
-      trace(batch, c * chunk, std::min(chunk, count - c * chunk), own);
-    batch.finalize();
+    for (std::size_t c; (c = claims.next(t)) != parallel::ChunkClaims::kNone;) {
+      if (over.load(std::memory_order_relaxed)) break;
+      if (!trace(batch, c * chunk, std::min(chunk, count - c * chunk), own, max_bricks)) {
+        over.store(true, std::memory_order_relaxed);
+        break;
+      }
+    }
+    if (!over.load(std::memory_order_relaxed)) batch.finalize();
     part[t] = own;
   });
-  InsertStats stats;
-  for (std::size_t t = 0; t < threads; ++t) stats += part[t];
   std::vector<const UpdateBatch*> batches;
   for (std::size_t t = 0; t < threads; ++t) batches.push_back(&scratch.batches[t]);
+  if (over.load() || overBudget(batches, max_bricks)) {
+    for (std::size_t t = 0; t < threads; ++t) scratch.batches[t].clear();
+    InsertStats skipped;
+    skipped.skipped_over_budget = count;
+    return skipped;
+  }
+  InsertStats stats;
+  for (std::size_t t = 0; t < threads; ++t) stats += part[t];
   applyBatches(store_, batches, stats, static_cast<int>(threads), scratch.apply_ctx);
   return stats;
 }
@@ -279,15 +321,18 @@ bool ScanIntegrator::preparePlanarBeams(const Eigen::Vector3d& origin, const Eig
     beam.seg = planarSegment(origin_l, rules.walkEnd(end, beam.end), origin_key, beam.end);
   }
   if (PlanarBatch::tilesFor(lo, hi) > kMaxPlanarTiles) return false;
+  // A budget smaller than the batch's box: the general path counts the bricks touched.
+  const std::uint64_t box_cells = std::uint64_t(PlanarBatch::tilesFor(lo, hi)) * kBrickSize * kBrickSize;
+  if (ip.max_scan_cells > 0 && box_cells > ip.max_scan_cells) return false;
   // Discretized beams are traced once per end cell, which a skip could not rely on.
   if (rules.tracesFree() && !rules.discretize()) fanSkipRuns(beams.data(), count);
   stats += counts;
   return true;
 }
 
-void ScanIntegrator::traceBeams(const Lattice& lattice, const Eigen::Vector3d& origin, const Eigen::Vector3f* points,
+bool ScanIntegrator::traceBeams(const Lattice& lattice, const Eigen::Vector3d& origin, const Eigen::Vector3f* points,
                                 std::size_t count, const InsertParams& ip, const std::uint8_t* is_hit,
-                                UpdateBatch& batch, InsertStats& stats) {
+                                UpdateBatch& batch, InsertStats& stats, std::size_t max_bricks) {
   const Key origin_key = lattice.key(origin);  // throws for a bad origin
   const Eigen::Vector3d origin_l = lattice.toLattice(origin);
   const BeamRules rules(lattice, ip);
@@ -299,7 +344,9 @@ void ScanIntegrator::traceBeams(const Lattice& lattice, const Eigen::Vector3d& o
     if (!BeamRules::count(kind, stats)) continue;
     rules.mark(kind == BeamEnd::Hit, end_key, batch,
                [&] { batch.queueRayFree(origin_l, rules.walkEnd(end, end_key), origin_key, end_key); });
+    if (max_bricks > 0 && batch.brickCount() > max_bricks) return false;
   }
+  return true;
 }
 
 }  // namespace rtog

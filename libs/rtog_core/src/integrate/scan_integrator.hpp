@@ -90,17 +90,20 @@ class ScanIntegrator {
                           const std::function<void()>& flush_pending);
 
   /// Traces beams into `batch` (no change to the map). Throws std::out_of_range if the origin
-  /// has no key.
-  static void traceBeams(const Lattice& lattice, const Eigen::Vector3d& origin, const Eigen::Vector3f* points,
+  /// has no key. With max_bricks > 0, stops and returns false once the batch holds more bricks.
+  static bool traceBeams(const Lattice& lattice, const Eigen::Vector3d& origin, const Eigen::Vector3f* points,
                          std::size_t count, const InsertParams& ip, const std::uint8_t* is_hit, UpdateBatch& batch,
-                         InsertStats& stats);
+                         InsertStats& stats, std::size_t max_bricks = 0);
 
  private:
   /// Points read from a PointSource at a time (24 KiB, on the tracing thread's stack).
   static constexpr std::size_t kSourcePiece = 2048;
-  using TraceChunk = std::function<void(UpdateBatch& batch, std::size_t first, std::size_t n, InsertStats& stats)>;
+  /// false: the batch went over `max_bricks` (InsertParams::max_scan_cells), tracing stopped.
+  using TraceChunk = std::function<bool(UpdateBatch& batch, std::size_t first, std::size_t n, InsertStats& stats,
+                                        std::size_t max_bricks)>;
   /// Traces beams [0, count) in chunks on the insertion threads, each chunk by
-  /// trace(thread's batch, first, n, thread's stats), then applies the batches.
+  /// trace(thread's batch, first, n, thread's stats, max_bricks), then applies the batches; a
+  /// scan whose batches touch more bricks than ip.max_scan_cells allows is skipped whole.
   InsertStats traceAndApply(std::size_t count, const InsertParams& ip, const TraceChunk& trace);
   /// A planar scan whose beams preparePlanarBeams() set out: marked, then kept in the planar cache.
   InsertStats insertPlanar(const Eigen::Vector3d& origin, std::size_t count, const InsertParams& ip, const Key& lo,

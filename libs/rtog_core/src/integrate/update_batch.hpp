@@ -86,6 +86,8 @@ class alignas(64) UpdateBatch {
   /// get their map slots in the order the upper tree is packed in. Ends marking; clear() starts
   /// a new batch.
   void finalize();
+  /// The bricks marked so far (each kBrickWords * 16 bytes and more).
+  std::size_t brickCount() const { return packed_keys_.size(); }
 
   /// The touched bricks in Morton order, after finalize().
   const std::vector<const BrickUpdates*>& bricks() const { return sorted_; }

@@ -73,6 +73,7 @@ InsertStats& InsertStats::operator+=(const InsertStats& o) {
   skipped_zero_length += o.skipped_zero_length;
   skipped_out_of_range += o.skipped_out_of_range;
   skipped_too_long += o.skipped_too_long;
+  skipped_over_budget += o.skipped_over_budget;
   cells_occupied += o.cells_occupied;
   cells_free += o.cells_free;
   cells_unchanged += o.cells_unchanged;
@@ -85,7 +86,7 @@ InsertStats& InsertStats::operator+=(const InsertStats& o) {
 bool InsertStats::operator==(const InsertStats& o) const {
   return rays_hit == o.rays_hit && rays_truncated == o.rays_truncated && skipped_non_finite == o.skipped_non_finite &&
          skipped_zero_length == o.skipped_zero_length && skipped_out_of_range == o.skipped_out_of_range &&
-         skipped_too_long == o.skipped_too_long &&
+         skipped_too_long == o.skipped_too_long && skipped_over_budget == o.skipped_over_budget &&
          cells_occupied == o.cells_occupied && cells_free == o.cells_free && cells_unchanged == o.cells_unchanged &&
          leaves_created == o.leaves_created && leaves_merged == o.leaves_merged && leaves_split == o.leaves_split;
 }

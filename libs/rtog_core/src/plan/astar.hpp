@@ -17,6 +17,23 @@ namespace rtog::plan_detail {
 /// Throws std::invalid_argument for options no plan can use (both planners check them first).
 void validate(const PlanOptions& o);
 
+/// The radius in whole cells of `resolution` (rounded up); throws std::invalid_argument naming the
+/// radius and the bound if it exceeds `max_cells` (kPlanMaxRadiusCells2D or 3D).
+std::int64_t radiusCells(const PlanOptions& o, double resolution, double max_cells);
+
+/// Blocks every cell whose centre lies nearer than `r_cells` cells to the centre of a cell blocked
+/// already: the same cells as a disc (sphere) stamped about each of them, in time linear in the
+/// grid whatever the radius (an exact Euclidean distance transform, squared distances capped just
+/// above r_cells^2). `n`: the grid's extents, x fastest (n[2] = 1 in 2D).
+void blockWithinRadius(std::vector<std::uint8_t>& blocked, const std::int64_t (&n)[3], double r_cells);
+
+/// Whether the cell `c` is occupied or its centre nearer than `r_cells` cells to an occupied
+/// cell's: 2D (`band`) over the columns of the band o.min_z..o.max_z (z of `c` unused), else over
+/// the cells. Read from the map's leaves within the radius, whatever the grid would be: a start or
+/// goal kept off by a large radius is refused before any grid is built.
+bool blockedAt(const OccupancyMap& map, const Key& c, double r_cells, const PlanOptions& o, bool band);
+
+
 struct Search {
   bool found = false;
   std::vector<std::uint32_t> nodes;  ///< start .. goal, as the edges were taken

@@ -31,6 +31,9 @@ namespace {
 
 using plan_detail::validate;
 
+constexpr const char* kStartBlocked = "rtog::plan: the start is occupied or nearer than the radius to an occupied cell";
+constexpr const char* kGoalBlocked = "rtog::plan: the goal is occupied or nearer than the radius to an occupied cell";
+
 /// The node of point p, or false if p lies outside the grid.
 bool nodeOf(const PlanGrid& g, const Eigen::Vector2d& p, std::int32_t& x, std::int32_t& y) {
   if (!p.allFinite()) return false;
@@ -101,15 +104,17 @@ PlanGrid buildPlanGrid(const OccupancyMap& map, const Eigen::Vector2d& from, con
     throw std::invalid_argument("rtog::plan: the start or the goal lies beyond the key range");
   const double res = map.resolution();
   const Box kb = map.keyBounds();
-  const auto rc = static_cast<std::int64_t>(std::ceil(o.radius / res));
+  const std::int64_t rc = plan_detail::radiusCells(o, res, kPlanMaxRadiusCells2D);
   const std::int64_t margin = o.margin_cells + rc;
+  if (plan_detail::blockedAt(map, kf, o.radius / res, o, true)) throw std::invalid_argument(kStartBlocked);
+  if (plan_detail::blockedAt(map, kt, o.radius / res, o, true)) throw std::invalid_argument(kGoalBlocked);
   std::int64_t x0 = std::min(kf.x, kt.x), y0 = std::min(kf.y, kt.y), x1 = std::max(kf.x, kt.x), y1 = std::max(kf.y, kt.y);
   if (!kb.isEmpty()) x0 = std::min<std::int64_t>(x0, kb.min.x), y0 = std::min<std::int64_t>(y0, kb.min.y),
                      x1 = std::max<std::int64_t>(x1, kb.max.x), y1 = std::max<std::int64_t>(y1, kb.max.y);
   x0 = std::max<std::int64_t>(x0 - margin, kKeyMin), y0 = std::max<std::int64_t>(y0 - margin, kKeyMin);
   x1 = std::min<std::int64_t>(x1 + margin, kKeyMax), y1 = std::min<std::int64_t>(y1 + margin, kKeyMax);
   const std::int64_t nx = x1 - x0 + 1, ny = y1 - y0 + 1;
-  if (nx * ny > (std::int64_t{1} << 26))
+  if (nx > (std::int64_t{1} << 26) || ny > (std::int64_t{1} << 26) || nx * ny > (std::int64_t{1} << 26))
     throw std::length_error("rtog::plan: the planning grid would have " + std::to_string(nx * ny) +
                             " cells (more than 2^26): the start or goal lies too far from the map");
   PlanGrid g;
@@ -128,24 +133,15 @@ PlanGrid buildPlanGrid(const OccupancyMap& map, const Eigen::Vector2d& from, con
   g.risk.assign(n, static_cast<float>(o.unknown_risk));
   g.blocked.assign(n, 0);
   g.known.assign(n, 0);
-  std::vector<std::size_t> occupied;
   for (std::size_t i = 0; i < n; ++i) {
     if (std::isnan(best[i])) continue;
     g.known[i] = 1;
     g.risk[i] = static_cast<float>(probability(best[i]));
-    if (best[i] >= occ) g.blocked[i] = 1, occupied.push_back(i);
+    if (best[i] >= occ) g.blocked[i] = 1;
   }
   // Cells whose centre is nearer than the radius to an occupied cell's centre.
-  const double r2 = (o.radius / res) * (o.radius / res);
-  for (const std::size_t i : occupied) {
-    const auto cx = static_cast<std::int64_t>(i % std::size_t(nx)), cy = static_cast<std::int64_t>(i / std::size_t(nx));
-    for (std::int64_t dy = -rc; dy <= rc; ++dy)
-      for (std::int64_t dx = -rc; dx <= rc; ++dx) {
-        const std::int64_t x = cx + dx, y = cy + dy;
-        if (x < 0 || y < 0 || x >= nx || y >= ny || double(dx * dx + dy * dy) >= r2) continue;
-        g.blocked[g.index(static_cast<std::int32_t>(x), static_cast<std::int32_t>(y))] = 1;
-      }
-  }
+  const std::int64_t extents[3] = {nx, ny, 1};
+  plan_detail::blockWithinRadius(g.blocked, extents, o.radius / res);
   if (o.cross_free_cuboids) findRects(map, o, g);
   return g;
 }
@@ -155,8 +151,8 @@ PlanResult planOnGrid(const PlanGrid& g, const Eigen::Vector2d& from, const Eige
   std::int32_t sx, sy, tx, ty;
   if (!nodeOf(g, from, sx, sy) || !nodeOf(g, to, tx, ty))
     throw std::invalid_argument("rtog::plan: the start or the goal lies outside the planning grid");
-  if (g.blocked[g.index(sx, sy)]) throw std::invalid_argument("rtog::plan: the start is occupied or nearer than the radius to an occupied cell");
-  if (g.blocked[g.index(tx, ty)]) throw std::invalid_argument("rtog::plan: the goal is occupied or nearer than the radius to an occupied cell");
+  if (g.blocked[g.index(sx, sy)]) throw std::invalid_argument(kStartBlocked);
+  if (g.blocked[g.index(tx, ty)]) throw std::invalid_argument(kGoalBlocked);
   const auto nx = std::size_t(g.nx);
   const auto start = static_cast<std::uint32_t>(g.index(sx, sy)), goal = static_cast<std::uint32_t>(g.index(tx, ty));
   const double res = g.resolution;

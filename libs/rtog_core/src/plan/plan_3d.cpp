@@ -21,8 +21,13 @@ PlanResult3D planPath3D(const OccupancyMap& map, const Eigen::Vector3d& from, co
   if (!lat.tryKey(from, kf) || !lat.tryKey(to, kt))
     throw std::invalid_argument("rtog::plan: the start or the goal lies beyond the key range");
   const double res = map.resolution();
-  const auto rc = static_cast<std::int64_t>(std::ceil(o.radius / res));
+  const std::int64_t rc = plan_detail::radiusCells(o, res, kPlanMaxRadiusCells3D);
   const std::int64_t margin = o.margin_cells + rc;
+  // Refused before the box is built (a large radius makes it large).
+  if (plan_detail::blockedAt(map, kf, o.radius / res, o, false))
+    throw std::invalid_argument("rtog::plan: the start is occupied or nearer than the radius to an occupied cell");
+  if (plan_detail::blockedAt(map, kt, o.radius / res, o, false))
+    throw std::invalid_argument("rtog::plan: the goal is occupied or nearer than the radius to an occupied cell");
   std::array<std::int64_t, 3> lo{}, hi{}, n{};
   const Box kb = map.keyBounds();
   for (int a = 0; a < 3; ++a) {
@@ -31,7 +36,8 @@ PlanResult3D planPath3D(const OccupancyMap& map, const Eigen::Vector3d& from, co
     lo[a] = std::max<std::int64_t>(lo[a] - margin, kKeyMin), hi[a] = std::min<std::int64_t>(hi[a] + margin, kKeyMax);
     n[a] = hi[a] - lo[a] + 1;
   }
-  if (n[0] * n[1] * n[2] > (std::int64_t{1} << 26))
+  constexpr std::int64_t kMaxNodes = std::int64_t{1} << 26;
+  if (n[0] > kMaxNodes || n[1] > kMaxNodes || n[2] > kMaxNodes || n[0] * n[1] > kMaxNodes || n[0] * n[1] * n[2] > kMaxNodes)
     throw std::length_error("rtog::plan: the 3D planning box would have " + std::to_string(n[0] * n[1] * n[2]) +
                             " cells (more than 2^26)");
   const std::size_t total = std::size_t(n[0] * n[1] * n[2]);
@@ -40,7 +46,6 @@ PlanResult3D planPath3D(const OccupancyMap& map, const Eigen::Vector3d& from, co
   };
   std::vector<float> risk(total, static_cast<float>(o.unknown_risk));
   std::vector<std::uint8_t> blocked(total, 0);
-  std::vector<std::size_t> occupied;
   const float occ = map.logOddsModel().occupiedThreshold();
   const Box region{Key{static_cast<std::int32_t>(lo[0]), static_cast<std::int32_t>(lo[1]), static_cast<std::int32_t>(lo[2])},
                    Key{static_cast<std::int32_t>(hi[0]), static_cast<std::int32_t>(hi[1]), static_cast<std::int32_t>(hi[2])}};
@@ -52,23 +57,12 @@ PlanResult3D planPath3D(const OccupancyMap& map, const Eigen::Vector3d& from, co
         for (std::int64_t x = c.min.x; x <= c.max.x; ++x) {
           const std::size_t i = index(x - lo[0], y - lo[1], z - lo[2]);
           risk[i] = p;
-          if (v >= occ) blocked[i] = 1, occupied.push_back(i);
+          if (v >= occ) blocked[i] = 1;
         }
   });
   // The radius: a sphere about each occupied cell's centre.
-  const double r2 = (o.radius / res) * (o.radius / res);
-  for (const std::size_t i : occupied) {
-    const auto cx = std::int64_t(i % std::size_t(n[0])), cy = std::int64_t(i / std::size_t(n[0]) % std::size_t(n[1])),
-               cz = std::int64_t(i / std::size_t(n[0] * n[1]));
-    for (std::int64_t dz = -rc; dz <= rc; ++dz)
-      for (std::int64_t dy = -rc; dy <= rc; ++dy)
-        for (std::int64_t dx = -rc; dx <= rc; ++dx) {
-          const std::int64_t x = cx + dx, y = cy + dy, z = cz + dz;
-          if (x < 0 || y < 0 || z < 0 || x >= n[0] || y >= n[1] || z >= n[2] || double(dx * dx + dy * dy + dz * dz) >= r2)
-            continue;
-          blocked[index(x, y, z)] = 1;
-        }
-  }
+  const std::int64_t extents[3] = {n[0], n[1], n[2]};
+  plan_detail::blockWithinRadius(blocked, extents, o.radius / res);
   const std::size_t start = index(kf.x - lo[0], kf.y - lo[1], kf.z - lo[2]), goal = index(kt.x - lo[0], kt.y - lo[1], kt.z - lo[2]);
   if (blocked[start]) throw std::invalid_argument("rtog::plan: the start is occupied or nearer than the radius to an occupied cell");
   if (blocked[goal]) throw std::invalid_argument("rtog::plan: the goal is occupied or nearer than the radius to an occupied cell");

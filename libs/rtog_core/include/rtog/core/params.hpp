@@ -53,6 +53,16 @@ struct InsertParams {
   /// (a 100 km reading) cannot make one scan take minutes and millions of leaves. 65,536 cells
   /// are 3.3 km at 5 cm, 655 m at 1 cm. 0: no bound (the caller's call). (Default: 65536)
   std::uint32_t max_ray_cells = std::uint32_t{1} << 16;
+  /// A bound on the memory one scan takes while it is traced: a scan whose beams touch bricks
+  /// (the aligned cubes of 16^3 = 4,096 cells the update batch allocates, 1 KiB each) holding
+  /// more cells than this is skipped whole, its beams counted in InsertStats::skipped_over_budget,
+  /// the map unchanged. 2^30 cells are 262,144 bricks, 256 MiB: a 2D scan of 361 beams reaching
+  /// 3 km touches 1.85 million; a depth image or a VLP-16 sweep within 100 m, a few thousand to
+  /// tens of thousands. Planar scans (one z-layer) are bounded by their batch's own size (2^26
+  /// cells) and reach it only if it is set lower; a pose-blurred scan (insertBlurred) is skipped
+  /// if any of its poses' traces goes over; RangeNoise scans are not counted. 0: no bound.
+  /// (Default: 2^30)
+  std::uint64_t max_scan_cells = std::uint64_t{1} << 30;
   /// Trace each beam to the centre of its end cell and beams ending in the same cell once
   /// (OctoMap's `discretize`): much faster for dense clouds. (Default: false)
   bool discretize = false;

@@ -16,11 +16,19 @@
 
 namespace rtog {
 
+/// The largest robot radius a plan takes, in cells of the map (std::invalid_argument beyond): the
+/// planning graph reaches the radius beyond the map on every side, and a larger radius alone would
+/// take it past its 2^26 nodes. 2D: 4000 cells (200 m at 5 cm); 3D: 200 cells (10 m at 5 cm).
+constexpr double kPlanMaxRadiusCells2D = 4000.0;
+constexpr double kPlanMaxRadiusCells3D = 200.0;
+
 struct PlanOptions {
   double te = 1.0;            ///< Te: the weight of the summed risk. (Default: 1)
   double ta = 1.0;            ///< Ta: the weight of the length, per metre. (Default: 1)
   double unknown_risk = 0.5;  ///< T(C) of an unknown cell, in [0, 1]; 1 keeps paths off them. (Default: 0.5)
-  double radius = 0.0;        ///< robot radius [m]: no path cell centre nearer to an occupied cell's. (Default: 0)
+  /// robot radius [m]: no path cell centre nearer to an occupied cell's. At most
+  /// kPlanMaxRadiusCells2D (2D) or kPlanMaxRadiusCells3D (3D) cells of the map. (Default: 0)
+  double radius = 0.0;
   double min_z = -1000.0, max_z = 1000.0;  ///< the height band [m] whose columns are planned on. (Default: all)
   /// Cells beyond the known cells' bounding box that paths may cross (unknown), besides those
   /// the radius needs. (Default: 2)
@@ -75,7 +83,9 @@ struct PlanResult3D {
 };
 
 /// The planning graph of `map` for a path from `from` to `to` (it covers both). Throws
-/// std::invalid_argument for bad options, std::length_error for a graph over 2^26 nodes.
+/// std::invalid_argument for bad options (a radius over kPlanMaxRadiusCells2D cells too), for a start
+/// or goal occupied or nearer than the radius to an occupied cell (read from the map's leaves near
+/// them, before the graph is built), std::length_error for a graph over 2^26 nodes.
 PlanGrid buildPlanGrid(const OccupancyMap& map, const Eigen::Vector2d& from, const Eigen::Vector2d& to,
                        const PlanOptions& o);
 

@@ -8,7 +8,7 @@
 
 namespace rtog {
 
-/// What one insertion did; every input beam is counted in exactly one of the first six.
+/// What one insertion did; every input beam is counted in exactly one of the first seven.
 struct InsertStats {
   std::size_t rays_hit = 0;              ///< beams that marked an occupied end cell
   std::size_t rays_truncated = 0;        ///< beams cut at max_range or flagged as no-return
@@ -16,6 +16,7 @@ struct InsertStats {
   std::size_t skipped_zero_length = 0;   ///< end point at the origin (no direction)
   std::size_t skipped_out_of_range = 0;  ///< end point outside the key range
   std::size_t skipped_too_long = 0;      ///< longer than InsertParams::max_ray_cells cells
+  std::size_t skipped_over_budget = 0;   ///< of scans over InsertParams::max_scan_cells, skipped whole
   std::size_t cells_occupied = 0;        ///< distinct cells updated as occupied
   std::size_t cells_free = 0;            ///< distinct cells updated as free
   std::size_t cells_unchanged = 0;       ///< updates absorbed by clamping
@@ -28,7 +29,7 @@ struct InsertStats {
 
   std::size_t raysTotal() const {
     return rays_hit + rays_truncated + skipped_non_finite + skipped_zero_length + skipped_out_of_range +
-           skipped_too_long;
+           skipped_too_long + skipped_over_budget;
   }
   InsertStats& operator+=(const InsertStats& o);
   bool operator==(const InsertStats& o) const;

@@ -34,6 +34,10 @@ GridImage bandImage(const OccupancyMap& map, double zmin, double zmax);
 cv::Mat threshold(const GridImage& g, double p);
 /// The image blurred by a Gaussian of sigma [m], unknown pixels left out of the weights
 /// (normalized convolution) and unknown again after; throws std::invalid_argument for sigma <= 0.
+/// The kernel is clipped to the image (the same weighted means). A sigma over 32 cells runs on
+/// blocks of sigma / 16 cells (their means), interpolated back: within about 1e-3 of the exact
+/// weighted means, at a cost that does not grow with sigma (a huge one gives nearly the known
+/// cells' mean).
 GridImage blur(const GridImage& g, double sigma);
 /// The blur the estimator seed relates to pose uncertainty: a cell unseen from a pose keeps the
 /// prior there, so unknown pixels count as `prior` (P), and the image is first widened by 3 sigma

@@ -90,6 +90,11 @@ struct RTreeInsertionOptions : public mrpt::config::CLoadableOptions {
   /// 2D scans update dense per-brick layers in place and become leaves when the map is next
   /// read, not at every scan (the cells are the same either way). (Default: true)
   bool planarCache{true};
+  /// A scan whose beams would touch bricks (cubes of 16^3 cells, 1 KiB each while traced) holding
+  /// more cells than this is skipped whole and counted (InsertStats::skipped_over_budget): a
+  /// bound on one scan's memory (InsertParams::max_scan_cells). 0: no bound. (Default: 1073741824,
+  /// 2^30: 256 MiB)
+  double maxScanCells{1073741824.0};
   /// Explicit ring elevations [deg] of a CObservationRotatingScan: if both are set, row r is at
   /// min + r*(max-min)/(rows-1). Unset (NaN), rings come from the lidar's calibration (MRPT's
   /// default table for VLP-16 / HDL-32E / HDL-64; MRPT 2.5's rotating scans carry none), and a
