@@ -241,6 +241,7 @@ TEST(MapOptions, ShippedAndStockSectionsStillLoad) {
   std::remove(list.c_str());
   EXPECT_GE(stock, 16);
   std::printf("shipped sections loaded: %d, stock grid sections loaded: %d\n", shipped, stock);
+}
 
 // maxScanCells (InsertParams::max_scan_cells) goes to the core as given, survives a save and a
 // load whole (MRPT writes doubles with "%e", six digits), and is refused unless a whole number.
