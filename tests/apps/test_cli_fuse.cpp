@@ -239,10 +239,22 @@ TEST(CliFuseRegister, MapsOfDifferentPlacesAreOneErrorLineAndNoOutput) {
 }  // namespace
 
 // Issue #37, finding 3: `--pose 1e18 0 0 0 0 0` converted 1e19 cells to integers and looped over
-// ~9e18 of them (the process did not return). The placed map lies beyond the key range: a counted
-// skip, printed, the first map saved as it was. The timeout only bounds a regression.
+// ~9e18 of them (the process did not return). The tool refuses a translation beyond 1e9 m in one
+// line; a placement within that but beyond the key range (±52 km at 5 cm) is a counted skip,
+// printed, the first map saved as it was (the library's own far-pose path is
+// FusionResample.AFarPoseIsACountedSkip). The timeout only bounds a regression.
 TEST_F(CliFuse, AFarPoseIsACountedSkipNotALoop) {
   for (const std::string pose : {"1e18 0 0 0 0 0", "0 -1e18 0 17 0 0", "1e18 1e18 0 17 6 -4"}) {
+    SCOPED_TRACE(pose);
+    const std::string c = tmp("far.rtog");
+    std::remove(c.c_str());
+    std::string out;
+    EXPECT_EQ(run("fuse " + a_ + " " + b_ + " --pose " + pose + " --out " + c, &out, "timeout 120 "), 1) << out;
+    EXPECT_EQ(std::count(out.begin(), out.end(), '\n'), 1) << out;
+    EXPECT_NE(out.find("--pose: x y z must lie within +-1e9 m"), std::string::npos) << out;
+    EXPECT_FALSE(exists(c));
+  }
+  for (const std::string pose : {"1e8 0 0 0 0 0", "0 -1e8 0 17 0 0", "1e8 1e8 0 17 6 -4", "999999999 0 0 0 0 0"}) {
     SCOPED_TRACE(pose);
     const std::string c = tmp("far.rtog");
     std::remove(c.c_str());

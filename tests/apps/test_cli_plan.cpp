@@ -166,20 +166,34 @@ TEST(CliPlan, BadRequestsAreOneErrorLineAndNoOutput) {
 
 // Radii of more cells than the bound: one error line naming the radius and the bound, 2D and 3D
 // (before: 1e18 planned as radius 0 in 2D and crashed in 3D; 1e9 to 1e17 failed allocating).
+// Beyond 10 km the option parser refuses the value itself (exit 2); below it, the planner's
+// bound in cells (2D 4,000, 3D 200; at 0.2 m: 800 m and 40 m) refuses it (exit 1).
 TEST(CliPlan, HugeRadiiAreOneErrorLineNamingTheBound) {
   const std::string d = scratch("plan_huge_radius");
   std::string out;
   ASSERT_EQ(run("build --simplemap " + kMalaga + " --resolution 0.2 --scans 0:10 --out " + d + "/m.rtog", &out), 0) << out;
   const std::string a = xy(robotPositions().front());
-  for (const auto& [ends, radius] : std::vector<std::pair<std::string, std::string>>{
-           {a + " --to " + a, "1e18"}, {a + " --to " + a, "1e12"}, {a + " --to " + a, "1e5"},
-           {a + " 0.3 --to " + a + " 0.3", "1e18"}, {a + " 0.3 --to " + a + " 0.3", "1e3"}}) {
-    const std::string args = "plan " + d + "/m.rtog --from " + ends + " --Te 1 --Ta 1 --radius " + radius + " --out " + d + "/p.txt";
-    EXPECT_EQ(run(args, &out, "timeout 60 "), 1) << args << "\n" << out;
+  struct Case {
+    std::string ends, radius;
+    int code;
+    std::string says;
+  };
+  for (const Case& c : std::vector<Case>{
+           {a + " --to " + a, "1e18", 2, "--radius: must be at most 10000"},
+           {a + " --to " + a, "1e12", 2, "--radius: must be at most 10000"},
+           {a + " --to " + a, "5000", 1, ", more than the bound of"},
+           {a + " --to " + a, "900", 1, ", more than the bound of"},
+           {a + " 0.3 --to " + a + " 0.3", "1e18", 2, "--radius: must be at most 10000"},
+           {a + " 0.3 --to " + a + " 0.3", "1000", 1, ", more than the bound of"},
+           {a + " 0.3 --to " + a + " 0.3", "50", 1, ", more than the bound of"}}) {
+    const std::string args = "plan " + d + "/m.rtog --from " + c.ends + " --Te 1 --Ta 1 --radius " + c.radius + " --out " + d + "/p.txt";
+    EXPECT_EQ(run(args, &out, "timeout 60 "), c.code) << args << "\n" << out;
     EXPECT_EQ(std::count(out.begin(), out.end(), '\n'), 1) << args << "\n" << out;
     EXPECT_EQ(out.rfind("rtog: error: ", 0), 0u) << out;
-    EXPECT_NE(out.find("the radius"), std::string::npos) << out;
-    EXPECT_NE(out.find(", more than the bound of"), std::string::npos) << out;
+    EXPECT_NE(out.find(c.says), std::string::npos) << args << "\n" << out;
+    if (c.code == 1) {
+      EXPECT_NE(out.find("the radius " + c.radius + " m"), std::string::npos) << out;
+    }
   }
   EXPECT_EQ(entries(d), std::vector<std::string>{"m.rtog"});
 }
