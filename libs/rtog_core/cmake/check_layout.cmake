@@ -69,6 +69,17 @@ foreach(f IN LISTS mrpt_files)
   endif()
 endforeach()
 
+# No installed header of any library names a third-party hash map (tsl/, absl/): they are
+# implementation choices, kept behind the libraries' private sources.
+get_filename_component(libs_dir ${CORE_DIR} DIRECTORY)
+file(GLOB_RECURSE installed ${libs_dir}/*/include/*)
+foreach(f IN LISTS installed)
+  file(READ ${f} text)
+  if(text MATCHES "#include[ \t]*[<\"](tsl|absl)/")
+    fail("${f}: an installed header includes a tsl/ or absl/ header")
+  endif()
+endforeach()
+
 if(errors)
   message(FATAL_ERROR "rtog::core layout rules broken:\n${errors}")
 endif()

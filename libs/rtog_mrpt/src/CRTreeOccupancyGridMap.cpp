@@ -10,6 +10,7 @@
 #include "rtog/mrpt/CRTreeBackedGridMap2D.h"
 #include "rtog/mrpt/register_classes.h"
 #include "CRTreeOccupancyGridMap_grid2d.hpp"
+#include "CRTreeOccupancyGridMap_caches.hpp"
 
 using namespace mrpt::maps;
 
@@ -71,11 +72,11 @@ void CRTreeOccupancyGridMap::syncParams() {
 }
 
 void CRTreeOccupancyGridMap::notifyMapChanged() {
-  std::lock_guard<std::mutex> lk(caches_.mutex);
-  caches_.lf.clear();
-  caches_.points_dirty = true;
-  caches_.grid_view.reset();
-  caches_.band_points_dirty = true;
+  std::lock_guard<std::mutex> lk(caches_->mutex);
+  caches_->lf.clear();
+  caches_->points_dirty = true;
+  caches_->grid_view.reset();
+  caches_->band_points_dirty = true;
 }
 
 InsertStats CRTreeOccupancyGridMap::fuse(const CRTreeOccupancyGridMap& other, const mrpt::poses::CPose3D& pose) {
@@ -99,16 +100,16 @@ void CRTreeOccupancyGridMap::internal_clear() {
   totalInsertStats = InsertStats{};
   invalidRangesSkipped = 0;
   notifyMapChanged();
-  std::lock_guard<std::mutex> lk(caches_.mutex);
-  caches_.local_valid = false;
+  std::lock_guard<std::mutex> lk(caches_->mutex);
+  caches_->local_valid = false;
 }
 
 bool CRTreeOccupancyGridMap::isEmpty() const { return map_.leafCount() == 0; }
 
 const mrpt::maps::CSimplePointsMap& CRTreeOccupancyGridMap::occupiedCellCenters() const {
-  std::lock_guard<std::mutex> lk(caches_.mutex);
-  if (caches_.points_dirty) {
-    auto& pts = caches_.occupied_points;
+  std::lock_guard<std::mutex> lk(caches_->mutex);
+  if (caches_->points_dirty) {
+    auto& pts = caches_->occupied_points;
     pts.clear();
     const LogOddsModel& lm = map_.logOddsModel();
     const Lattice& lat = map_.lattice();
@@ -120,9 +121,9 @@ const mrpt::maps::CSimplePointsMap& CRTreeOccupancyGridMap::occupiedCellCenters(
       });
     });
     pts.mark_as_modified();
-    caches_.points_dirty = false;
+    caches_->points_dirty = false;
   }
-  return caches_.occupied_points;
+  return caches_->occupied_points;
 }
 
 std::string CRTreeOccupancyGridMap::asString() const {

@@ -5,6 +5,7 @@
 #include "rtog/core/band.hpp"
 #include "mrpt_grid.hpp"
 #include "options_check.hpp"
+#include "CRTreeOccupancyGridMap_caches.hpp"
 
 #include <cmath>
 #include <limits>
@@ -222,8 +223,8 @@ void CRTreeOccupancyGridMap::GridView::setOptions(const TLikelihoodOptions& o, c
 std::shared_ptr<CRTreeOccupancyGridMap::GridView> CRTreeOccupancyGridMap::gridViewShared(const double* need) const {
   const float lo = gridViewOptions.gridView_minZ, hi = gridViewOptions.gridView_maxZ;
   if (!(lo <= hi)) throw std::invalid_argument("rtog::CRTreeOccupancyGridMap: need gridView_minZ <= gridView_maxZ");
-  std::lock_guard<std::mutex> lk(caches_.mutex);
-  auto& v = caches_.grid_view;
+  std::lock_guard<std::mutex> lk(caches_->mutex);
+  auto& v = caches_->grid_view;
   const bool same = v && v->minZ == lo && v->maxZ == hi;
   if (same && (!need || v->covers({need[0], need[1], need[2], need[3]}))) return v;
   // In the mrpt_grid preset the view is the grid the scans were stepped in, which is what the

@@ -17,6 +17,7 @@
 #include "fingerprint.hpp"
 #include "rotating_scan.hpp"
 #include "sensor_points.hpp"
+#include "CRTreeOccupancyGridMap_caches.hpp"
 
 namespace rtog {
 
@@ -91,15 +92,15 @@ std::uint64_t keyDepth(const mrpt::obs::CObservation3DRangeScan& d, std::size_t 
 
 }  // namespace
 
-std::shared_ptr<const CRTreeOccupancyGridMap::Caches::ScanAngles> CRTreeOccupancyGridMap::scanAngles(
+std::shared_ptr<const CRTreeOccupancyGridMap::ScanAngles> CRTreeOccupancyGridMap::scanAngles(
     const mrpt::obs::CObservation2DRangeScan& scan) const {
   const std::size_t n = scan.getScanSize();
   {
-    std::lock_guard<std::mutex> lk(caches_.mutex);
-    const auto& a = caches_.scan_angles;
+    std::lock_guard<std::mutex> lk(caches_->mutex);
+    const auto& a = caches_->scan_angles;
     if (a && a->beams == n && a->aperture == scan.aperture && a->right_to_left == scan.rightToLeft) return a;
   }
-  auto table = std::make_shared<Caches::ScanAngles>();
+  auto table = std::make_shared<ScanAngles>();
   table->beams = n;
   table->aperture = scan.aperture;
   table->right_to_left = scan.rightToLeft;
@@ -111,8 +112,8 @@ std::shared_ptr<const CRTreeOccupancyGridMap::Caches::ScanAngles> CRTreeOccupanc
     table->cos.push_back(std::cos(a));
     table->sin.push_back(std::sin(a));
   }
-  std::lock_guard<std::mutex> lk(caches_.mutex);
-  caches_.scan_angles = table;
+  std::lock_guard<std::mutex> lk(caches_->mutex);
+  caches_->scan_angles = table;
   return table;
 }
 
@@ -120,21 +121,21 @@ template <class Decode>
 void CRTreeOccupancyGridMap::localPointsCached(std::uint64_t key, Decode&& decode, std::vector<Eigen::Vector3f>& pts,
                                                std::size_t& invalid) const {
   {
-    std::lock_guard<std::mutex> lk(caches_.mutex);
-    if (caches_.local_valid && caches_.local_key == key) {
-      pts = caches_.local_points;
-      invalid = caches_.local_invalid;
+    std::lock_guard<std::mutex> lk(caches_->mutex);
+    if (caches_->local_valid && caches_->local_key == key) {
+      pts = caches_->local_points;
+      invalid = caches_->local_invalid;
       return;
     }
   }
   pts.clear();
   invalid = 0;
   decode(pts, invalid);
-  std::lock_guard<std::mutex> lk(caches_.mutex);
-  caches_.local_valid = true;
-  caches_.local_key = key;
-  caches_.local_points = pts;
-  caches_.local_invalid = invalid;
+  std::lock_guard<std::mutex> lk(caches_->mutex);
+  caches_->local_valid = true;
+  caches_->local_key = key;
+  caches_->local_points = pts;
+  caches_->local_invalid = invalid;
 }
 
 bool CRTreeOccupancyGridMap::extractBeams(const mrpt::obs::CObservation& obs, const CPose3D& robotPose,

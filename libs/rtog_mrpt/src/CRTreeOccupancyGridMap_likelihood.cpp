@@ -12,6 +12,7 @@
 
 #include "finite_pose.hpp"
 #include "rtog/mrpt/CRTreeOccupancyGridMap.h"
+#include "CRTreeOccupancyGridMap_caches.hpp"
 
 namespace rtog {
 
@@ -60,9 +61,9 @@ float CRTreeOccupancyGridMap::fieldTermLocked(const Eigen::Vector3d& p, const Fi
   if (!likelihoodOptions.enableLikelihoodCache) return term(p);
   // Cached per lattice cell: the term at the cell centre.
   const std::uint64_t pk = packKey(k);
-  if (const auto it = caches_.lf.find(pk); it != caches_.lf.end()) return it->second;
+  if (const auto it = caches_->lf.find(pk); it != caches_->lf.end()) return it->second;
   const float t = term(map_.lattice().cellCenter(k));
-  caches_.lf.emplace(pk, t);
+  caches_->lf.emplace(pk, t);
   return t;
 }
 
@@ -72,10 +73,10 @@ double CRTreeOccupancyGridMap::likelihoodField(const ObservationBeams& b) const 
                       o.LF_maxCorrsDistance, o.LF_useSquareDist};
   double sum = 0.0;
   // One lock per scan, not per point: a particle filter calls this for every particle.
-  std::lock_guard<std::mutex> lk(caches_.mutex);
-  if (!caches_.lf_params || !(*caches_.lf_params == f)) {  // options changed since the terms were cached
-    caches_.lf.clear();
-    caches_.lf_params = f;
+  std::lock_guard<std::mutex> lk(caches_->mutex);
+  if (!caches_->lf_params || !(*caches_->lf_params == f)) {  // options changed since the terms were cached
+    caches_->lf.clear();
+    caches_->lf_params = f;
   }
   for (std::size_t i = 0; i < b.points.size(); ++i) {
     if (!b.is_hit[i] || b.ranges[i] > o.LF_maxRange) continue;

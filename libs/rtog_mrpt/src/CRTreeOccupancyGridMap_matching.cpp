@@ -7,6 +7,7 @@
 #include <mrpt/poses/CPose2D.h>
 
 #include "rtog/mrpt/CRTreeOccupancyGridMap.h"
+#include "CRTreeOccupancyGridMap_caches.hpp"
 
 namespace rtog {
 
@@ -19,9 +20,9 @@ const CSimplePointsMap& CRTreeOccupancyGridMap::occupiedCellCentersForMatching2D
   if (kb.isEmpty() || (lat.cellCenter(kb.min).z() >= lo && lat.cellCenter(kb.max).z() <= hi))
     return occupiedCellCenters();  // the band holds every cell
   const CSimplePointsMap& all = occupiedCellCenters();
-  std::lock_guard<std::mutex> lk(caches_.mutex);
-  if (caches_.band_points_dirty || caches_.band_lo != lo || caches_.band_hi != hi) {
-    auto& pts = caches_.band_points;
+  std::lock_guard<std::mutex> lk(caches_->mutex);
+  if (caches_->band_points_dirty || caches_->band_lo != lo || caches_->band_hi != hi) {
+    auto& pts = caches_->band_points;
     pts.clear();
     const auto& xs = all.getPointsBufferRef_x();
     const auto& ys = all.getPointsBufferRef_y();
@@ -29,11 +30,11 @@ const CSimplePointsMap& CRTreeOccupancyGridMap::occupiedCellCentersForMatching2D
     for (std::size_t i = 0; i < xs.size(); ++i)
       if (zs[i] >= lo && zs[i] <= hi) pts.insertPointFast(xs[i], ys[i], zs[i]);
     pts.mark_as_modified();
-    caches_.band_lo = lo;
-    caches_.band_hi = hi;
-    caches_.band_points_dirty = false;
+    caches_->band_lo = lo;
+    caches_->band_hi = hi;
+    caches_->band_points_dirty = false;
   }
-  return caches_.band_points;
+  return caches_->band_points;
 }
 
 // Correspondences pair each point of `otherMap` with the centre of an occupied cell within the

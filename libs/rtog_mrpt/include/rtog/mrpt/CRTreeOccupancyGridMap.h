@@ -8,8 +8,6 @@
 #include <limits>
 #include <memory>
 #include <mutex>
-
-#include <tsl/robin_map.h>
 #include <optional>
 #include <string>
 #include <unordered_map>
@@ -342,7 +340,7 @@ class CRTreeOccupancyGridMap : public mrpt::maps::CMetricMap {
   const mrpt::maps::CSimplePointsMap& occupiedCellCentersForMatching2D() const;
   /// The log-likelihood term of an end point at p: its distance to the nearest occupied cuboid
   /// (capped) through the field's Gaussian-plus-uniform mixture. With the cache on, per lattice
-  /// cell, as COccupancyGridMap2D's precomputed field. The caller holds caches_.mutex.
+  /// cell, as COccupancyGridMap2D's precomputed field. The caller holds caches_->mutex.
   float fieldTermLocked(const Eigen::Vector3d& p, const FieldParams& f) const;
   /// An observation's beams in its sensor's frame (not a CObservationRange: see sonarEndPoints),
   /// decimated for insertion or for the likelihood; false for an unsupported type.
@@ -354,45 +352,23 @@ class CRTreeOccupancyGridMap : public mrpt::maps::CMetricMap {
   void localPointsCached(std::uint64_t key, Decode&& decode, std::vector<Eigen::Vector3f>& pts,
                          std::size_t& invalid) const;
 
-  /// Derived data; copies start empty (a copy rebuilds them on demand).
-  struct Caches {
-    std::mutex mutex;
-    tsl::robin_map<std::uint64_t, float> lf;  ///< packed key -> likelihood-field term
-    std::optional<FieldParams> lf_params;  ///< what the terms in `lf` were computed with
-    bool points_dirty{true};
-    mrpt::maps::CSimplePointsMap occupied_points;
-    bool band_points_dirty{true};
-    float band_lo{0}, band_hi{0};  ///< the band `band_points` holds
-    mrpt::maps::CSimplePointsMap band_points;
-    /// Sensor-frame points of the last decoded observation (Velodyne raw packets, depth image),
-    /// so that evaluating one observation at many poses (particle filters) decodes it once. Keyed
-    /// by content: addresses and timestamps are reused by different scans.
-    bool local_valid{false};
-    std::uint64_t local_key{0};
-    std::vector<Eigen::Vector3f> local_points;
-    std::size_t local_invalid{0};
-    /// cos/sin of the beam angles of the last 2D scan geometry (a log's scans share one), so
-    /// that a scan is turned into points without trigonometry, as MRPT's grids do.
-    struct ScanAngles {
-      std::size_t beams;
-      float aperture;
-      bool right_to_left;
-      std::vector<double> cos, sin;
-    };
-    std::shared_ptr<const ScanAngles> scan_angles;
-    std::shared_ptr<GridView> grid_view;  ///< gridView(); reset when the map changes
-    Caches() = default;
-    Caches(const Caches&) {}
-    Caches& operator=(const Caches&) {
-      std::lock_guard<std::mutex> lk(mutex);
-      lf.clear();
-      lf_params.reset();
-      points_dirty = true;
-      band_points_dirty = true;
-      local_valid = false;
-      grid_view.reset();
-      return *this;
-    }
+  /// Derived data (likelihood-field terms, point clouds, decoded points, the 2D view), defined
+  /// in src/ so that this header needs no hash map. Copies start empty (a copy rebuilds them on
+  /// demand); assigning a map invalidates the target's caches. Guarded by Caches::mutex.
+  struct Caches;
+  /// cos/sin of the beam angles of the last 2D scan geometry (defined with Caches).
+  struct ScanAngles;
+  /// Owns the caches; copying yields empty caches, assignment invalidates (see Caches).
+  class CachesHolder {
+   public:
+    CachesHolder();
+    ~CachesHolder();
+    CachesHolder(const CachesHolder&);
+    CachesHolder& operator=(const CachesHolder&);
+    Caches* operator->() const { return p_.get(); }
+
+   private:
+    std::unique_ptr<Caches> p_;
   };
 
   OccupancyMap map_;
@@ -401,10 +377,10 @@ class CRTreeOccupancyGridMap : public mrpt::maps::CMetricMap {
   /// loadPrior() made, shared by copies; none otherwise. Not serialized.
   struct Prior;
   std::shared_ptr<const Prior> prior_;
-  mutable Caches caches_;
+  mutable CachesHolder caches_;
 
   /// cos/sin of the scan's beam angles, from the cache when the geometry is the last one's.
-  std::shared_ptr<const Caches::ScanAngles> scanAngles(const mrpt::obs::CObservation2DRangeScan& scan) const;
+  std::shared_ptr<const ScanAngles> scanAngles(const mrpt::obs::CObservation2DRangeScan& scan) const;
 };
 
 }  // namespace rtog
