@@ -4,7 +4,8 @@
 # coverage, with libFuzzer's -merge=1 (an input is taken only if it adds features to those of the
 # kept corpus and of the inputs taken before it, smallest first). Commit fuzz/corpus with the change.
 # Then prints one line per target, the figures doc/reliability.md gives:
-#   corpus TARGET: F files, B bytes; cov: C ft: T; added N files (M new features); executions E
+#   corpus TARGET: F files, B bytes; cov: C ft: T; added N files (M new features, E new edges);
+#   executions X
 # cov:/ft: are libFuzzer's counts of edges and features on loading the kept corpus (-runs=0);
 # executions are stat::number_of_executed_units of the last run (BUILD/fuzz/TARGET.log).
 # Usage: fuzz/merge_corpus.sh [--minimize] [--out DIR] BUILD_DIR [TARGET...]
@@ -49,7 +50,7 @@ for t in "${targets[@]}"; do
   for d in "$build/fuzz/corpus/$t" "$build/fuzz/seeds/$t"; do
     if [ -d "$d" ]; then sources+=("$d"); fi
   done
-  added="added 0 files (0 new features)"
+  added="added 0 files (0 new features, 0 new edges)"
   if [ "$minimize" = 1 ]; then
     fresh=$(mktemp -d)
     "$bin" -merge=1 "${flags[@]}" "$fresh" "$dest" "${sources[@]}" > "$log.merge.log" 2>&1 || {
@@ -62,7 +63,7 @@ for t in "${targets[@]}"; do
     "$bin" -merge=1 "${flags[@]}" "$dest" "${sources[@]}" > "$log.merge.log" 2>&1 || {
       tail -n 30 "$log.merge.log"; echo "merge of $t failed (see $log.merge.log)"; exit 1; }
     # "MERGE-OUTER: 3 new files with 12 new features added; 2 new coverage edges"
-    added=$(sed -n 's/^MERGE-OUTER: \([0-9]*\) new files with \([0-9]*\) new features added.*/added \1 files (\2 new features)/p' \
+    added=$(sed -n 's/^MERGE-OUTER: \([0-9]*\) new files with \([0-9]*\) new features added; \([0-9]*\) new coverage edges.*/added \1 files (\2 new features, \3 new edges)/p' \
       "$log.merge.log" | tail -n 1)
   fi
   "$bin" -runs=0 "${flags[@]}" "$dest" > "$log.stats.log" 2>&1 || {
