@@ -1,3 +1,4 @@
+# shellcheck shell=bash
 # Sourced by fuzz/run.sh and fuzz/merge_corpus.sh: the targets, and the bounds of the corpora kept
 # in the repository (fuzz/corpus/TARGET, so that each run starts where the last one ended).
 # RTOG_FUZZ_MAX_LEN is libFuzzer's -max_len for every run and merge of a target, and so the
