@@ -25,8 +25,9 @@ for t in "${targets[@]}"; do
   mkdir -p "$corpus" "$findings"
   read -r files bytes big < <(corpus_size "$kept" "$len")
   if [ "$bytes" -gt "$RTOG_FUZZ_CORPUS_BUDGET" ] || [ "$big" -gt 0 ]; then
-    echo "fuzz/corpus/$t: $files files, $bytes bytes, $big over $len bytes: over its budget"
-    echo "($RTOG_FUZZ_CORPUS_BUDGET bytes); re-minimize it: fuzz/merge_corpus.sh --minimize BUILD $t"
+    echo "fuzz/corpus/$t: $files files, $bytes bytes, $big over $len bytes: over its budget of"
+    echo "$RTOG_FUZZ_CORPUS_BUDGET bytes in files of at most $len (fuzz/targets.sh). Remove the larger"
+    echo "files, re-minimize it (fuzz/merge_corpus.sh --minimize BUILD $t) or raise the budget on purpose."
     exit 1
   fi
   dirs=("$corpus")
