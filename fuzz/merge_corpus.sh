@@ -69,9 +69,10 @@ for t in "${targets[@]}"; do
   "$bin" -runs=0 "${flags[@]}" "$dest" > "$log.stats.log" 2>&1 || {
     tail -n 30 "$log.stats.log"; echo "loading the corpus of $t failed (see $log.stats.log)"; exit 1; }
   cov=$(sed -n 's/^#[0-9]*[[:space:]]*INITED \(cov: [0-9]* ft: [0-9]*\).*/\1/p' "$log.stats.log" | tail -n 1)
-  execs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$log.log" 2>/dev/null | tail -n 1)
+  execs=
+  if [ -f "$log.log" ]; then execs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$log.log" | tail -n 1); fi
   read -r files bytes big < <(corpus_size "$dest" "$len")
-  echo "corpus $t: $files files, $bytes bytes ($dest); ${cov:-cov: ? ft: ?}; $added; executions ${execs:-none} (last run)"
+  echo "corpus $t: $files files, $bytes bytes ($dest); ${cov:-cov: ? ft: ?}; ${added:-added ?}; executions ${execs:-none} (last run)"
   if [ "$bytes" -gt "$RTOG_FUZZ_CORPUS_BUDGET" ] || [ "$big" -gt 0 ]; then
     echo "corpus $t is over its budget ($RTOG_FUZZ_CORPUS_BUDGET bytes, files of at most $len bytes; $big larger): $0 --minimize"
     status=1
