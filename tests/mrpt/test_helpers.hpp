@@ -18,18 +18,23 @@
 namespace rtog_test {
 
 inline std::string dataset(const std::string& name) { return std::string(RTOG_MRPT_DATASETS) + "/" + name; }
+/// The maps MRPT's map loader makes (as MRPT's apps do) from the `[MappingApplication]` sections
+/// of `ini`.
+inline mrpt::maps::CMultiMetricMap multiMapFromIni(const std::string& ini) {
+  mrpt::config::CConfigFileMemory cfg(ini);
+  mrpt::maps::TSetOfMetricMapInitializers inits;
+  inits.loadFromConfigFile(cfg, "MappingApplication");
+  mrpt::maps::CMultiMetricMap mm;
+  mm.setListOfMaps(inits);
+  return mm;
+}
 /// A CRTreeOccupancyGridMap made by MRPT's map loader (as MRPT's apps create maps) from an `.ini`
 /// whose `_creationOpts` section holds `creation` and whose `_insertOpts` section holds `insert_opts`.
 inline rtog::CRTreeOccupancyGridMap::Ptr mapFromSections(const std::string& creation, const std::string& insert_opts) {
   const std::string ini = "[MappingApplication]\nrtreeOccupancyGrid_count=1\n"
                           "[MappingApplication_rtreeOccupancyGrid_00_creationOpts]\n" + creation +
                           "\n[MappingApplication_rtreeOccupancyGrid_00_insertOpts]\n" + insert_opts + "\n";
-  mrpt::config::CConfigFileMemory cfg(ini);
-  mrpt::maps::TSetOfMetricMapInitializers inits;
-  inits.loadFromConfigFile(cfg, "MappingApplication");
-  mrpt::maps::CMultiMetricMap mm;
-  mm.setListOfMaps(inits);
-  return std::dynamic_pointer_cast<rtog::CRTreeOccupancyGridMap>(mm.maps.at(0));
+  return std::dynamic_pointer_cast<rtog::CRTreeOccupancyGridMap>(multiMapFromIni(ini).maps.at(0));
 }
 /// The same at 5 cm.
 inline rtog::CRTreeOccupancyGridMap::Ptr mapFromIni(const std::string& insert_opts) {

@@ -17,19 +17,13 @@
 #include "rtog/mrpt/CRTreeBackedGridMap2D.h"
 #include "rtog/mrpt/CRTreeOccupancyGridMap.h"
 #include "rtog/mrpt/ini_checks.h"
+#include "test_helpers.hpp"
 
 using rtog::CRTreeOccupancyGridMap;
 
 namespace {
 
-mrpt::maps::CMultiMetricMap fromIni(const std::string& ini) {
-  mrpt::config::CConfigFileMemory cfg(ini);
-  mrpt::maps::TSetOfMetricMapInitializers inits;
-  inits.loadFromConfigFile(cfg, "MappingApplication");
-  mrpt::maps::CMultiMetricMap mm;
-  mm.setListOfMaps(inits);
-  return mm;
-}
+const auto fromIni = &rtog_test::multiMapFromIni;
 
 const char* kIni = R"(
 [MappingApplication]
