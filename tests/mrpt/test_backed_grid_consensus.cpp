@@ -4,6 +4,8 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <memory>
+#include <vector>
 
 #include <mrpt/maps/COccupancyGridMap2D.h>
 #include <mrpt/maps/CPointsMap.h>
@@ -11,6 +13,8 @@
 #include <mrpt/poses/CPose2D.h>
 
 #include "rtog/mrpt/CRTreeBackedGridMap2D.h"
+#include "rtog/mrpt/CRTreeOccupancyGridMap.h"
+#include "registration_helpers.hpp"
 #include "test_helpers.hpp"
 
 using namespace rtog_test;
@@ -45,6 +49,30 @@ bool endPointsOnGrid(const COccupancyGridMap2D& g, const CObservation2DRangeScan
     if (!(w.x >= g.getXMin() && w.x < g.getXMax() && w.y >= g.getYMin() && w.y < g.getYMax())) return false;
   }
   return true;
+}
+
+/// Scores `scan`s of `frames` (beams cut at `reach` [m]) at poses around their own on `map` and
+/// on `stock`, where every end point lies on `stock`'s cells (MRPT's consensus is defined there):
+/// the same double each time. Returns how many poses were compared.
+int compareWithStock(const mrpt::maps::CMetricMap& map, const COccupancyGridMap2D& stock,
+                     const std::vector<PosedFrame>& frames, float reach) {
+  int compared = 0;
+  for (std::size_t i = 0; i < frames.size(); ++i) {
+    const auto full = frames[i].sf->getObservationByClass<CObservation2DRangeScan>();
+    if (!full) continue;
+    auto scan = std::make_shared<CObservation2DRangeScan>(*full);
+    for (std::size_t k = 0; k < scan->getScanSize(); ++k)
+      if (scan->getScanRange(k) > reach) scan->setScanRangeValidity(k, false);
+    for (double dx : {-0.3, 0.0, 0.2})
+      for (double dyaw : {-0.1, 0.0, 0.15}) {
+        const mrpt::poses::CPose3D q = frames[i].pose + mrpt::poses::CPose3D(dx, 0.1, 0, dyaw, 0, 0);
+        if (!endPointsOnGrid(stock, *scan, mrpt::poses::CPose2D(q))) continue;
+        EXPECT_EQ(map.computeObservationLikelihood(*scan, q), stock.computeObservationLikelihood(*scan, q))
+            << "frame " << i << " at " << q.asString();
+        ++compared;
+      }
+  }
+  return compared;
 }
 
 }  // namespace
@@ -87,23 +115,32 @@ TEST(BackedGridConsensus, EndPointsBeyondTheGridDoNotCrash) {
 // poses around their own.
 TEST(BackedGridConsensus, EqualsTheStockGridWhereItIsDefined) {
   const auto& g = senaBacked();
-  const COccupancyGridMap2D stock = g;
-  int compared = 0;
-  for (std::size_t i = 0; i < senaFrames().size(); ++i) {
-    const auto full = senaFrames()[i].sf->getObservationByClass<CObservation2DRangeScan>();
-    if (!full) continue;
-    auto scan = std::make_shared<CObservation2DRangeScan>(*full);
-    for (std::size_t k = 0; k < scan->getScanSize(); ++k)
-      if (scan->getScanRange(k) > 4.0f) scan->setScanRangeValidity(k, false);
-    for (double dx : {-0.3, 0.0, 0.2})
-      for (double dyaw : {-0.1, 0.0, 0.15}) {
-        const mrpt::poses::CPose3D q = senaFrames()[i].pose + mrpt::poses::CPose3D(dx, 0.1, 0, dyaw, 0, 0);
-        if (!endPointsOnGrid(g, *scan, mrpt::poses::CPose2D(q))) continue;
-        EXPECT_EQ(g.computeObservationLikelihood(*scan, q), stock.computeObservationLikelihood(*scan, q))
-            << "frame " << i << " at " << q.asString();
-        ++compared;
-      }
+  const int compared = compareWithStock(g, COccupancyGridMap2D(g), senaFrames(), 4.0f);
+  std::printf("SENA: compared at %d poses\n", compared);
+  EXPECT_GE(compared, 20);
+}
+
+// The same on a log the consensus rule was not written against: the Malaga CS building's
+// simplemap (corrected poses), its first 40 frames. Also for the R-tree map's 2D view, whose
+// consensus goes through the same function: against a stock grid that inserted the scans itself.
+TEST(BackedGridConsensus, EqualsTheStockGridOnTheMalagaBuilding) {
+  auto frames = simplemapFrames(dataset("malaga-cs-fac-building.simplemap.gz"));
+  frames.resize(std::min<std::size_t>(frames.size(), 40));
+  rtog::CRTreeBackedGridMap2D backed(0.05);
+  COccupancyGridMap2D stock(-10, 10, -10, 10, 0.05);
+  auto native = mapFromSections("resolution=0.05", "");
+  for (const auto& f : frames) {
+    f.sf->insertObservationsInto(backed, f.pose);
+    f.sf->insertObservationsInto(stock, f.pose);
+    f.sf->insertObservationsInto(*native, f.pose);
   }
-  std::printf("compared at %d poses\n", compared);
+  backed.likelihoodOptions.likelihoodMethod = COccupancyGridMap2D::lmConsensus;
+  stock.likelihoodOptions.likelihoodMethod = COccupancyGridMap2D::lmConsensus;
+  native->likelihoodOptions.likelihoodMethod = rtog::CRTreeOccupancyGridMap::lmConsensus;
+  int compared = compareWithStock(backed, COccupancyGridMap2D(backed), frames, 4.0f);
+  std::printf("Malaga, backed grid: compared at %d poses\n", compared);
+  EXPECT_GE(compared, 20);
+  compared = compareWithStock(*native, stock, frames, 4.0f);
+  std::printf("Malaga, the R-tree map's 2D view: compared at %d poses\n", compared);
   EXPECT_GE(compared, 20);
 }
