@@ -44,6 +44,40 @@ foreach(f IN LISTS all)
     endif()
   endforeach()
 endforeach()
+# One door for evidence: only the engine's apply (src/map/map_engine.cpp) calls the appliers of
+# update sets and the planar cache's mutators; the appliers are defined in integrate/.
+foreach(f IN LISTS private)
+  if(f MATCHES "^src/map/map_engine\\.cpp$")
+    continue()
+  endif()
+  file(READ ${CORE_DIR}/${f} text)
+  if(NOT f MATCHES "^src/integrate/(batch_apply|assign_apply)\\.(hpp|cpp)$" AND
+     text MATCHES "(applyBatches|applyGraded|applyAssigned)\\(")
+    fail("${f}: calls an update-set applier (only MapEngine::apply may)")
+  endif()
+  if(text MATCHES "planar_?\\.(apply|applyStepRuns|cover)\\(")
+    fail("${f}: changes the planar cache (only MapEngine::apply and flush may)")
+  endif()
+  if(NOT f MATCHES "^src/integrate/(brick_update|batch_apply|assign_apply)\\.(hpp|cpp)$" AND
+     text MATCHES "(applyBrick|applyGradedBrick|coverDense)\\(")
+    fail("${f}: applies to bricks outside the appliers")
+  endif()
+endforeach()
+# Fusion is one integrator: map_fusion.cpp includes no other file of integrate/.
+file(READ ${CORE_DIR}/src/map/map_fusion.cpp fusion_text)
+string(REGEX MATCHALL "#include \"integrate/[^\"]+\"" fusion_includes "${fusion_text}")
+foreach(inc IN LISTS fusion_includes)
+  if(NOT inc STREQUAL "#include \"integrate/fusion_integrator.hpp\"")
+    fail("src/map/map_fusion.cpp: ${inc} (only the fusion integrator)")
+  endif()
+endforeach()
+# The value types' sources live in src/base, not with the facade in src/map.
+foreach(v key log_odds params band)
+  if(EXISTS ${CORE_DIR}/src/map/${v}.cpp)
+    fail("src/map/${v}.cpp: a value type's source belongs in src/base")
+  endif()
+endforeach()
+
 if(EXISTS ${CORE_DIR}/include/rtog/core/detail)
   fail("include/rtog/core/detail exists: nothing private is installed")
 endif()
@@ -66,6 +100,22 @@ foreach(f IN LISTS mrpt_files)
   file(READ ${f} text)
   if(text MATCHES "#include \"(storage|integrate|map|kernels|parallel|util)/" OR text MATCHES "rtog/core/detail")
     fail("${f}: includes a private header of the core")
+  endif()
+endforeach()
+
+# The core's file format is written by the core alone (src/map/map_io.cpp): no other library
+# and no tool writes its magic; they set cells with OccupancyMap::assignCells.
+get_filename_component(root_dir ${CORE_DIR} DIRECTORY)
+get_filename_component(root_dir ${root_dir} DIRECTORY)
+file(GLOB_RECURSE outside ${root_dir}/libs/*.cpp ${root_dir}/libs/*.hpp ${root_dir}/libs/*.h
+     ${root_dir}/apps/*.cpp ${root_dir}/apps/*.hpp ${root_dir}/apps/*.h)
+foreach(f IN LISTS outside)
+  if(f MATCHES "/libs/rtog_core/")
+    continue()
+  endif()
+  file(READ ${f} text)
+  if(text MATCHES "RTOGMAP")
+    fail("${f}: writes or names the core's file format (use OccupancyMap::assignCells / write)")
   endif()
 endforeach()
 

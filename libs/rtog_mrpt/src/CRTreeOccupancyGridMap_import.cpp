@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
-#include <sstream>
 #include <stdexcept>
 #include <string>
 
@@ -30,37 +29,6 @@ float boundProbability(float v, int dir) {
   p = p0;
   while (dir < 0 ? l(p) > v : l(p) < v) p = std::nextafter(p, dir < 0 ? 0.0f : 1.0f);
   return p;
-}
-
-struct Leaf {
-  std::int32_t lo[3], hi[3];
-  float value;
-};
-
-// The core map's binary format (doc/format.md), the one public way to give cells a value.
-std::string encodeMap(const MapParams& p, const std::vector<Leaf>& leaves) {
-  std::ostringstream os(std::ios::binary);
-  std::uint64_t h = 0xcbf29ce484222325ull;  // FNV-1a over every byte after the magic
-  const auto put = [&](const auto& v) {
-    const auto* b = reinterpret_cast<const unsigned char*>(&v);
-    os.write(reinterpret_cast<const char*>(b), sizeof v);
-    for (std::size_t i = 0; i < sizeof v; ++i) h = (h ^ b[i]) * 0x100000001b3ull;
-  };
-  os.write("RTOGMAP", 8);  // with its terminating NUL
-  put(std::uint32_t{1});
-  const LogOddsParams& l = p.log_odds;
-  for (double d : {p.resolution, l.prob_hit, l.prob_miss, l.clamp_min, l.clamp_max, l.occupied_threshold, l.prior}) put(d);
-  put(static_cast<std::uint8_t>(p.merge));
-  put(p.rtree.max_entries);
-  put(p.rtree.min_entries);
-  put(static_cast<std::uint64_t>(leaves.size()));
-  for (const Leaf& f : leaves) {
-    for (int a = 0; a < 3; ++a) put(f.lo[a]);
-    for (int a = 0; a < 3; ++a) put(f.hi[a]);
-    put(f.value);
-  }
-  os.write(reinterpret_cast<const char*>(&h), sizeof h);
-  return os.str();
 }
 
 }  // namespace
@@ -113,7 +81,8 @@ void CRTreeOccupancyGridMap::loadGridLayer(const mrpt::maps::COccupancyGridMap2D
     throw std::out_of_range("rtog::CRTreeOccupancyGridMap::loadFromGrid: grid outside the key range");
   if (k0.x + static_cast<std::int64_t>(sx) - 1 > kKeyMax || k0.y + static_cast<std::int64_t>(sy) - 1 > kKeyMax)
     throw std::out_of_range("rtog::CRTreeOccupancyGridMap::loadFromGrid: grid outside the key range");
-  std::vector<Leaf> leaves;
+  std::vector<Box> boxes;
+  std::vector<float> values;
   for (std::size_t cy = 0; cy < sy; ++cy)
     for (std::size_t cx = 0; cx < sx;) {
       // An int8 cell may hold -128, which MRPT reads as -127 (its bound): the mrpt_grid preset's too.
@@ -130,11 +99,13 @@ void CRTreeOccupancyGridMap::loadGridLayer(const mrpt::maps::COccupancyGridMap2D
       if (mergeable(v))
         while (end < sx && std::max<int>(cells[cy * sx + end], -127) == l && ((kx + std::int32_t(end - cx)) >> kBrickBits) == (kx >> kBrickBits))
           ++end;
-      leaves.push_back(Leaf{{kx, ky, k0.z}, {kx + std::int32_t(end - cx) - 1, ky, k0.z}, v});
+      boxes.push_back(Box{Key{kx, ky, k0.z}, Key{kx + std::int32_t(end - cx) - 1, ky, k0.z}});
+      values.push_back(v);
       cx = end;
     }
-  std::istringstream is(encodeMap(p, leaves), std::ios::binary);
-  map_ = OccupancyMap::read(is);
+  OccupancyMap imported(p);
+  imported.assignCells(boxes.data(), values.data(), boxes.size());
+  map_ = std::move(imported);
   insertionOptions = io;
   // Scans inserted later continue on the grid's geometry and plane, as in the grid itself.
   frame_.x_min = grid.getXMin(), frame_.x_max = grid.getXMax();

@@ -3,7 +3,8 @@
 
 #include <vector>
 
-#include "map/map_engine.hpp"
+#include "integrate/beam_integrator.hpp"
+#include "map/engine_access.hpp"
 #include "rtog/core/occupancy_map.hpp"
 
 using namespace rtog;
@@ -22,14 +23,24 @@ TEST(OccupancyMap, SeveralBatchesApplyAsTheirUnionWithOccupiedWinning) {
   both.insert(both.end(), b.begin(), b.end());
   UpdateBatch one, first, second;
   InsertStats s1, s2;
-  together.engine().computeUpdate(origin, both.data(), both.size(), {}, nullptr, one, s1);
+  const auto trace = [&](const OccupancyMap& m, const std::vector<Eigen::Vector3f>& pts, UpdateBatch& batch,
+                         InsertStats& s) {
+    BeamIntegrator::traceBeams(m.lattice(), origin, pts.data(), pts.size(), {}, nullptr, batch, s);
+  };
+  const auto apply = [](OccupancyMap& m, std::vector<const UpdateBatch*> batches, const InsertStats& s, int threads) {
+    UpdateSet set = UpdateSet::nothing(UpdateSet::Kind::Marks, s);
+    set.batches = std::move(batches);
+    set.threads = threads;
+    return MapEngineAccess::of(m).apply(std::move(set));
+  };
+  trace(together, both, one, s1);
   one.finalize();
-  together.engine().applyUpdate({&one}, s1);
-  split.engine().computeUpdate(origin, a.data(), a.size(), {}, nullptr, first, s2);
-  split.engine().computeUpdate(origin, b.data(), b.size(), {}, nullptr, second, s2);
+  s1 = apply(together, {&one}, s1, 1);
+  trace(split, a, first, s2);
+  trace(split, b, second, s2);
   first.finalize();
   second.finalize();
-  split.engine().applyUpdate({&second, &first}, s2, 2);
+  s2 = apply(split, {&second, &first}, s2, 2);
   EXPECT_EQ(split.checkInvariants(), "");
   EXPECT_EQ(split.state(Key{5, 0, 0}), CellState::Occupied);  // free in `second`, occupied in `first`
   EXPECT_EQ(s2.cells_occupied, s1.cells_occupied);

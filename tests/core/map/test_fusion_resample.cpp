@@ -11,7 +11,7 @@
 
 #include <Eigen/Geometry>
 
-#include "map/fusion_resample.hpp"
+#include "integrate/fusion_resample.hpp"
 #include "map_cells.hpp"
 #include "rtog/core/occupancy_map.hpp"
 #include "test_support.hpp"

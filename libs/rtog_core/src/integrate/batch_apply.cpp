@@ -107,10 +107,6 @@ const UpdateBatch::BrickUpdates* unionOf(const UpdateBatch::BrickUpdates* const*
 
 }  // namespace
 
-namespace {
-void refreshFromContexts(LeafIndex& index, std::vector<ApplyContext>& contexts, std::size_t n, InsertStats& stats);
-}  // namespace
-
 void applyBatches(MapStore& store, const std::vector<const UpdateBatch*>& batches, InsertStats& stats, int threads,
                   std::vector<ApplyContext>& contexts) {
   if (threads < 1) throw std::invalid_argument("applyUpdate: threads must be >= 1");
@@ -158,9 +154,6 @@ void applyBatches(MapStore& store, const std::vector<const UpdateBatch*>& batche
   refreshFromContexts(index, contexts, n, stats);
 }
 
-namespace {
-
-// The upper tree brought up to date with the bricks the contexts reshaped.
 void refreshFromContexts(LeafIndex& index, std::vector<ApplyContext>& contexts, std::size_t n, InsertStats& stats) {
   std::vector<std::uint32_t> reshaped;
   for (std::size_t t = 0; t < n; ++t) {
@@ -177,7 +170,6 @@ void refreshFromContexts(LeafIndex& index, std::vector<ApplyContext>& contexts, 
   });
 }
 
-}  // namespace
 
 void applyGraded(MapStore& store, const std::vector<const GradedScan*>& scans, InsertStats& stats, int threads,
                  std::vector<ApplyContext>& contexts) {

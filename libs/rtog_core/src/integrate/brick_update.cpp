@@ -228,8 +228,6 @@ static void coverFreshBrick(MapStore& store, const UpdateBatch::BrickUpdates& up
   noteReshaped(store, slot, ctx);
 }
 
-namespace {
-
 // The brick's leaves painted into a dense table of values; `known` gets their cells.
 void loadDense(const std::vector<LeafEntry>& leaves, std::vector<float>& value, BrickMask& known) {
   value.resize(kBrickCells);
@@ -244,6 +242,8 @@ void loadDense(const std::vector<LeafEntry>& leaves, std::vector<float>& value, 
       }
   }
 }
+
+namespace {
 
 // One cell's update in the dense table: counted unchanged, or marked changed (and known).
 void updateDense(const LogOddsModel& model, std::size_t idx, float delta, std::vector<float>& value, BrickMask& known,
@@ -263,6 +263,8 @@ void updateDense(const LogOddsModel& model, std::size_t idx, float delta, std::v
   }
   changed[w] |= bit;
 }
+
+}  // namespace
 
 // The brick covered anew from the dense table: old cuboids that now disagree inside are the
 // splits; the known cells are covered with boxes of bit-identical (so lossless), mergeable values.
@@ -299,7 +301,6 @@ void coverDense(MapStore& store, std::uint32_t slot, const std::vector<float>& v
   noteReshaped(store, slot, ctx);
 }
 
-}  // namespace
 
 static void rebuildBrick(MapStore& store, const UpdateBatch::BrickUpdates& upd, std::uint32_t slot, ApplyContext& ctx) {
   const LogOddsModel& model = store.model;

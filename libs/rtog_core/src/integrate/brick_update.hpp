@@ -51,6 +51,13 @@ void applyBrick(MapStore& store, const UpdateBatch::BrickUpdates& upd, std::uint
 void applyGradedBrick(MapStore& store, const GradedCell* cells, std::size_t n, const BrickMask* miss,
                       std::uint32_t slot, ApplyContext& ctx);
 
+/// A brick's leaves painted into a dense table of values (kBrickCells); `known` gets their cells.
+void loadDense(const std::vector<LeafEntry>& leaves, std::vector<float>& value, BrickMask& known);
+/// Brick `slot` covered anew from a dense table (`changed`: the cells that changed, for the count
+/// of split leaves), with boxes of equal mergeable value; recorded in ctx.reshaped.
+void coverDense(MapStore& store, std::uint32_t slot, const std::vector<float>& value, const BrickMask& known,
+                const BrickMask& changed, ApplyContext& ctx);
+
 /// Records brick `slot` as reshaped, with its leaf-node boxes.
 void noteReshaped(const MapStore& store, std::uint32_t slot, ApplyContext& ctx);
 

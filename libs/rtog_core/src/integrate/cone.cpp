@@ -6,10 +6,11 @@
 #include <stdexcept>
 #include <string>
 
-#include "integrate/batch_apply.hpp"
 #include "integrate/beams.hpp"
+#include "integrate/cone_integrator.hpp"
 #include "integrate/graded_scan.hpp"
-#include "integrate/scan_integrator.hpp"
+#include "integrate/insert_scratch.hpp"
+#include "storage/map_store.hpp"
 #include "rtog/core/ray_traversal.hpp"
 
 namespace rtog {
@@ -104,10 +105,10 @@ void coneCells(const Lattice& lattice, const ConeReading& r, ConeWeighting w, st
     }
 }
 
-InsertStats ScanIntegrator::insertCones(const ConeReading* readings, std::size_t n, ConeWeighting w,
-                                        const InsertParams& ip, const std::function<void()>& flush_pending) {
+UpdateSet ConeIntegrator::trace(const ConeReading* readings, std::size_t n, ConeWeighting w, const InsertParams& ip) {
   ip.validate();
-  const BeamRules rules(store_.lattice, ip);
+  const MapStore& store = ctx_.store;
+  const BeamRules rules(store.lattice, ip);
   // Every reading's cells first, so that a bad one throws before the map changes.
   InsertStats stats;
   std::vector<std::vector<ConeCell>> cells(n);
@@ -123,7 +124,7 @@ InsertStats ScanIntegrator::insertCones(const ConeReading* readings, std::size_t
     if (!r.origin.allFinite()) throw std::invalid_argument(which + ": the origin is not finite");
     if (!(r.aperture >= 0.0 && r.aperture <= 3.14159265358979323846))
       throw std::invalid_argument(which + ": the aperture must be in [0, pi] rad");
-    (void)store_.lattice.key(r.origin);  // std::out_of_range for an origin without a key
+    (void)store.lattice.key(r.origin);  // std::out_of_range for an origin without a key
     // A reading is data: a bad one is a counted skip, as a bad beam is.
     if (!std::isfinite(r.range) || !std::isfinite(r.yaw)) {
       ++stats.skipped_non_finite;
@@ -137,26 +138,26 @@ InsertStats ScanIntegrator::insertCones(const ConeReading* readings, std::size_t
     if (!BeamRules::count(kind, stats)) continue;
     r.range = std::min(r.range, (end - r.origin).norm());
     r.hit = kind == BeamEnd::Hit;
-    coneCells(store_.lattice, r, w, cells[i], &layers[i]);
+    coneCells(store.lattice, r, w, cells[i], &layers[i]);
     traced[i] = true;
   }
-  flush_pending();
-  const LogOddsModel& model = store_.model;
-  GradedScan& g = scratch_.graded.empty() ? scratch_.graded.emplace_back() : scratch_.graded.front();
+  const LogOddsModel& model = store.model;
+  std::size_t readings_traced = 0;
+  for (std::size_t i = 0; i < n; ++i) readings_traced += traced[i];
+  std::vector<GradedScan>& g = ctx_.scratch.graded;
+  if (g.size() < readings_traced) g.resize(readings_traced);
+  UpdateSet set = UpdateSet::nothing(UpdateSet::Kind::Sequence, stats);
   for (std::size_t i = 0; i < n; ++i) {
     if (!traced[i]) continue;
     // Each reading is one measurement: its cells take their change once, readings in order.
-    g.clear();
+    GradedScan& one = g[set.graded.size()];
+    one.clear();
     for (const ConeCell& c : cells[i])
-      g.mark(Key{c.x, c.y, layers[i]},
-             c.weight * (c.kind == StepKind::Occupied ? model.hitDelta() : model.missDelta()));
-    g.finalize();
-    InsertStats applied;
-    applyGraded(store_, {&g}, applied, 1, scratch_.apply_ctx);
-    applied.rays_hit = applied.rays_truncated = 0;
-    stats += applied;
+      one.mark(Key{c.x, c.y, layers[i]}, c.weight * (c.kind == StepKind::Occupied ? model.hitDelta() : model.missDelta()));
+    one.finalize();
+    set.graded.push_back(&one);
   }
-  return stats;
+  return set;
 }
 
 }  // namespace rtog

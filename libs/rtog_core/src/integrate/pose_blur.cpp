@@ -11,18 +11,17 @@
 
 #include <Eigen/Eigenvalues>
 
-#include "integrate/batch_apply.hpp"
-#include "integrate/scan_integrator.hpp"
+#include "integrate/pose_blur.hpp"
+
+#include "integrate/beam_integrator.hpp"
+#include "integrate/insert_scratch.hpp"
+#include "integrate/mixture.hpp"
 #include "parallel/parallel.hpp"
-#include "rtog/core/pose_blur.hpp"
 #include "storage/brick.hpp"
-#include "util/flat_hash_map.hpp"
+#include "storage/map_store.hpp"
 
 namespace rtog {
 namespace {
-
-double sigmoid(double l) { return 1.0 / (1.0 + std::exp(-l)); }
-
 
 /// One pose's updates of one brick: a finalized batch's brick or a graded scan's.
 struct BrickSource {
@@ -31,16 +30,14 @@ struct BrickSource {
   std::uint32_t index;  // brick index in that pose's batch / graded scan
 };
 
-/// The mixture, brick by brick: per cell the weighted sum over the poses of (P_i - P0), in pose
+/// The mixture (ProbabilityMixture), brick by brick: per cell the sum of the poses' terms, in pose
 /// order (so the sums do not depend on the thread count), in a dense brick array; cells a pose's
 /// scan did not touch add nothing, which is their prior. Each touched cell is then appended to `out`
 /// with its change logit(P0 + sum) - l0, bricks in Morton order as finalize() leaves them.
 class Mixture {
  public:
   Mixture(const LogOddsModel& model, const std::vector<double>& weights)
-      : model_(model), weights_(weights), p0_(sigmoid(model.prior())),
-        hit_(sigmoid(double(model.prior()) + model.hitDelta()) - p0_),
-        miss_(sigmoid(double(model.prior()) + model.missDelta()) - p0_) {}
+      : model_(model), weights_(weights), rule_(model.prior()) {}
 
   void mixBatches(const std::vector<UpdateBatch>& batches, GradedScan& out) {
     std::vector<BrickSource> sources;
@@ -50,8 +47,8 @@ class Mixture {
     forEachBrick(sources, out, [&](const BrickSource& s) {
       const auto& upd = *batches[s.pose].bricks()[s.index];
       const double w = weights_[s.pose];
-      addMask(upd.occupied, w * hit_);
-      addMask(upd.free, w * miss_);  // finalize() dropped the free marks of occupied cells
+      addMask(upd.occupied, rule_.term(w, model_.hitDelta()));
+      addMask(upd.free, rule_.term(w, model_.missDelta()));  // finalize() dropped the free marks of occupied cells
       return upd.brick;
     });
   }
@@ -63,7 +60,7 @@ class Mixture {
     forEachBrick(sources, out, [&](const BrickSource& s) {
       const GradedScan& scan = scans[s.pose];
       const double w = weights_[s.pose];
-      // A cell in both the miss mask and the graded cells takes the larger change, as applyGraded() does.
+      // A cell in both the miss mask and the graded cells takes the larger change, as the graded applier does.
       const BrickMask* miss = scan.missMask(s.index);
       BrickMask own{};
       const GradedCell* cells = scan.cells(s.index);
@@ -74,13 +71,13 @@ class Mixture {
         own[word] |= bit;
         float delta = cells[c].delta;
         if (miss && ((*miss)[word] & bit)) delta = std::max(delta, model_.missDelta());
-        sum_[static_cast<std::size_t>(i)] += w * (sigmoid(double(model_.prior()) + delta) - p0_);
+        sum_[static_cast<std::size_t>(i)] += rule_.term(w, delta);
         touched_[word] |= bit;
       }
       if (miss) {
         BrickMask rest;
         for (std::size_t k = 0; k < rest.size(); ++k) rest[k] = (*miss)[k] & ~own[k];
-        addMask(rest, w * miss_);
+        addMask(rest, rule_.term(w, model_.missDelta()));
       }
       return scan.brick(s.index);
     });
@@ -109,11 +106,7 @@ class Mixture {
       for (std::size_t w = 0; w < touched_.size(); ++w) {
         for (std::uint64_t bits = touched_[w]; bits != 0; bits &= bits - 1) {
           const auto i = w * 64 + static_cast<std::size_t>(__builtin_ctzll(bits));
-          // P lies between the smallest and the largest P_i, all in (0, 1); the clamp only guards
-          // against rounding at the ends.
-          const double p = std::clamp(p0_ + sum_[i], 1e-12, 1.0 - 1e-12);
-          cells_.push_back(GradedCell{static_cast<std::uint16_t>(i),
-                                      static_cast<float>(std::log(p / (1.0 - p)) - double(model_.prior()))});
+          cells_.push_back(GradedCell{static_cast<std::uint16_t>(i), rule_.change(sum_[i])});
           sum_[i] = 0.0;
         }
         touched_[w] = 0;
@@ -125,7 +118,7 @@ class Mixture {
 
   const LogOddsModel& model_;
   const std::vector<double>& weights_;
-  double p0_, hit_, miss_;
+  ProbabilityMixture rule_;
   std::array<double, kBrickCells> sum_{};
   BrickMask touched_{};
   std::vector<GradedCell> cells_;  // one brick's, for out.appendBrick()
@@ -162,10 +155,10 @@ std::vector<SigmaPoint> sigmaPoints(const Eigen::MatrixXd& cov) {
   return out;
 }
 
-InsertStats ScanIntegrator::insertBlurred(const WeightedScan* scans, std::size_t n, const InsertParams& ip,
-                                          const std::function<void()>& flush_pending) {
+UpdateSet PoseBlurIntegrator::trace(const WeightedScan* scans, std::size_t n, const InsertParams& ip) {
   ip.validate();
-  if (n == 0) return {};
+  const MapStore& store = ctx_.store;
+  if (n == 0) return UpdateSet::nothing(UpdateSet::Kind::Graded, {});
   double total = 0.0;
   for (std::size_t i = 0; i < n; ++i) {
     if (!(std::isfinite(scans[i].weight) && scans[i].weight > 0.0))
@@ -173,10 +166,9 @@ InsertStats ScanIntegrator::insertBlurred(const WeightedScan* scans, std::size_t
     total += scans[i].weight;
   }
   if (!std::isfinite(total)) throw std::invalid_argument("insertBlurred: the weights' sum is not finite");
-  if (n == 1) return insert(scans[0].origin, scans[0].points, scans[0].count, ip, scans[0].is_hit, flush_pending);
-  for (std::size_t i = 0; i < n; ++i) (void)store_.lattice.key(scans[i].origin);  // throws before any change
-  flush_pending();
-  InsertScratch& scratch = scratch_;
+  if (n == 1) return integrateScan(ctx_, scans[0].origin, scans[0].points, scans[0].count, ip, scans[0].is_hit);
+  for (std::size_t i = 0; i < n; ++i) (void)store.lattice.key(scans[i].origin);  // throws before any change
+  InsertScratch& scratch = ctx_.scratch;
   const bool graded = ip.model == SensorModel::RangeNoise;
   // One batch per pose (one more graded scan holds the mixture), traced on the insertion's
   // threads; they are mixed in pose order, so the map does not depend on the thread count.
@@ -186,56 +178,51 @@ InsertStats ScanIntegrator::insertBlurred(const WeightedScan* scans, std::size_t
     scratch.batches.resize(n);
   }
   if (scratch.graded.empty()) scratch.graded.resize(1);
-  std::vector<InsertStats> part(n);
-  const std::size_t threads = std::min<std::size_t>(static_cast<std::size_t>(ip.threads), n);
-  parallel::ChunkClaims claims(n, threads);
+  std::vector<InsertStats> part(n), unused(std::min<std::size_t>(static_cast<std::size_t>(ip.threads), n));
   // InsertParams::max_scan_cells bounds each pose's batch (each a copy of the one scan): a pose
   // over it skips the scan, whatever the thread count (each pose is traced by one thread).
-  const std::size_t max_bricks =
-      ip.max_scan_cells == 0 ? 0 : static_cast<std::size_t>(std::max<std::uint64_t>(1, ip.max_scan_cells / kBrickCells));
-  std::atomic<bool> over{false};
-  parallel::run(threads, [&](std::size_t t) {
-    for (std::size_t i; (i = claims.next(t)) != parallel::ChunkClaims::kNone;) {
-      if (over.load(std::memory_order_relaxed)) break;
-      const WeightedScan& s = scans[i];
-      if (graded) {
-        GradedScan& g = scratch.graded[i];
-        g.clear();
-        g.traceRangeNoise(store_.lattice, store_.model, s.origin, s.points, s.count, ip, s.is_hit, part[i]);
-        g.finalize();
-      } else {
+  const std::size_t max_bricks = maxScanBricks(ip);
+  const bool traced = parallel::traceChunks(
+      n, 1, unused, [](std::size_t) {},
+      [&](std::size_t, std::size_t i, std::size_t, InsertStats&) {
+        const WeightedScan& s = scans[i];
+        if (graded) {
+          GradedScan& g = scratch.graded[i];
+          g.clear();
+          g.traceRangeNoise(store.lattice, store.model, s.origin, s.points, s.count, ip, s.is_hit, part[i]);
+          g.finalize();
+          return true;
+        }
         UpdateBatch& b = scratch.batches[i];
         b.clear();
-        if (!traceBeams(store_.lattice, s.origin, s.points, s.count, ip, s.is_hit, b, part[i], max_bricks)) {
-          over.store(true, std::memory_order_relaxed);
-          break;
-        }
+        if (!BeamIntegrator::traceBeams(store.lattice, s.origin, s.points, s.count, ip, s.is_hit, b, part[i], max_bricks))
+          return false;
         b.finalize();
-        if (max_bricks > 0 && b.brickCodes().size() > max_bricks) over.store(true, std::memory_order_relaxed);
-      }
-    }
-  });
-  if (over.load()) {
+        return !(max_bricks > 0 && b.brickCodes().size() > max_bricks);
+      },
+      [](std::size_t) {});
+  if (!traced) {
     for (std::size_t i = 0; i < n; ++i) scratch.batches[i].clear();
     InsertStats skipped;
     skipped.skipped_over_budget = scans[0].count;
-    return skipped;
+    return UpdateSet::nothing(UpdateSet::Kind::Graded, skipped);
   }
   std::vector<double> weights(n);
   for (std::size_t i = 0; i < n; ++i) weights[i] = scans[i].weight / total;
   GradedScan& out = scratch.graded[graded ? n : 0];
   out.clear();
-  auto mix = std::make_unique<Mixture>(store_.model, weights);  // 36 KB of dense brick sums
+  auto mix = std::make_unique<Mixture>(store.model, weights);  // 36 KB of dense brick sums
   if (graded) {
     mix->mixGraded(scratch.graded, out);
   } else {
     mix->mixBatches(scratch.batches, out);
   }
   // The beams are those of one scan: counted once, as the first pose's trace counts them.
-  InsertStats stats = part[0];
-  stats.cells_free = stats.cells_occupied = stats.cells_unchanged = 0;
-  applyGraded(store_, {&out}, stats, ip.threads, scratch.apply_ctx);
-  return stats;
+  UpdateSet set = UpdateSet::nothing(UpdateSet::Kind::Graded, part[0]);
+  set.stats.cells_free = set.stats.cells_occupied = set.stats.cells_unchanged = 0;
+  set.graded.push_back(&out);
+  set.threads = ip.threads;
+  return set;
 }
 
 }  // namespace rtog

@@ -18,68 +18,48 @@ void MapEngine::clear() {
   cover_pending.store(false, std::memory_order_release);
 }
 
-template <class Insert>
-InsertStats MapEngine::integrate(Insert&& insert) {
-  ScratchScope scope(scratch);
-  ScanIntegrator integrator(store, planar, *scope);
-  const InsertStats stats = insert(integrator, [this] {
-    if (cover_pending.load(std::memory_order_acquire)) flush();
-  });
-  if (!planar.empty()) cover_pending.store(true, std::memory_order_release);
-  // Buffers kept for the next scan may add half the map's own bytes to what the process holds.
-  scope.keepAtMost(store.index.memoryBytesAtLeast() / 2 + planar.memoryBytes());
-  return stats;
-}
-
-InsertStats MapEngine::insertPointCloud(const Eigen::Vector3d& origin, const Eigen::Vector3f* points,
-                                        std::size_t count, const InsertParams& ip, const std::uint8_t* is_hit) {
-  return integrate([&](ScanIntegrator& in, const std::function<void()>& flush_pending) {
-    return in.insert(origin, points, count, ip, is_hit, flush_pending);
-  });
-}
-
-InsertStats MapEngine::insertPointSource(const Eigen::Vector3d& origin, const PointSource& source,
-                                        const InsertParams& ip) {
-  return integrate([&](ScanIntegrator& in, const std::function<void()>& flush_pending) {
-    return in.insert(origin, source, ip, flush_pending);
-  });
-}
-
-InsertStats MapEngine::insertBlurred(const WeightedScan* scans, std::size_t n, const InsertParams& ip) {
-  return integrate([&](ScanIntegrator& in, const std::function<void()>& flush_pending) {
-    return in.insertBlurred(scans, n, ip, flush_pending);
-  });
-}
-
-InsertStats MapEngine::insertCones(const ConeReading* readings, std::size_t n, ConeWeighting w,
-                                   const InsertParams& ip) {
-  ScratchScope scope(scratch);
-  const InsertStats stats = ScanIntegrator(store, planar, *scope).insertCones(readings, n, w, ip, [this] {
-    if (cover_pending.load(std::memory_order_acquire)) flush();
-  });
-  scope.keepAtMost(store.index.memoryBytesAtLeast() / 2 + planar.memoryBytes());
-  return stats;
-}
-
-InsertStats MapEngine::applyStepRuns(std::int32_t z, const StepRun* runs, std::size_t n, const StepRule& rule,
-                                     std::vector<float>* after) {
-  if (after) after->clear();
-  if (n == 0) return {};
-  const InsertStats stats = planar.applyStepRuns(store, z, runs, n, rule, after);
-  cover_pending.store(true, std::memory_order_release);
-  return stats;
-}
-
-void MapEngine::computeUpdate(const Eigen::Vector3d& origin, const Eigen::Vector3f* points, std::size_t count,
-                              const InsertParams& ip, const std::uint8_t* is_hit, UpdateBatch& batch,
-                              InsertStats& stats) const {
-  ScanIntegrator::traceBeams(store.lattice, origin, points, count, ip, is_hit, batch, stats);
-}
-
-void MapEngine::applyUpdate(const std::vector<const UpdateBatch*>& batches, InsertStats& stats, int threads) {
+InsertStats MapEngine::apply(UpdateSet&& set) {
   const ScratchScope scope(scratch);
+  std::vector<ApplyContext>& contexts = (*scope).apply_ctx;
+  InsertStats stats = set.stats;
+  switch (set.kind) {
+    case UpdateSet::Kind::Planar:
+      planar.apply(store, *set.planar, set.planar_count, set.z, stats);
+      cover_pending.store(true, std::memory_order_release);
+      return stats;
+    case UpdateSet::Kind::StepRuns:
+      if (set.after) set.after->clear();
+      if (set.run_count == 0) return {};
+      stats = planar.applyStepRuns(store, set.z, set.runs, set.run_count, *set.rule, set.after);
+      cover_pending.store(true, std::memory_order_release);
+      return stats;
+    default:
+      break;
+  }
   ensureCovered();
-  applyBatches(store, batches, stats, threads, (*scope).apply_ctx);
+  switch (set.kind) {
+    case UpdateSet::Kind::Marks:
+      if (!set.batches.empty()) applyBatches(store, set.batches, stats, set.threads, contexts);
+      break;
+    case UpdateSet::Kind::Graded:
+      if (!set.graded.empty()) applyGraded(store, set.graded, stats, set.threads, contexts);
+      break;
+    case UpdateSet::Kind::Sequence:
+      // One measurement after the other, each of its cells once (cone readings).
+      for (const GradedScan* g : set.graded) {
+        InsertStats applied;
+        applyGraded(store, {g}, applied, 1, contexts);
+        applied.rays_hit = applied.rays_truncated = 0;
+        stats += applied;
+      }
+      break;
+    case UpdateSet::Kind::Assigned:
+      if (set.assigned) applyAssigned(store, *set.assigned, stats, contexts);
+      break;
+    default:
+      break;
+  }
+  return stats;
 }
 
 }  // namespace rtog

@@ -1,15 +1,15 @@
 // The implementation behind OccupancyMap: the stored map, the planar cache in front of it and
-// the insertion scratch, with the rule that readers see the cache covered.
+// the insertion scratch, with the rule that readers see the cache covered. Evidence enters by
+// one door: an integrator produces an UpdateSet (integrate/update_set.hpp), apply() applies it.
 #pragma once
 
 #include <atomic>
 #include <memory>
 #include <mutex>
-#include <vector>
 
+#include "integrate/insert_scratch.hpp"
 #include "integrate/planar/planar_cache.hpp"
-#include "integrate/scan_integrator.hpp"
-#include "integrate/update_batch.hpp"
+#include "integrate/update_set.hpp"
 #include "storage/map_store.hpp"
 
 namespace rtog {
@@ -24,23 +24,23 @@ class MapEngine {
   void ensureCovered() {
     if (cover_pending.load(std::memory_order_acquire)) flush();
   }
+  // The only mutators of the store: flush(), clear() and apply().
   InsertStats flush();
   void clear();
+  /// Applies an integrator's set: planar batches and step runs into the planar cache (a cover
+  /// pending after), every other kind after covering the cache. The set's buffers are those of
+  /// this map's scratch (held by the caller's ScratchScope, or by apply's own).
+  InsertStats apply(UpdateSet&& set);
 
-  InsertStats insertPointCloud(const Eigen::Vector3d& origin, const Eigen::Vector3f* points, std::size_t count,
-                               const InsertParams& ip, const std::uint8_t* is_hit);
-  InsertStats insertPointSource(const Eigen::Vector3d& origin, const PointSource& source, const InsertParams& ip);
-  InsertStats insertBlurred(const WeightedScan* scans, std::size_t n, const InsertParams& ip);
-  InsertStats insertCones(const ConeReading* readings, std::size_t n, ConeWeighting w, const InsertParams& ip);
-  InsertStats applyStepRuns(std::int32_t z, const StepRun* runs, std::size_t n, const StepRule& rule,
-                            std::vector<float>* after);
-  /// Step 1 of an insertion: traces the beams into `batch`; no change to the map.
-  void computeUpdate(const Eigen::Vector3d& origin, const Eigen::Vector3f* points, std::size_t count,
-                     const InsertParams& ip, const std::uint8_t* is_hit, UpdateBatch& batch,
-                     InsertStats& stats) const;
-  /// Step 2: applies the union of finalized batches (occupied winning across batches too), on
-  /// up to `threads` threads; the result does not depend on the count.
-  void applyUpdate(const std::vector<const UpdateBatch*>& batches, InsertStats& stats, int threads = 1);
+  /// Runs produce(IntegrationContext) -> UpdateSet with this map's scratch, then apply().
+  template <class Produce>
+  InsertStats integrate(Produce&& produce) {
+    ScratchScope scope(scratch);
+    InsertStats stats = apply(produce(IntegrationContext{store, *scope}));
+    // Buffers kept for the next scan may add half the map's own bytes to what the process holds.
+    scope.keepAtMost(store.index.memoryBytesAtLeast() / 2 + planar.memoryBytes());
+    return stats;
+  }
 
   std::size_t memoryBytes() const { return sizeof(*this) + store.index.memoryBytes() + planar.memoryBytes(); }
 
@@ -49,11 +49,6 @@ class MapEngine {
   std::unique_ptr<InsertScratch> scratch;  // while inserting (ScratchScope)
   std::mutex cover_mutex;
   std::atomic<bool> cover_pending{false};
-
- private:
-  /// Runs insert(integrator, flush_pending) with this map's scratch, then notes a pending cover.
-  template <class Insert>
-  InsertStats integrate(Insert&& insert);
 };
 
 }  // namespace rtog

@@ -14,12 +14,8 @@
 
 #include <Eigen/Geometry>
 
-#include "integrate/batch_apply.hpp"
-#include "integrate/graded_scan.hpp"
-#include "map/fusion_resample.hpp"
+#include "integrate/fusion_integrator.hpp"
 #include "map/map_engine.hpp"
-#include "parallel/parallel.hpp"
-#include "util/flat_hash_map.hpp"
 #include "rtog/core/occupancy_map.hpp"
 
 namespace rtog {
@@ -34,63 +30,6 @@ void checkRigid(const Eigen::Isometry3d& pose) {
         "rtog::OccupancyMap::fuse: the pose must be rigid (finite, a rotation and a translation)");
 }
 
-/// The cells of `box` of `src` moved by a whole-cell shift of an equal lattice: each to `emit`, with
-/// no transform per cell; those beyond the keys are left out, the box counted once.
-template <class Emit>
-void shiftedCells(const std::array<std::int64_t, 3>& shift, const Box& box, InsertStats& stats, Emit&& emit) {
-  bool beyond = false;
-  for (std::int64_t z = box.min.z; z <= box.max.z; ++z)
-    for (std::int64_t y = box.min.y; y <= box.max.y; ++y)
-      for (std::int64_t x = box.min.x; x <= box.max.x; ++x) {
-        const std::int64_t kx = x + shift[0], ky = y + shift[1], kz = z + shift[2];
-        if (kx < kKeyMin || ky < kKeyMin || kz < kKeyMin || kx > kKeyMax || ky > kKeyMax || kz > kKeyMax) {
-          beyond = true;
-          continue;
-        }
-        emit(Key{static_cast<std::int32_t>(kx), static_cast<std::int32_t>(ky), static_cast<std::int32_t>(kz)});
-      }
-  if (beyond) ++stats.skipped_out_of_range;
-}
-
-/// `other`'s evidence (l - l0 per cell) placed by `pose` and resampled into `dst`, conserved: the
-/// one rule of both fusions (fusion_resample.hpp). The leaves go in blocks of a fixed size, each
-/// summed apart (by the threads, a wave at a time), the blocks' sums added in block order: the
-/// same sums in the same order for any thread count.
-ResampledEvidence resample(const OccupancyMap& other, const Lattice& dst, const Eigen::Isometry3d& pose, float l0,
-                           int threads, InsertStats& stats) {
-  constexpr std::size_t kBlock = kResampleBlock;
-  std::vector<std::pair<Box, float>> leaves;
-  other.forEachLeaf([&](const Box& box, float v) { leaves.emplace_back(box, v); });
-  const Placement place(dst, other.lattice(), pose);
-  const std::size_t blocks = (leaves.size() + kBlock - 1) / kBlock;
-  const std::size_t wave = std::max<std::size_t>(1, std::min<std::size_t>(static_cast<std::size_t>(threads), blocks));
-  std::vector<ResampledEvidence> part(wave);
-  std::vector<std::size_t> skipped(wave);
-  ResampledEvidence out;
-  for (std::size_t first = 0; first < blocks; first += wave) {
-    const std::size_t n = std::min(wave, blocks - first);
-    const auto run = [&](std::size_t t) {
-      part[t].clear();
-      InsertStats st;
-      const std::size_t end = std::min(leaves.size(), (first + t + 1) * kBlock);
-      for (std::size_t i = (first + t) * kBlock; i < end; ++i) {
-        const double d = static_cast<double>(leaves[i].second - l0);
-        place.overlaps(leaves[i].first, st, [&](const Key& k, double volume) { part[t].add(k, d * volume); });
-      }
-      skipped[t] = st.skipped_out_of_range;
-    };
-    if (n == 1)
-      run(0);
-    else
-      parallel::run(n, run);
-    for (std::size_t t = 0; t < n; ++t) {
-      for (std::size_t j = 0; j < part[t].keys().size(); ++j) out.add(part[t].keys()[j], part[t].sums()[j]);
-      stats.skipped_out_of_range += skipped[t];
-    }
-  }
-  return out;
-}
-
 }  // namespace
 
 InsertStats OccupancyMap::fuse(const OccupancyMap& other, const Eigen::Isometry3d& pose, int threads) {
@@ -98,30 +37,7 @@ InsertStats OccupancyMap::fuse(const OccupancyMap& other, const Eigen::Isometry3
     throw std::invalid_argument("rtog::OccupancyMap::fuse: a map fused with itself would count its evidence twice");
   checkRigid(pose);
   if (threads < 1) throw std::invalid_argument("rtog::OccupancyMap::fuse: threads must be at least 1");
-  other.engine_->ensureCovered();
-  MapEngine& e = *engine_;
-  e.ensureCovered();
-  const float l0 = other.logOddsModel().prior();
-  InsertStats stats;
-  GradedScan graded;
-  if (const auto shift = wholeCellShift(e.store.lattice, other.lattice(), pose)) {
-    // Chunks of one log, maps of one frame: the leaves are disjoint and the shift one-to-one, so
-    // each cell is reached once and goes in with no lookup.
-    std::size_t cells = 0;
-    other.forEachLeaf([&](const Box& box, float) { cells += static_cast<std::size_t>(box.volume()); });
-    graded.reserve(cells);
-    other.forEachLeaf([&](const Box& box, float v) {
-      shiftedCells(*shift, box, stats, [&](const Key& k) { graded.markDistinct(k, v - l0); });
-    });
-  } else {
-    const ResampledEvidence r = resample(other, e.store.lattice, pose, l0, threads, stats);
-    graded.reserve(r.keys().size());
-    for (std::size_t i = 0; i < r.keys().size(); ++i) graded.markDistinct(r.keys()[i], static_cast<float>(r.sums()[i]));
-  }
-  graded.finalize();
-  std::vector<ApplyContext> contexts;
-  applyGraded(e.store, {&graded}, stats, threads, contexts);
-  return stats;
+  return engine_->integrate([&](const IntegrationContext& c) { return FusionIntegrator(c).trace(other, pose, threads); });
 }
 
 InsertStats OccupancyMap::fuse(const OccupancyMap& other, const std::vector<WeightedPose>& poses, int threads) {
@@ -137,38 +53,7 @@ InsertStats OccupancyMap::fuse(const OccupancyMap& other, const std::vector<Weig
   }
   if (poses.empty() || !(std::fabs(total - 1.0) < 1e-9))
     throw std::invalid_argument("rtog::OccupancyMap::fuse: the poses' weights must sum to 1");
-  if (poses.size() == 1) return fuse(other, poses[0].pose, threads);
-  other.engine_->ensureCovered();
-  MapEngine& e = *engine_;
-  e.ensureCovered();
-  // Per cell of this map: the mixture over the poses of the other map's P(occupied) there, a pose
-  // that leaves the cell outside the other map's known cells adding the prior (it says nothing).
-  const float l0 = other.logOddsModel().prior();
-  const double p0 = probability(l0);
-  detail::FlatHashMap64 index;
-  std::vector<Key> keys;
-  std::vector<double> mass, weight;  // sum of w P over the poses that know the cell, and of w
-  InsertStats stats;
-  for (const WeightedPose& w : poses) {
-    // The other map under this pose, resampled as by the plain fusion: P_i = P(l0 + evidence).
-    const ResampledEvidence r = resample(other, e.store.lattice, w.pose, l0, threads, stats);
-    for (std::size_t j = 0; j < r.keys().size(); ++j) {
-      const auto i = static_cast<std::uint32_t>(keys.size());
-      const std::uint32_t at = index.findOrInsert(packKey(r.keys()[j]), i);
-      if (at == i) keys.push_back(r.keys()[j]), mass.push_back(0.0), weight.push_back(0.0);
-      mass[at] += w.weight * probability(double(l0) + r.sums()[j]);
-      weight[at] += w.weight;
-    }
-  }
-  GradedScan graded;
-  for (std::size_t i = 0; i < keys.size(); ++i) {
-    const double p = std::min(std::max(mass[i] + (1.0 - weight[i]) * p0, 1e-12), 1.0 - 1e-12);
-    graded.mark(keys[i], static_cast<float>(logit(p)) - l0);
-  }
-  graded.finalize();
-  std::vector<ApplyContext> contexts;
-  applyGraded(e.store, {&graded}, stats, threads, contexts);
-  return stats;
+  return engine_->integrate([&](const IntegrationContext& c) { return FusionIntegrator(c).trace(other, poses, threads); });
 }
 
 }  // namespace rtog

@@ -151,7 +151,9 @@ OccupancyMap OccupancyMap::read(std::istream& is) {
                              std::to_string(left) + " (truncated or corrupt)");
 
   OccupancyMap map(p);
-  MapStore& store = map.engine_->store;
+  const MapStore& store = map.engine_->store;
+  std::vector<Box> boxes;
+  std::vector<float> values;
   for (std::uint64_t i = 0; i < count; ++i) {
     Box b;
     for (int a = 0; a < 3; ++a) b.min[a] = r.get<std::int32_t>("leaf");
@@ -163,40 +165,21 @@ OccupancyMap OccupancyMap::read(std::istream& is) {
       throw std::runtime_error("rtog map: leaf value outside the clamping bounds");
     if (b.volume() > 1 && !store.mergeable(v))
       throw std::runtime_error("rtog map: merged leaf " + toString(b) + " with a value its merge policy keeps apart");
-    const Key o = brickOrigin(brickOf(b.min));
-    LeafEntry e{};
-    for (int a = 0; a < 3; ++a) {
-      e.lo[a] = static_cast<std::uint8_t>(b.min[a] - o[a]);
-      e.hi[a] = static_cast<std::uint8_t>(b.max[a] - o[a]);
-    }
-    e.value = v;
-    store.index.brick(store.index.brickSlot(brickOf(b.min))).leaves.push_back(e);
+    boxes.push_back(b);
+    values.push_back(v);
   }
   std::uint64_t stored_sum;
   const std::uint64_t sum = r.checksum();
   if (!is.read(reinterpret_cast<char*>(&stored_sum), sizeof(stored_sum)))
     throw std::runtime_error("rtog map: truncated stream while reading checksum");
   if (stored_sum != sum) throw std::runtime_error("rtog map: checksum mismatch (corrupt file)");
-
-  // Leaves must be disjoint: paint each brick's cells once, then pack the brick and index
-  // all leaf nodes with one bulk load.
-  std::vector<std::int32_t> local(kBrickCells, -1);
-  for (std::uint32_t slot = 0; slot < store.index.bricks().size(); ++slot) {
-    Brick& br = store.index.brick(slot);
-    for (std::size_t i = 0; i < br.leaves.size(); ++i) {
-      bool overlap = false;
-      br.leaves[i].forEachCell([&](int c) {
-        std::int32_t& cell = local[static_cast<std::size_t>(c)];
-        overlap |= cell >= 0;
-        cell = static_cast<std::int32_t>(i);
-      });
-      if (overlap) throw std::runtime_error("rtog map: overlapping leaves in brick " + toString(br.brick));
-    }
-    store.index.packLeaves(slot, local);
-    std::fill(local.begin(), local.end(), -1);
-    store.index.addLeafCount(static_cast<std::int64_t>(br.leaves.size()));
+  // The leaves, checked disjoint, become the map's leaves as they are (assignCells into a map
+  // without leaves), with one bulk load of the upper tree.
+  try {
+    map.assignCells(boxes.data(), values.data(), boxes.size());
+  } catch (const std::invalid_argument& e) {
+    throw std::runtime_error(std::string("rtog map: ") + e.what());
   }
-  store.index.rebuildUpperTree();
   return map;
 }
 

@@ -1,7 +1,10 @@
 // OccupancyMap: the public face of MapEngine. Readers cover the planar cache first.
 #include "rtog/core/occupancy_map.hpp"
 
-#include "integrate/scan_integrator.hpp"
+#include "integrate/beam_integrator.hpp"
+#include "integrate/cell_assignment.hpp"
+#include "integrate/cone_integrator.hpp"
+#include "integrate/pose_blur.hpp"
 #include "map/map_engine.hpp"
 
 namespace rtog {
@@ -47,28 +50,33 @@ void OccupancyMap::clear() { engine_->clear(); }
 InsertStats OccupancyMap::flush() { return engine_->flush(); }
 bool OccupancyMap::hasPendingCover() const { return engine_->cover_pending.load(std::memory_order_acquire); }
 
+// Each verb: its integrator, then the engine's apply (MapEngine::integrate).
 InsertStats OccupancyMap::insertPointCloud(const Eigen::Vector3d& origin, const Eigen::Vector3f* points,
                                            std::size_t count, const InsertParams& ip, const std::uint8_t* is_hit) {
-  return engine_->insertPointCloud(origin, points, count, ip, is_hit);
+  return engine_->integrate([&](const IntegrationContext& c) { return integrateScan(c, origin, points, count, ip, is_hit); });
 }
 
 InsertStats OccupancyMap::insertPointSource(const Eigen::Vector3d& origin, const PointSource& source,
                                            const InsertParams& ip) {
-  return engine_->insertPointSource(origin, source, ip);
+  return engine_->integrate([&](const IntegrationContext& c) { return integrateScan(c, origin, source, ip); });
 }
 
 InsertStats OccupancyMap::insertBlurred(const WeightedScan* scans, std::size_t n, const InsertParams& ip) {
-  return engine_->insertBlurred(scans, n, ip);
+  return engine_->integrate([&](const IntegrationContext& c) { return PoseBlurIntegrator(c).trace(scans, n, ip); });
 }
 
 InsertStats OccupancyMap::insertCones(const ConeReading* readings, std::size_t n, ConeWeighting w,
                                       const InsertParams& ip) {
-  return engine_->insertCones(readings, n, w, ip);
+  return engine_->integrate([&](const IntegrationContext& c) { return ConeIntegrator(c).trace(readings, n, w, ip); });
 }
 
 InsertStats OccupancyMap::applyStepRuns(std::int32_t z, const StepRun* runs, std::size_t n, const StepRule& rule,
                                         std::vector<float>* after) {
-  return engine_->applyStepRuns(z, runs, n, rule, after);
+  return engine_->apply(UpdateSet::stepRuns(z, runs, n, rule, after));
+}
+
+InsertStats OccupancyMap::assignCells(const Box* boxes, const float* values, std::size_t n) {
+  return engine_->integrate([&](const IntegrationContext& c) { return CellAssignment(c).trace(boxes, values, n); });
 }
 
 void OccupancyMap::releaseInsertBuffers() { rtog::releaseInsertBuffers(); }

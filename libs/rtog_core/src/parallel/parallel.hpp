@@ -39,5 +39,33 @@ class ChunkClaims {
   std::vector<Range> ranges_;
 };
 
+/// The skeleton of every integrator's tracing: `count` work items in chunks of `chunk`, claimed
+/// (ChunkClaims) by `threads` threads. Each thread t calls begin(t), then trace(t, first, n,
+/// counts[t]) for each chunk it claims, then finish(t). A trace that returns false stops every
+/// thread at its next chunk (finish is then skipped: the caller drops what was traced). Returns
+/// whether all chunks were traced. The counts are per thread, summed by the caller in thread
+/// order: the split of the work among threads must not change what the callers produce.
+template <class Counts, class Begin, class Trace, class Finish>
+bool traceChunks(std::size_t count, std::size_t chunk, std::vector<Counts>& counts, Begin&& begin, Trace&& trace,
+                 Finish&& finish) {
+  const std::size_t threads = counts.size();
+  ChunkClaims claims((count + chunk - 1) / chunk, threads);
+  std::atomic<bool> stopped{false};
+  run(threads, [&](std::size_t t) {
+    Counts own{};  // counted locally: neighbouring entries of `counts` share a cache line
+    begin(t);
+    for (std::size_t c; (c = claims.next(t)) != ChunkClaims::kNone;) {
+      if (stopped.load(std::memory_order_relaxed)) break;
+      if (!trace(t, c * chunk, chunk < count - c * chunk ? chunk : count - c * chunk, own)) {
+        stopped.store(true, std::memory_order_relaxed);
+        break;
+      }
+    }
+    if (!stopped.load(std::memory_order_relaxed)) finish(t);
+    counts[t] = own;
+  });
+  return !stopped.load();
+}
+
 }  // namespace parallel
 }  // namespace rtog

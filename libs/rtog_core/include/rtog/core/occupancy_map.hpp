@@ -137,6 +137,16 @@ class OccupancyMap {
   /// rigid, weights that are not positive or do not sum to 1, threads < 1, or `other` being this map.
   InsertStats fuse(const OccupancyMap& other, const std::vector<WeightedPose>& poses, int threads = defaultThreadCount());
 
+  /// Sets cells to absolute log-odds values (a prior, an imported grid): the cells of boxes[i]
+  /// take values[i], whatever they held; other cells keep theirs. A map without leaves takes the
+  /// boxes as its leaves, cut at brick borders (cell by cell where the merge policy keeps the value
+  /// apart); elsewhere each touched brick is covered anew, as insertion covers it. Counts each cell
+  /// in cells_occupied (a value above the prior) or cells_free. Throws std::invalid_argument,
+  /// changing nothing, for an empty box, one beyond the key range, boxes that overlap, boxes
+  /// spanning more than 2^26 bricks, or a value that is not finite or lies outside the clamping
+  /// bounds.
+  InsertStats assignCells(const Box* boxes, const float* values, std::size_t n);
+
   /// Insertion works in buffers that all maps of the process share through a pool: an idle one
   /// keeps the size of the largest insertion it served, and up to four are kept (one for each
   /// map inserting at the same time). This frees the idle ones.
@@ -200,11 +210,8 @@ class OccupancyMap {
   /// Throws std::runtime_error on a corrupt or truncated stream.
   static OccupancyMap read(std::istream& is);
 
-  /// The implementation, for code of this library (src/) only.
-  MapEngine& engine() { return *engine_; }
-  const MapEngine& engine() const { return *engine_; }
-
  private:
+  friend struct MapEngineAccess;  // the core's own code and tests (src/map/engine_access.hpp)
   using LeafVisitor = void (*)(void* fn, const Box& box, float log_odds);
   template <class Fn>
   static void callLeafVisitor(void* fn, const Box& box, float log_odds) {

@@ -1,7 +1,7 @@
 // Placing the other map of a fusion by a rigid pose, with the exact overlap of each placed cuboid
 // and each cell of this lattice. Coordinates are lattice coordinates (a cell is a unit cube);
 // distances are measured in src cells so that a cuboid's overlaps sum to its cell count.
-#include "map/fusion_resample.hpp"
+#include "integrate/fusion_resample.hpp"
 
 #include <algorithm>
 #include <cmath>
