@@ -19,8 +19,6 @@ void MapEngine::clear() {
 }
 
 InsertStats MapEngine::apply(UpdateSet&& set) {
-  const ScratchScope scope(scratch);
-  std::vector<ApplyContext>& contexts = (*scope).apply_ctx;
   InsertStats stats = set.stats;
   switch (set.kind) {
     case UpdateSet::Kind::Planar:
@@ -37,6 +35,9 @@ InsertStats MapEngine::apply(UpdateSet&& set) {
       break;
   }
   ensureCovered();
+  // The appliers' per-thread contexts: the scratch's (the planar cache needs none).
+  const ScratchScope scope(scratch);
+  std::vector<ApplyContext>& contexts = (*scope).apply_ctx;
   switch (set.kind) {
     case UpdateSet::Kind::Marks:
       if (!set.batches.empty()) applyBatches(store, set.batches, stats, set.threads, contexts);
