@@ -1,5 +1,6 @@
 #include "integrate/cell_assignment.hpp"
 
+#include <algorithm>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -9,15 +10,62 @@
 #include "util/flat_hash_map.hpp"
 
 namespace rtog {
+namespace {
+
+const char* const kWhat = "rtog::OccupancyMap::assignCells: ";
+
+/// Each brick's pieces made contiguous, bricks in the order they first appear (a stable counting
+/// sort, done only if some brick's pieces are apart), then checked disjoint brick by brick.
+void groupAndCheck(std::vector<AssignedPiece>& pieces) {
+  detail::FlatHashMap64 run_of;  // brick -> the index of its first run
+  std::vector<std::uint32_t> run_group;  // per run: its brick's group
+  std::uint32_t groups = 0;
+  bool apart = false;
+  for (std::size_t i = 0; i < pieces.size(); ++i) {
+    if (i > 0 && pieces[i].brick == pieces[i - 1].brick) continue;
+    const std::uint32_t at = run_of.findOrInsert(packKey(pieces[i].brick), groups);
+    if (at == groups) {
+      ++groups;
+    } else {
+      apart = true;
+    }
+    run_group.push_back(at);
+  }
+  if (apart) {
+    std::vector<std::size_t> start(groups + 1, 0);
+    std::vector<std::uint32_t> group_of(pieces.size());
+    for (std::size_t i = 0, run = 0; i < pieces.size(); ++i) {
+      if (i > 0 && !(pieces[i].brick == pieces[i - 1].brick)) ++run;
+      group_of[i] = run_group[run];
+      ++start[group_of[i] + 1];
+    }
+    for (std::size_t g = 0; g < groups; ++g) start[g + 1] += start[g];
+    std::vector<AssignedPiece> grouped(pieces.size());
+    for (std::size_t i = 0; i < pieces.size(); ++i) grouped[start[group_of[i]]++] = pieces[i];
+    pieces.swap(grouped);
+  }
+  BrickMask painted{};
+  for (std::size_t first = 0; first < pieces.size();) {
+    std::size_t last = first;
+    painted.fill(0);
+    for (; last < pieces.size() && pieces[last].brick == pieces[first].brick; ++last)
+      pieces[last].leaf.forEachCell([&](int c) {
+        const std::uint64_t bit = std::uint64_t{1} << (c & 63);
+        if (painted[static_cast<std::size_t>(c >> 6)] & bit)
+          throw std::invalid_argument(std::string(kWhat) + "boxes overlap in brick " + toString(pieces[first].brick));
+        painted[static_cast<std::size_t>(c >> 6)] |= bit;
+      });
+    first = last;
+  }
+}
+
+}  // namespace
 
 UpdateSet CellAssignment::trace(const Box* boxes, const float* values, std::size_t n) {
   const LogOddsModel& model = ctx_.store.model;
-  const std::string what = "rtog::OccupancyMap::assignCells: ";
-  // Each box cut into its bricks' pieces; the pieces grouped by brick, bricks in the order they
-  // first appear (so a map without leaves takes its bricks in the caller's order, as read() does).
-  detail::FlatHashMap64 group_of;
-  std::vector<Key> bricks;
-  std::vector<std::pair<std::uint32_t, AssignedPiece>> pieces;
+  const std::string what = kWhat;
+  std::vector<AssignedPiece>& pieces = ctx_.scratch.assigned;
+  pieces.clear();
   std::int64_t total_pieces = 0;
   for (std::size_t i = 0; i < n; ++i) {
     const Box& b = boxes[i];
@@ -35,40 +83,22 @@ UpdateSet CellAssignment::trace(const Box* boxes, const float* values, std::size
       for (std::int32_t by = b0.y; by <= b1.y; ++by)
         for (std::int32_t bx = b0.x; bx <= b1.x; ++bx) {
           const Key brick{bx, by, bz}, o = brickOrigin(brick);
-          const auto g = static_cast<std::uint32_t>(bricks.size());
-          const std::uint32_t at = group_of.findOrInsert(packKey(brick), g);
-          if (at == g) bricks.push_back(brick);
           AssignedPiece p{brick, LeafEntry{}};
           for (int a = 0; a < 3; ++a) {
             p.leaf.lo[a] = static_cast<std::uint8_t>(std::max(b.min[a], o[a]) - o[a]);
             p.leaf.hi[a] = static_cast<std::uint8_t>(std::min(b.max[a], o[a] + kBrickSize - 1) - o[a]);
           }
           p.leaf.value = values[i];
-          pieces.emplace_back(at, p);
+          pieces.push_back(p);
         }
   }
-  // Grouped (stable), then each brick's pieces checked for overlap before anything changes.
-  std::vector<std::size_t> start(bricks.size() + 1, 0);
-  for (const auto& [g, p] : pieces) ++start[g + 1];
-  for (std::size_t g = 0; g < bricks.size(); ++g) start[g + 1] += start[g];
-  std::vector<AssignedPiece>& out = ctx_.scratch.assigned;
-  out.resize(pieces.size());
-  for (const auto& [g, p] : pieces) out[start[g]++] = p;
-  BrickMask painted{};
-  for (std::size_t first = 0; first < out.size();) {
-    std::size_t last = first;
-    painted.fill(0);
-    for (; last < out.size() && out[last].brick == out[first].brick; ++last)
-      out[last].leaf.forEachCell([&](int c) {
-        const std::uint64_t bit = std::uint64_t{1} << (c & 63);
-        if (painted[static_cast<std::size_t>(c >> 6)] & bit)
-          throw std::invalid_argument(what + "boxes overlap in brick " + toString(out[first].brick));
-        painted[static_cast<std::size_t>(c >> 6)] |= bit;
-      });
-    first = last;
-  }
+  return tracePieces();
+}
+
+UpdateSet CellAssignment::tracePieces() {
+  groupAndCheck(ctx_.scratch.assigned);
   UpdateSet set = UpdateSet::nothing(UpdateSet::Kind::Assigned, {});
-  set.assigned = &out;
+  set.assigned = &ctx_.scratch.assigned;
   return set;
 }
 

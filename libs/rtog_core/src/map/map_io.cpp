@@ -5,6 +5,7 @@
 #include <istream>
 #include <ostream>
 
+#include "integrate/cell_assignment.hpp"
 #include "map/map_engine.hpp"
 #include "rtog/core/occupancy_map.hpp"
 
@@ -151,32 +152,40 @@ OccupancyMap OccupancyMap::read(std::istream& is) {
                              std::to_string(left) + " (truncated or corrupt)");
 
   OccupancyMap map(p);
-  const MapStore& store = map.engine_->store;
-  std::vector<Box> boxes;
-  std::vector<float> values;
-  for (std::uint64_t i = 0; i < count; ++i) {
-    Box b;
-    for (int a = 0; a < 3; ++a) b.min[a] = r.get<std::int32_t>("leaf");
-    for (int a = 0; a < 3; ++a) b.max[a] = r.get<std::int32_t>("leaf");
-    const auto v = r.get<float>("leaf");
-    if (!keyInRange(b.min) || !keyInRange(b.max) || b.isEmpty() || brickOf(b.min) != brickOf(b.max))
-      throw std::runtime_error("rtog map: malformed leaf box " + toString(b));
-    if (!(v >= store.model.clampMin() && v <= store.model.clampMax()))
-      throw std::runtime_error("rtog map: leaf value outside the clamping bounds");
-    if (b.volume() > 1 && !store.mergeable(v))
-      throw std::runtime_error("rtog map: merged leaf " + toString(b) + " with a value its merge policy keeps apart");
-    boxes.push_back(b);
-    values.push_back(v);
-  }
-  std::uint64_t stored_sum;
-  const std::uint64_t sum = r.checksum();
-  if (!is.read(reinterpret_cast<char*>(&stored_sum), sizeof(stored_sum)))
-    throw std::runtime_error("rtog map: truncated stream while reading checksum");
-  if (stored_sum != sum) throw std::runtime_error("rtog map: checksum mismatch (corrupt file)");
-  // The leaves, checked disjoint, become the map's leaves as they are (assignCells into a map
-  // without leaves), with one bulk load of the upper tree.
+  // The leaves go in as pieces of a cell assignment into a map without leaves: they become its
+  // leaves as they are, checked disjoint, with one bulk load of the upper tree.
   try {
-    map.assignCells(boxes.data(), values.data(), boxes.size());
+    map.engine_->integrate([&](const IntegrationContext& c) {
+      std::vector<AssignedPiece>& pieces = c.scratch.assigned;
+      pieces.clear();
+      if (bytesLeft(is) >= 0) pieces.reserve(static_cast<std::size_t>(count));  // the count was checked
+      for (std::uint64_t i = 0; i < count; ++i) {
+        Box b;
+        for (int a = 0; a < 3; ++a) b.min[a] = r.get<std::int32_t>("leaf");
+        for (int a = 0; a < 3; ++a) b.max[a] = r.get<std::int32_t>("leaf");
+        const auto v = r.get<float>("leaf");
+        if (!keyInRange(b.min) || !keyInRange(b.max) || b.isEmpty() || brickOf(b.min) != brickOf(b.max))
+          throw std::runtime_error("rtog map: malformed leaf box " + toString(b));
+        if (!(v >= c.store.model.clampMin() && v <= c.store.model.clampMax()))
+          throw std::runtime_error("rtog map: leaf value outside the clamping bounds");
+        if (b.volume() > 1 && !c.store.mergeable(v))
+          throw std::runtime_error("rtog map: merged leaf " + toString(b) + " with a value its merge policy keeps apart");
+        const Key o = brickOrigin(brickOf(b.min));
+        AssignedPiece piece{brickOf(b.min), LeafEntry{}};
+        for (int a = 0; a < 3; ++a) {
+          piece.leaf.lo[a] = static_cast<std::uint8_t>(b.min[a] - o[a]);
+          piece.leaf.hi[a] = static_cast<std::uint8_t>(b.max[a] - o[a]);
+        }
+        piece.leaf.value = v;
+        pieces.push_back(piece);
+      }
+      std::uint64_t stored_sum;
+      const std::uint64_t sum = r.checksum();
+      if (!is.read(reinterpret_cast<char*>(&stored_sum), sizeof(stored_sum)))
+        throw std::runtime_error("rtog map: truncated stream while reading checksum");
+      if (stored_sum != sum) throw std::runtime_error("rtog map: checksum mismatch (corrupt file)");
+      return CellAssignment(c).tracePieces();
+    });
   } catch (const std::invalid_argument& e) {
     throw std::runtime_error(std::string("rtog map: ") + e.what());
   }
