@@ -94,12 +94,17 @@ if(lines GREATER 20)
   fail("OccupancyMap's private section has ${lines} lines (at most 20)")
 endif()
 
-# rtog_mrpt uses the core through its installed headers only.
+# rtog_mrpt uses the core through its installed headers only, and its header-only containers
+# (util/: one hash map in the project) in private sources.
 file(GLOB_RECURSE mrpt_files ${MRPT_DIR}/*.cpp ${MRPT_DIR}/*.hpp ${MRPT_DIR}/*.h)
 foreach(f IN LISTS mrpt_files)
   file(READ ${f} text)
-  if(text MATCHES "#include \"(storage|integrate|map|kernels|parallel|util)/" OR text MATCHES "rtog/core/detail")
+  if(text MATCHES "#include \"(base|storage|integrate|map|kernels|parallel|plan)/" OR text MATCHES "rtog/core/detail")
     fail("${f}: includes a private header of the core")
+  endif()
+  # The core's containers (util/, header-only, target rtog_core_util) only in private sources.
+  if(f MATCHES "/include/" AND text MATCHES "#include \"util/")
+    fail("${f}: an installed header includes the core's containers")
   endif()
 endforeach()
 

@@ -1,5 +1,5 @@
 // CRTreeOccupancyGridMap's derived data, kept out of the installed header (the pimpl behind
-// CachesHolder) so that the public API names no third-party hash map.
+// CachesHolder) so that the public API names no container of the implementation.
 #pragma once
 
 #include <cstdint>
@@ -8,25 +8,10 @@
 #include <optional>
 #include <vector>
 
-#include <tsl/robin_map.h>
-
 #include "rtog/mrpt/CRTreeOccupancyGridMap.h"
+#include "util/flat_hash_map.hpp"
 
 namespace rtog {
-
-/// std::hash of an integer is the identity in libstdc++, and robin_map picks a bucket by the low
-/// bits: a packed key's low bits are its x, so a block of cells would share a few buckets. The
-/// splitmix64 finalizer spreads every bit of the key over the bucket index.
-struct MixedKeyHash {
-  std::size_t operator()(std::uint64_t k) const noexcept {
-    k ^= k >> 30;
-    k *= 0xbf58476d1ce4e5b9ULL;
-    k ^= k >> 27;
-    k *= 0x94d049bb133111ebULL;
-    k ^= k >> 31;
-    return static_cast<std::size_t>(k);
-  }
-};
 
 struct CRTreeOccupancyGridMap::ScanAngles {
   std::size_t beams;
@@ -38,7 +23,9 @@ struct CRTreeOccupancyGridMap::ScanAngles {
 /// Derived data; copies start empty (a copy rebuilds them on demand).
 struct CRTreeOccupancyGridMap::Caches {
   std::mutex mutex;
-  tsl::robin_map<std::uint64_t, float, MixedKeyHash> lf;  ///< packed key -> likelihood-field term
+  /// packed key -> likelihood-field term (its float bits): the project's one hash map, which
+  /// mixes the key (a packed key's low bits are its x, shared by a block of cells).
+  detail::FlatHashMap64 lf;
   std::optional<FieldParams> lf_params;  ///< what the terms in `lf` were computed with
   bool points_dirty{true};
   mrpt::maps::CSimplePointsMap occupied_points;

@@ -61,9 +61,15 @@ float CRTreeOccupancyGridMap::fieldTermLocked(const Eigen::Vector3d& p, const Fi
   if (!likelihoodOptions.enableLikelihoodCache) return term(p);
   // Cached per lattice cell: the term at the cell centre.
   const std::uint64_t pk = packKey(k);
-  if (const auto it = caches_->lf.find(pk); it != caches_->lf.end()) return it->second;
-  const float t = term(map_.lattice().cellCenter(k));
-  caches_->lf.emplace(pk, t);
+  std::uint32_t bits = caches_->lf.find(pk);
+  float t;
+  if (bits != detail::FlatHashMap64::kAbsent) {
+    std::memcpy(&t, &bits, sizeof t);
+    return t;
+  }
+  t = term(map_.lattice().cellCenter(k));
+  std::memcpy(&bits, &t, sizeof t);
+  if (bits != detail::FlatHashMap64::kAbsent) caches_->lf.findOrInsert(pk, bits);  // a finite term never is
   return t;
 }
 
