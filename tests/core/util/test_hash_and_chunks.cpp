@@ -119,3 +119,58 @@ TEST(ChunkClaims, EveryChunkIsClaimedExactlyOnceForRandomCountsAndThreads) {
     for (std::size_t t = 0; t < threads; ++t) ASSERT_EQ(claims.next(t), parallel::ChunkClaims::kNone);
   }
 }
+
+// The integrators' tracing skeleton: every item traced once in chunks of the given size (the last
+// one shorter), each thread begun and finished once, counts per thread summing to the items; a
+// trace returning false stops every thread at its next chunk and skips every finish.
+TEST(TraceChunks, TracesEveryItemOnceAndStopsEveryThreadOnFalse) {
+  std::mt19937 rng(39);
+  for (int trial = 0; trial < 40; ++trial) {
+    const std::size_t count = trial == 0 ? 0 : rng() % 20000, chunk = 1 + rng() % 700, threads = 1 + rng() % 6;
+    std::vector<std::atomic<int>> traced(count);
+    std::vector<std::atomic<int>> begun(threads), finished(threads);
+    std::vector<std::size_t> counts(threads);
+    std::atomic<bool> bad_chunk{false};
+    const bool all = parallel::traceChunks(
+        count, chunk, counts, [&](std::size_t t) { ++begun[t]; },
+        [&](std::size_t, std::size_t first, std::size_t n, std::size_t& own) {
+          if (first % chunk != 0 || n == 0 || n > chunk || (n < chunk && first + n != count)) bad_chunk = true;
+          for (std::size_t i = first; i < first + n; ++i) ++traced[i];
+          own += n;
+          return true;
+        },
+        [&](std::size_t t) { ++finished[t]; });
+    ASSERT_TRUE(all);
+    ASSERT_FALSE(bad_chunk.load()) << count << " items, chunk " << chunk;
+    std::size_t sum = 0;
+    for (std::size_t t = 0; t < threads; ++t) {
+      ASSERT_EQ(begun[t].load(), 1);
+      ASSERT_EQ(finished[t].load(), 1);
+      sum += counts[t];
+    }
+    ASSERT_EQ(sum, count);
+    for (std::size_t i = 0; i < count; ++i) ASSERT_EQ(traced[i].load(), 1) << "item " << i;
+
+    // A chunk that fails: no finish runs. When every chunk fails, each thread traces at most one
+    // (it stops itself), whatever the timing.
+    if (count == 0) continue;
+    const std::size_t failing = rng() % ((count + chunk - 1) / chunk);
+    for (const bool every : {false, true}) {
+      std::vector<std::atomic<int>> finished2(threads), per_thread(threads);
+      const bool all2 = parallel::traceChunks(
+          count, chunk, counts, [](std::size_t) {},
+          [&](std::size_t t, std::size_t first, std::size_t, std::size_t&) {
+            ++per_thread[t];
+            return !(every || first / chunk == failing);
+          },
+          [&](std::size_t t) { ++finished2[t]; });
+      ASSERT_FALSE(all2);
+      for (std::size_t t = 0; t < threads; ++t) {
+        ASSERT_EQ(finished2[t].load(), 0);
+        if (every) {
+          ASSERT_LE(per_thread[t].load(), 1);
+        }
+      }
+    }
+  }
+}
