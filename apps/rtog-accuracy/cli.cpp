@@ -39,7 +39,7 @@ int main(int argc, char** argv, std::ostream& out, std::ostream& err) {
       ->check(number(Sign::NonNegative));
   cli.add_option("--pose-correlation", cfg.pose_correlation, "Correlation of consecutive poses' errors, in [0, 1)")
       ->capture_default_str()
-      ->check(CLI::Range(0.0, 0.999999));
+      ->check(app::checks::within(0.0, 0.999999));
   cli.add_option("--rooms-x", cfg.world.rooms_x, "Rooms of the world along x")
       ->capture_default_str()
       ->check(app::checks::integer(1, 16));

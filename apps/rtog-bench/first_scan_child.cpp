@@ -9,6 +9,8 @@
 #include <stdexcept>
 
 #include <CLI/CLI.hpp>
+
+#include "rtog/app/option_checks.hpp"
 #include <mrpt/config/CConfigFileMemory.h>
 #include <mrpt/maps/CMultiMetricMap.h>
 #include <mrpt/maps/COccupancyGridMap2D.h>
@@ -165,7 +167,9 @@ int firstScanMain(int argc, char** argv, std::ostream& out, std::ostream& err) {
   cli.add_option("--map", map_type, "CMultiMetricMap .ini map name")
       ->required()
       ->check(CLI::IsMember({"rtreeOccupancyGrid", "octoMap", "occupancyGrid"}));
-  cli.add_option("--resolution", resolution, "Cell size [m]")->required()->check(CLI::PositiveNumber);
+  cli.add_option("--resolution", resolution, "Cell size [m]")
+      ->required()
+      ->check(rtog::app::checks::number(rtog::app::checks::Sign::Positive, 1000));
   cli.add_flag("--as-recorded", as_recorded, "Insert the observation as recorded (default: as every map type takes it)");
   try {
     cli.parse(argc, argv);

@@ -7,6 +7,7 @@
 #include <CLI/CLI.hpp>
 
 #include "bench.hpp"
+#include "rtog/app/option_checks.hpp"
 
 namespace {
 /// rtog-first-scan beside this executable (both are built into the same directory).
@@ -50,8 +51,10 @@ int main(int argc, char** argv) {
   app.add_option("--min-seconds", opts.min_seconds,
                  "A fast method builds again in a round until its share of this much was timed")
       ->capture_default_str()
-      ->check(CLI::NonNegativeNumber);
-  app.add_option("--resolutions", opts.resolutions, "Cell sizes [m]")->capture_default_str();
+      ->check(rtog::app::checks::number(rtog::app::checks::Sign::NonNegative));
+  app.add_option("--resolutions", opts.resolutions, "Cell sizes [m]")
+      ->capture_default_str()
+      ->check(rtog::app::checks::number(rtog::app::checks::Sign::Positive, 1000));
   app.add_option("--json", cmd.json, "JSON output")->capture_default_str();
   app.add_option("--markdown", cmd.markdown, "Markdown report")->capture_default_str();
   app.add_option("--img-dir", cmd.img_dir, "Directory for PNG plots")->capture_default_str()->check(CLI::ExistingDirectory);

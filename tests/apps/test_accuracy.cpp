@@ -83,7 +83,7 @@ TEST(AccuracyCli, BadValuesAreRefusedWithExit2) {
   for (const std::vector<std::string>& bad :
        {std::vector<std::string>{"--resolution", "nan"}, {"--resolution", "0"}, {"--stride", "0"}, {"--stride", "1.5"},
         {"--seed", "-1"}, {"--sigma", "-0.1"},
-        {"--pose-sigma-xy", "-0.01"}, {"--pose-sigma-yaw", "inf"}, {"--pose-correlation", "1"}, {"--pose-correlation", "-0.5"},
+        {"--pose-sigma-xy", "-0.01"}, {"--pose-sigma-yaw", "inf"}, {"--pose-correlation", "1"}, {"--pose-correlation", "-0.5"}, {"--pose-correlation", "nan"},
         {"--calibrated-clamp-readings", "0"}, {"--calibrated-clamp-readings", "65"}, {"--calibrated-clamp-readings", "1.5"},
         {"--json", ""}, {"--quick", "--stride", "2"}, {"--no-such-option"}}) {
     std::string err;

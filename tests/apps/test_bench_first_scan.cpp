@@ -106,6 +106,24 @@ TEST(BenchFirstScan, HelperRefusesABadCommandLine) {
   missing.path = ::testing::TempDir() + "/no_such.rawlog";
   EXPECT_THROW(runFirstScanProcess(RTOG_FIRST_SCAN_EXE, missing, {"octoMap"}, 0.1), std::runtime_error);
   EXPECT_THROW(runFirstScanProcess(RTOG_FIRST_SCAN_EXE, kSenaSource, {"noSuchMap"}, 0.1), std::runtime_error);
+  // CLI11's own number checks let "nan" through (NaN compares false): a NaN cell size is refused.
+  EXPECT_THROW(runFirstScanProcess(RTOG_FIRST_SCAN_EXE, kSenaSource, {"octoMap"}, std::nan("")), std::runtime_error);
+}
+
+TEST(BenchCli, NonFiniteValuesAreRefusedWithAMessage) {
+  for (const std::string args : {"--resolutions nan", "--resolutions 0.1 inf", "--resolutions -0.1", "--min-seconds nan"}) {
+    const std::string cmd = std::string(RTOG_BENCH_EXE) + " --only tum --methods none " + args + " --json " +
+                            ::testing::TempDir() + "/bench_cli.json --markdown " + ::testing::TempDir() +
+                            "/bench_cli.md 2>&1";
+    FILE* p = popen(cmd.c_str(), "r");
+    ASSERT_NE(p, nullptr);
+    std::string out;
+    char buf[512];
+    while (std::fgets(buf, sizeof buf, p)) out += buf;
+    const int status = pclose(p);
+    EXPECT_NE(status, 0) << args << ": " << out;
+    EXPECT_NE(out.find("must be"), std::string::npos) << args << ": " << out;
+  }
 }
 
 // The TUM frame the first-scan rows insert: through MRPT's own unprojection (as COctoMap and
