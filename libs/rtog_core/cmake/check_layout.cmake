@@ -80,6 +80,46 @@ foreach(f IN LISTS installed)
   endif()
 endforeach()
 
+# ---- rtog_mrpt and all of libs/ (the adapter's rules; the core's are above) -------------------
+# (a) No file under libs/*/include or libs/*/src over max_lines lines.
+file(GLOB_RECURSE lib_files ${libs_dir}/*/include/* ${libs_dir}/*/src/*)
+foreach(f IN LISTS lib_files)
+  file(READ ${f} text)
+  string(REGEX MATCHALL "\n" newlines "${text}")
+  list(LENGTH newlines lines)
+  if(lines GREATER max_lines)
+    fail("${f}: ${lines} lines (at most ${max_lines})")
+  endif()
+endforeach()
+# (b) CRTreeOccupancyGridMap's files are split on one axis, by MRPT verb: a file of the class is
+# named CRTreeOccupancyGridMap[_<verb>].{cpp,hpp} with a verb of this list. Sensor specifics
+# (sonar cones, grid-scan insertion, pose-PDF sigma points, ...) are helpers in files of their
+# own, called from the verb files; a name such as CRTreeOccupancyGridMap_sonar.cpp fails here.
+set(mrpt_map_verbs insert likelihood io matching simulate viz options prior import grid2d caches)
+file(GLOB_RECURSE mrpt_class_files RELATIVE ${MRPT_DIR} ${MRPT_DIR}/src/CRTreeOccupancyGridMap*)
+foreach(f IN LISTS mrpt_class_files)
+  get_filename_component(name ${f} NAME)
+  if(name MATCHES "^CRTreeOccupancyGridMap\\.(cpp|hpp)$")
+    continue()
+  endif()
+  if(NOT name MATCHES "^CRTreeOccupancyGridMap_([a-z0-9]+)\\.(cpp|hpp)$")
+    fail("${MRPT_DIR}/${f}: CRTreeOccupancyGridMap's files are named CRTreeOccupancyGridMap_<verb>.cpp")
+    continue()
+  endif()
+  list(FIND mrpt_map_verbs "${CMAKE_MATCH_1}" at)
+  if(at LESS 0)
+    fail("${MRPT_DIR}/${f}: '${CMAKE_MATCH_1}' is not an MRPT verb of the map (${mrpt_map_verbs}): a sensor's code is a helper in a file of its own")
+  endif()
+endforeach()
+# (c) The installed adapter header includes no tsl/ or absl/ header: the libs-wide rule above.
+if(NOT EXISTS ${MRPT_DIR}/include/rtog/mrpt/CRTreeOccupancyGridMap.h)
+  fail("${MRPT_DIR}/include/rtog/mrpt/CRTreeOccupancyGridMap.h not found (pass an absolute MRPT_DIR)")
+endif()
+list(LENGTH lib_files lib_checked)
+if(lib_checked LESS 60)
+  fail("only ${lib_checked} files found under ${libs_dir}/*/include and src")
+endif()
+
 if(errors)
   message(FATAL_ERROR "rtog::core layout rules broken:\n${errors}")
 endif()
