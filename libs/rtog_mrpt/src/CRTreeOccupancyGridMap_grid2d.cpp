@@ -13,8 +13,6 @@
 #include <string>
 
 #include <mrpt/config/CConfigFileBase.h>
-#include <mrpt/obs/CObservation2DRangeScan.h>
-#include <mrpt/obs/CObservationRange.h>
 
 namespace rtog {
 
