@@ -6,6 +6,7 @@
 #include <mrpt/opengl/CSetOfObjects.h>
 #include <mrpt/serialization/CArchive.h>
 
+#include "gzip.hpp"
 #include "rtog/mrpt/CRTreeOccupancyGridMap.h"
 
 #include <nlohmann/json.hpp>
@@ -204,5 +205,7 @@ int exportMap(const ExportOptions& opts, std::ostream& out) {
   for (const auto& m : messages) out << m << "\n";
   return 0;
 }
+
+void writeGzip(const void* data, std::size_t n, std::ostream& out) { gzip::compress(data, n, out); }
 
 }  // namespace rtog::cli

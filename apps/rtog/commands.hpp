@@ -165,8 +165,9 @@ inline constexpr const char* kNoReason = "unknown error (the exception said noth
 /// throws std::runtime_error naming the file on failure, including bytes after the map.
 OccupancyMap loadMap(const std::string& path);
 
-/// `n` bytes gzip-compressed into `out`, in memory. (MRPT's compress_gz_data_block goes through
-/// a file in /tmp named by the clock: two processes in the same microsecond share it.)
+/// `n` bytes gzip-compressed into `out`, in memory (rtog::gzip::compress). (MRPT's
+/// compress_gz_data_block goes through a file in /tmp named by the clock: two processes in the
+/// same microsecond share it.)
 void writeGzip(const void* data, std::size_t n, std::ostream& out);
 /// What a child process found reading an MRPT archive file (a rawlog, a simplemap) entry by
 /// entry (rawlog_input.cpp).

@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "commands.hpp"
+#include "gzip.hpp"
 #include "rtog/mrpt/CRTreeOccupancyGridMap.h"
 
 #include <mrpt/core/exceptions.h>
@@ -77,7 +78,7 @@ OccupancyMap loadMap(const std::string& path) {
     // apps write it); anything else must be the core format. Peeked, not seeked: a pipe cannot.
     const int first = in.peek();
     if (first == std::char_traits<char>::eof()) throw std::runtime_error("the file is empty");
-    if (first == 0x1f) return readMrptMap(in);
+    if (gzip::startsMember(first)) return readMrptMap(in);
     OccupancyMap map = OccupancyMap::read(in);
     std::uint64_t left = 0;
     char scratch[1 << 14];

@@ -13,7 +13,6 @@
 #include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
-#include <zlib.h>
 
 #include <cerrno>
 #include <cstdio>
@@ -30,29 +29,10 @@
 #include <mrpt/serialization/CArchive.h>
 
 #include "commands.hpp"
+#include "gzip.hpp"
 
 namespace rtog::cli {
 namespace {
-
-/// Bytes of the log as MRPT reads them: a gzip file decompressed (counted, not kept).
-std::uint64_t logBytes(const std::string& path, const char* what) {
-  std::ifstream f(path, std::ios::binary);
-  unsigned char magic[2] = {0, 0};
-  f.read(reinterpret_cast<char*>(magic), 2);
-  if (!(magic[0] == 0x1f && magic[1] == 0x8b)) {
-    f.clear();
-    f.seekg(0, std::ios::end);
-    return static_cast<std::uint64_t>(f.tellg());
-  }
-  gzFile gz = gzopen(path.c_str(), "rb");
-  if (!gz) throw std::runtime_error(std::string("cannot open ") + what + " '" + path + "'");
-  std::uint64_t n = 0;
-  std::vector<char> buf(std::size_t{1} << 16);
-  int got = 0;
-  while ((got = gzread(gz, buf.data(), static_cast<unsigned>(buf.size()))) > 0) n += static_cast<std::uint64_t>(got);
-  gzclose(gz);
-  return n;  // a damaged gzip stream counts up to the damage: the entry there is truncated
-}
 
 /// What an MRPT exception says, in one line: the objects it was reading, outermost first, and
 /// the innermost message (its text nests one banner, message and backtrace per object).
@@ -151,7 +131,7 @@ void say(int fd, const std::string& s) {
 
 ArchiveCheck checkArchive(const std::string& path, const char* what) {
   ArchiveCheck r;
-  r.bytes = logBytes(path, what);
+  r.bytes = gzip::fileBytes(path, what);  // the log as MRPT reads it: a gzip file decompressed
   const std::string name = std::string(what) + " '" + path + "'";
   int fds[2];
   if (pipe(fds) != 0) throw std::runtime_error("cannot check " + name + ": no pipe");

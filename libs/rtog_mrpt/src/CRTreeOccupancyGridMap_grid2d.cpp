@@ -1,7 +1,7 @@
 // rtog::CRTreeOccupancyGridMap: the 2D view (a COccupancyGridMap2D of a height band), the
-// likelihood of planar scans on it, and the grid queries MRPT users call on a 2D grid.
+// mrpt_grid preset's grid geometry, and the grid queries MRPT users call on a 2D grid. (The
+// likelihood of planar scans on the view is in CRTreeOccupancyGridMap_likelihood.cpp.)
 #include "CRTreeOccupancyGridMap_grid2d.hpp"
-#include "grid_consensus.hpp"
 #include "rtog/core/band.hpp"
 #include "mrpt_grid.hpp"
 #include "options_check.hpp"
@@ -13,8 +13,6 @@
 #include <string>
 
 #include <mrpt/config/CConfigFileBase.h>
-#include <mrpt/obs/CObservation2DRangeScan.h>
-#include <mrpt/obs/CObservationRange.h>
 
 namespace rtog {
 
@@ -251,102 +249,11 @@ std::shared_ptr<const Grid2D> CRTreeOccupancyGridMap::gridView() const {
   return std::shared_ptr<const Grid2D>(v, &v->grid);  // keeps the view alive, not the map's cache
 }
 
-std::optional<double> CRTreeOccupancyGridMap::gridViewLikelihood(const mrpt::obs::CObservation& obs,
-                                                                 const mrpt::poses::CPose3D& pose) const {
-  if (!likelihoodOptions.scanLikelihoodOnGridView) return std::nullopt;
-  if (const auto* range = dynamic_cast<const mrpt::obs::CObservationRange*>(&obs)) return sonarLikelihood(*range, pose);
-  const auto* scan = dynamic_cast<const mrpt::obs::CObservation2DRangeScan*>(&obs);
-  if (!scan) return std::nullopt;
-  // Non-finite poses (of the robot or of the sensor on it) and tilted scans are left to the
-  // native 3D path, which scores the former as impossible.
-  // Both poses checked apart, not composed: a particle filter calls this for every particle, and
-  // reading the angles of a composed pose costs more than the rest of this wrapper.
-  for (const mrpt::poses::CPose3D* p : {&pose, &scan->sensorPose})
-    if (!(std::isfinite(p->x()) && std::isfinite(p->y()) && std::isfinite(p->z()) && std::isfinite(p->yaw()) &&
-          std::isfinite(p->pitch()) && std::isfinite(p->roll())))
-      return std::nullopt;
-  likelihoodOptions.validate();
-  static const float kPlanarTolerance = mrpt::maps::COccupancyGridMap2D::TInsertionOptions().horizontalTolerance;
-  if (!scan->isPlanarScan(kPlanarTolerance)) return std::nullopt;
-  // MRPT's lmConsensus reads the cells of end points without a bounds check: for it the view
-  // is grown to hold them (beyond the stock grid, where that grid's result is undefined). The
-  // others check bounds (getCell, or the field's own test) and run on the view as it is.
-  const auto method = likelihoodOptions.likelihoodMethod;
-  std::optional<std::array<double, 4>> need;
-  // Consensus, MI and cells-difference read or write the cells of every valid end point: a
-  // "valid" range that is not finite, negative (an end point behind the sensor) or beyond the
-  // scan's maxRange or 100 km (beyond any range sensor) is taken as no return for them, on a
-  // copy made only for a scan that has one. (Not the insertion range: the stock grid scores
-  // beams beyond it, and so must the view.)
-  std::optional<mrpt::obs::CObservation2DRangeScan> trimmed;  // made only when needed: a scan is a heavy object
-  const mrpt::obs::CObservation2DRangeScan* scored = scan;
-  if (method == lmConsensus || method == lmMeanInformation || method == lmCellsDifference) {
-    // MRPT puts beam i at angle aperture * (i / (n - 1) - 1/2): a non-finite aperture gives NaN end
-    // points, whose cells these methods would read at an undefined index; a single beam MRPT
-    // refuses by an assertion (nRays >= 2 in its sin/cos table). Both are scored by the native
-    // path, which counts NaN beams as invalid and casts one beam as the insertion does.
-    if (!std::isfinite(scan->aperture) || scan->getScanSize() < 2) return std::nullopt;
-    const float limit = scan->maxRange > 0.0f ? std::min(scan->maxRange, 1e5f) : 1e5f;
-    const auto farOrBad = [&](std::size_t i) {
-      const float r = scan->getScanRange(i);
-      return scan->getScanRangeValidity(i) && !(std::isfinite(r) && r >= 0.0f && r <= limit);
-    };
-    // A pose whose scan cannot reach the map's cells is left to the native path: the view or
-    // grid would grow from the map to a particle flung far away. It must hold the robot and the
-    // sensor (which may be mounted, or misconfigured, far off); composed here only, as these
-    // methods cost far more than the composition. Written so that a NaN is refused too.
-    const Box kb = map_.keyBounds();
-    if (kb.isEmpty()) return std::nullopt;
-    const Eigen::Vector3d lo = map_.lattice().boxMin(kb), hi = map_.lattice().boxMax(kb);
-    const double reach = limit + 1.0;
-    const mrpt::poses::CPose3D sensor = pose + scan->sensorPose;
-    for (const mrpt::poses::CPose3D* p : {&pose, &sensor})
-      if (!(p->x() >= lo.x() - reach && p->y() >= lo.y() - reach && p->x() <= hi.x() + reach && p->y() <= hi.y() + reach))
-        return std::nullopt;
-    std::size_t i = 0;
-    while (i < scan->getScanSize() && !farOrBad(i)) ++i;
-    if (i < scan->getScanSize()) {
-      trimmed.emplace(*scan);
-      for (; i < trimmed->getScanSize(); ++i)
-        if (farOrBad(i)) trimmed->setScanRangeValidity(i, false);
-      scored = &*trimmed;
-    }
-  }
-  if (method == lmConsensus || method == lmMeanInformation) {
-    // Consensus reads the cell of every valid end point, and MI "inserts" the scan into a copy of
-    // the view that MRPT does not grow for it: the view must hold all the scan reaches.
-    double r = 0;
-    for (std::size_t i = 0; i < scored->getScanSize(); ++i)
-      if (scored->getScanRangeValidity(i)) r = std::max<double>(r, scored->getScanRange(i));
-    if (method == lmMeanInformation && insertionOptions.considerInvalidRangesAsFreeSpace)
-      r = std::max<double>(r, std::min<double>(scored->maxRange > 0.0f ? scored->maxRange : 0.0, insertionOptions.maxDistanceInsertion));
-    r += std::hypot(scan->sensorPose.x(), scan->sensorPose.y()) + 1.0;
-    need = std::array<double, 4>{pose.x() - r, pose.y() - r, pose.x() + r, pose.y() + r};
-    // A pose whose scan cannot reach the map's cells is left to the native path: growing the
-    // view there would cost memory without bound (a particle flung kilometres away).
-    const Box kb = map_.keyBounds();
-    if (kb.isEmpty()) return std::nullopt;
-    const Eigen::Vector3d lo = map_.lattice().boxMin(kb), hi = map_.lattice().boxMax(kb);
-    if ((*need)[0] < lo.x() - r || (*need)[1] < lo.y() - r || (*need)[2] > hi.x() + r || (*need)[3] > hi.y() + r)
-      return std::nullopt;
-  }
-  const auto v = gridViewShared(need ? need->data() : nullptr);
-  std::lock_guard<std::mutex> lk(v->mutex);
-  v->setOptions(likelihoodOptions, insertionOptions);
-  if (method == lmMeanInformation) {
-    // MRPT's MI "inserts" the scan counting information, but its scan insertion writes (and may
-    // resize) the grid all the same: run it on a copy, so that the view stays the map's.
-    GridView::Grid scratch = v->grid;
-    return scratch.computeObservationLikelihood(*scored, pose);
-  }
-  // The stock grid's likelihood field, its terms and their logarithms kept per cell.
-  if (method == lmLikelihoodField_Thrun && v->grid.genericMapParams.enableObservationLikelihood)
-    return v->field.scanLogLikelihood(v->grid, *scan, pose);
-  // Consensus as rtreeGridMap2D scores it (one implementation): the view holds every end point,
-  // so this is MRPT's value; the bounds check stands should it not.
-  if (method == lmConsensus && v->grid.genericMapParams.enableObservationLikelihood)
-    if (const std::optional<double> l = boundedConsensusLikelihood(v->grid, *scored, mrpt::poses::CPose2D(pose))) return *l;
-  return v->grid.computeObservationLikelihood(*scored, pose);
+void CRTreeOccupancyGridMap::setGridFrame(float x_min, float x_max, float y_min, float y_max) {
+  if (!isEmpty()) throw std::logic_error("rtog::CRTreeOccupancyGridMap::setGridFrame: the map holds cells");
+  TGridFrame2D f;
+  mrpt_grid::setSize(f, x_min, x_max, y_min, y_max, static_cast<float>(map_.resolution()));
+  frame_ = f;
 }
 
 // ---- grid queries on the view --------------------------------------------------------------

@@ -1,96 +1,35 @@
-// rtog::CRTreeOccupancyGridMap: turning MRPT observations into beams and inserting them.
+// rtog::CRTreeOccupancyGridMap: turning MRPT observations into beams and inserting them, at a
+// pose or an uncertain pose. The sensor specifics are helpers: sensor_points.hpp (point clouds,
+// depth, Velodyne), sonar_cones.hpp (CObservationRange as cones), grid_scan.hpp (2D scans in
+// the mrpt_grid preset), pose_sigma.hpp (the sigma points of a pose covariance).
 #include <cmath>
 #include <stdexcept>
 #include <string>
 
 #include <mrpt/maps/CPointsMap.h>
+#include <mrpt/maps/CSimpleMap.h>
 #include <mrpt/maps/CSimplePointsMap.h>
 #include <mrpt/obs/CObservation2DRangeScan.h>
 #include <mrpt/obs/CObservation3DRangeScan.h>
 #include <mrpt/obs/CObservationPointCloud.h>
 #include <mrpt/obs/CObservationRange.h>
 #include <mrpt/obs/CObservationRotatingScan.h>
+#include <mrpt/obs/CSensoryFrame.h>
 #include <mrpt/obs/CObservationVelodyneScan.h>
 
 #include "rtog/mrpt/CRTreeOccupancyGridMap.h"
 #include "depth_unprojection.hpp"
 #include "fingerprint.hpp"
 #include "rotating_scan.hpp"
+#include "grid_scan.hpp"
+#include "pose_sigma.hpp"
 #include "sensor_points.hpp"
+#include "sonar_cones.hpp"
 #include "CRTreeOccupancyGridMap_caches.hpp"
 
 namespace rtog {
 
 using mrpt::poses::CPose3D;
-
-namespace {
-
-// Arrays of one point cloud that disagree in length (a damaged or hand-made observation): read
-// past the shortest, they would be undefined behaviour.
-void requireSameSizes(const char* what, std::size_t x, std::size_t y, std::size_t z) {
-  if (x != y || x != z)
-    throw std::invalid_argument(std::string("rtog::CRTreeOccupancyGridMap: ") + what + " arrays differ in length (x " +
-                                std::to_string(x) + ", y " + std::to_string(y) + ", z " + std::to_string(z) + ")");
-}
-
-// Points of a points map (sensor frame), every `dec`-th.
-void takePointsMap(const mrpt::maps::CPointsMap& pm, std::size_t dec, detail::SensorPoints& sp) {
-  const auto& xs = pm.getPointsBufferRef_x();
-  const auto& ys = pm.getPointsBufferRef_y();
-  const auto& zs = pm.getPointsBufferRef_z();
-  requireSameSizes("points map", xs.size(), ys.size(), zs.size());
-  sp.x = xs.data(), sp.y = ys.data(), sp.z = zs.data();
-  sp.n = xs.size();
-  sp.dec = dec;
-}
-
-// Points decoded into `local` (sensor frame, valid, decimated already).
-void takeLocal(const std::vector<Eigen::Vector3f>& local, detail::SensorPoints& sp) {
-  static_assert(sizeof(Eigen::Vector3f) == 3 * sizeof(float), "Vector3f: three packed floats");
-  const float* first = local.empty() ? nullptr : local.front().data();
-  sp.x = first, sp.y = first ? first + 1 : nullptr, sp.z = first ? first + 2 : nullptr;
-  sp.stride = 3;
-  sp.n = local.size();
-  sp.dec = 1;
-}
-
-// Keys of the sensor-frame point cache: everything the decoded points depend on.
-std::uint64_t keyVelodyne(const mrpt::obs::CObservationVelodyneScan& v, std::size_t dec) {
-  detail::Fingerprint f;
-  f.value(std::uint32_t{2});
-  f.value(dec);
-  f.value(v.minRange);
-  f.value(v.maxRange);
-  f.vector(v.point_cloud.x);
-  f.vector(v.point_cloud.y);
-  f.vector(v.point_cloud.z);
-  f.vector(v.scan_packets);
-  f.vector(v.calibration.laser_corrections);
-  return f.digest();
-}
-
-std::uint64_t keyDepth(const mrpt::obs::CObservation3DRangeScan& d, std::size_t dec) {
-  detail::Fingerprint f;
-  f.value(std::uint32_t{4});
-  f.value(dec);
-  f.value(d.rangeImage.rows());
-  f.value(d.rangeImage.cols());
-  f.bytes(d.rangeImage.data(), std::size_t(d.rangeImage.rows()) * std::size_t(d.rangeImage.cols()) * 2);
-  f.value(d.rangeUnits);
-  f.value(d.range_is_depth);
-  // The whole camera model the unprojection reads (MRPT's undistorts every ray through `dist`,
-  // at every decimation); the sensor pose is not in it: the points are in the sensor frame.
-  const auto& c = d.cameraParams;
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j) f.value(c.intrinsicParams(i, j));
-  for (double v : c.dist) f.value(v);
-  f.value(static_cast<int>(c.distortion));
-  f.value(c.nrows);
-  f.value(c.ncols);
-  return f.digest();
-}
-
-}  // namespace
 
 std::shared_ptr<const CRTreeOccupancyGridMap::ScanAngles> CRTreeOccupancyGridMap::scanAngles(
     const mrpt::obs::CObservation2DRangeScan& scan) const {
@@ -146,7 +85,7 @@ bool CRTreeOccupancyGridMap::extractBeams(const mrpt::obs::CObservation& obs, co
     // Insertion takes the readings as cones (insertSonar), never as beams; for the likelihood
     // they are the echoes on the axes.
     if (forInsertion) return false;
-    sonarEndPoints(*range, robotPose, out);
+    sonar::endPoints(*range, robotPose, out);
     return true;
   }
   detail::SensorPoints sp;
@@ -200,20 +139,20 @@ bool CRTreeOccupancyGridMap::sensorPoints(const mrpt::obs::CObservation& obs, co
         local.emplace_back(static_cast<float>(r * angles->cos[i]), static_cast<float>(r * angles->sin[i]), 0.0f);
       }
     }
-    takeLocal(local, sp);
+    detail::takeLocal(local, sp);
     return true;
   }
   if (const auto* pc = dynamic_cast<const CObservationPointCloud*>(&obs)) {
     pc->load();
     if (!pc->pointcloud) return false;
     sp.setSensor(robotPose + pc->sensorPose);
-    takePointsMap(*pc->pointcloud, dec, sp);
+    detail::takePointsMap(*pc->pointcloud, dec, sp);
     return true;
   }
   if (const auto* velo = dynamic_cast<const CObservationVelodyneScan*>(&obs)) {
     sp.setSensor(robotPose + velo->sensorPose);
     localPointsCached(
-        keyVelodyne(*velo, dec),
+        detail::keyVelodyne(*velo, dec),
         [&](std::vector<Eigen::Vector3f>& pts, std::size_t& invalid) {
           CObservationVelodyneScan tmp;
           const CObservationVelodyneScan* src = velo;
@@ -223,7 +162,7 @@ bool CRTreeOccupancyGridMap::sensorPoints(const mrpt::obs::CObservation& obs, co
             src = &tmp;
           }
           const auto& pcl = src->point_cloud;
-          requireSameSizes("CObservationVelodyneScan point_cloud", pcl.x.size(), pcl.y.size(), pcl.z.size());
+          detail::requireSameSizes("CObservationVelodyneScan point_cloud", pcl.x.size(), pcl.y.size(), pcl.z.size());
           for (std::size_t i = 0; i < pcl.x.size(); i += dec) {
             if (!std::isfinite(pcl.x[i]) || !std::isfinite(pcl.y[i]) || !std::isfinite(pcl.z[i])) {
               ++invalid;
@@ -233,7 +172,7 @@ bool CRTreeOccupancyGridMap::sensorPoints(const mrpt::obs::CObservation& obs, co
           }
         },
         local, sp.invalid);
-    takeLocal(local, sp);
+    detail::takeLocal(local, sp);
     return true;
   }
   if (const auto* rot = dynamic_cast<const CObservationRotatingScan*>(&obs)) {
@@ -241,7 +180,7 @@ bool CRTreeOccupancyGridMap::sensorPoints(const mrpt::obs::CObservation& obs, co
     // Not cached: fingerprinting the whole range image costs more than decoding it.
     detail::decodeRotatingScan(*rot, dec, insertionOptions.rotatingScan_minElevation_deg,
                                insertionOptions.rotatingScan_maxElevation_deg, local, sp.invalid);
-    takeLocal(local, sp);
+    detail::takeLocal(local, sp);
     return true;
   }
   if (const auto* depth = dynamic_cast<const CObservation3DRangeScan*>(&obs)) {
@@ -250,7 +189,7 @@ bool CRTreeOccupancyGridMap::sensorPoints(const mrpt::obs::CObservation& obs, co
     if (!depth->hasRangeImage) {
       if (!depth->hasPoints3D) return false;
       // Only the point cloud was stored (sensor frame).
-      requireSameSizes("CObservation3DRangeScan points3D", depth->points3D_x.size(), depth->points3D_y.size(),
+      detail::requireSameSizes("CObservation3DRangeScan points3D", depth->points3D_x.size(), depth->points3D_y.size(),
                        depth->points3D_z.size());
       sp.x = depth->points3D_x.data(), sp.y = depth->points3D_y.data(), sp.z = depth->points3D_z.data();
       sp.n = depth->points3D_x.size();
@@ -263,7 +202,7 @@ bool CRTreeOccupancyGridMap::sensorPoints(const mrpt::obs::CObservation& obs, co
     // same points without the table of every pixel MRPT would keep (depth_unprojection.hpp).
     const std::size_t ddec = forInsertion ? insertionOptions.decimation_3d_range : std::min<std::size_t>(dec, 255);
     localPointsCached(
-        keyDepth(*depth, ddec),
+        detail::keyDepth(*depth, ddec),
         [&](std::vector<Eigen::Vector3f>& pts, std::size_t& invalid) {
           if (ddec > 1) {
             detail::unprojectDecimated(*depth, ddec, pts, invalid);
@@ -289,7 +228,7 @@ bool CRTreeOccupancyGridMap::sensorPoints(const mrpt::obs::CObservation& obs, co
           invalid += pixels > xs.size() ? pixels - xs.size() : 0;
         },
         local, sp.invalid);
-    takeLocal(local, sp);
+    detail::takeLocal(local, sp);
     return true;
   }
   return false;
@@ -317,6 +256,86 @@ bool CRTreeOccupancyGridMap::internal_insertObservation(const mrpt::obs::CObserv
   invalidRangesSkipped += sp.invalid + (sp.size() - lastInsertStats.raysTotal());
   notifyMapChanged();
   return true;
+}
+
+
+// ---- 2D scans in the mrpt_grid preset, sonar cones ----------------------------------------
+
+bool CRTreeOccupancyGridMap::insertGridScan(const mrpt::obs::CObservation2DRangeScan& scan, const CPose3D& robotPose,
+                                            GridScanUpdate* update) {
+  syncParams();
+  InsertStats stats;
+  std::size_t invalid = 0;
+  if (!mrpt_grid::insertScan(map_, frame_, scan, robotPose, insertionOptions, update, stats, invalid)) return false;
+  invalidRangesSkipped += invalid;
+  lastInsertStats = stats;
+  totalInsertStats += stats;
+  notifyMapChanged();
+  return true;
+}
+
+std::vector<ConeReading> CRTreeOccupancyGridMap::sonarReadings(const mrpt::obs::CObservationRange& o,
+                                                               const CPose3D& robotPose, std::size_t& invalid) const {
+  return sonar::readings(o, robotPose, insertionOptions, invalid);
+}
+
+bool CRTreeOccupancyGridMap::insertSonar(const mrpt::obs::CObservationRange& o, const CPose3D& robotPose) {
+  syncParams();
+  std::size_t invalid = 0;
+  const std::vector<ConeReading> readings = sonarReadings(o, robotPose, invalid);
+  InsertStats stats;
+  if (!insertionOptions.mrptGrid())
+    stats = map_.insertCones(readings.data(), readings.size(),
+                             coneWeightingFromString(insertionOptions.sonarConeWeighting),
+                             insertionOptions.toInsertParams());
+  else
+    stats = sonar::insertOnGrid(map_, frame_, readings, insertionOptions);
+  invalidRangesSkipped += invalid;
+  lastInsertStats = stats;
+  totalInsertStats += stats;
+  notifyMapChanged();
+  return true;
+}
+
+// ---- uncertain poses (poseUncertainty, doc/pose-uncertainty.md) ----------------------------
+
+bool CRTreeOccupancyGridMap::insertObservation(const mrpt::obs::CObservation& obs,
+                                               const mrpt::poses::CPose3DPDFGaussian& pose) {
+  if (!insertionOptions.poseUncertainty) return insertObservation(obs, pose.mean);
+  // A sonar reading already spreads over its cone: inserted at the mean (doc/sonar.md).
+  if (dynamic_cast<const mrpt::obs::CObservationRange*>(&obs)) return insertObservation(obs, pose.mean);
+  insertionOptions.validate();  // the mrpt_grid preset has no graded update
+  const std::vector<pose_sigma::SigmaPose> sigma = pose_sigma::sigmaPoses(pose);  // throws for a bad covariance
+  if (sigma.size() == 1) return insertObservation(obs, pose.mean);  // a certain pose: the plain update
+  if (!genericMapParams.enableObservationInsertion) return false;
+  std::vector<ObservationBeams> beams(sigma.size());
+  for (std::size_t i = 0; i < sigma.size(); ++i)
+    if (!extractBeams(obs, sigma[i].pose, beams[i], true)) return false;
+  const std::vector<WeightedScan> scans = pose_sigma::weightedScans(sigma, beams);
+  syncParams();
+  lastInsertStats = map_.insertBlurred(scans, insertionOptions.toInsertParams());
+  totalInsertStats += lastInsertStats;
+  invalidRangesSkipped += beams[0].invalid;
+  notifyMapChanged();
+  publishEvent(mrpt::maps::mrptEventMetricMapInsert(this, &obs, pose.mean));
+  return true;
+}
+
+bool CRTreeOccupancyGridMap::insertObservation(const mrpt::obs::CObservation& obs,
+                                               const mrpt::poses::CPosePDFGaussian& pose) {
+  return insertObservation(obs, mrpt::poses::CPose3DPDFGaussian(pose));
+}
+
+void CRTreeOccupancyGridMap::loadFromProbabilisticPosesAndObservations(const mrpt::maps::CSimpleMap& sm) {
+  clear();
+  for (const auto& pair : sm) {
+    if (!pair.pose) throw std::invalid_argument("rtog::CRTreeOccupancyGridMap: a simplemap frame has no pose");
+    if (!pair.sf) throw std::invalid_argument("rtog::CRTreeOccupancyGridMap: a simplemap frame has no observations");
+    mrpt::poses::CPose3DPDFGaussian g;
+    g.copyFrom(*pair.pose);  // a particle or mixture PDF as its mean and covariance
+    for (const auto& obs : *pair.sf)
+      if (obs) insertObservation(*obs, g);
+  }
 }
 
 }  // namespace rtog

@@ -4,9 +4,14 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
+#include <vector>
 
 #include <Eigen/Core>
+#include <mrpt/maps/CPointsMap.h>
 #include <mrpt/math/CMatrixFixed.h>
+#include <mrpt/obs/CObservation3DRangeScan.h>
+#include <mrpt/obs/CObservationVelodyneScan.h>
 #include <mrpt/poses/CPose3D.h>
 
 namespace rtog::detail {
@@ -37,5 +42,16 @@ struct SensorPoints {
   mrpt::math::CMatrixDouble33 R_;
   double t_[3] = {0.0, 0.0, 0.0};
 };
+
+/// Throws std::invalid_argument where the arrays of one point cloud disagree in length (a
+/// damaged or hand-made observation): read past the shortest, they would be undefined behaviour.
+void requireSameSizes(const char* what, std::size_t x, std::size_t y, std::size_t z);
+/// Points of a points map (sensor frame), every `dec`-th, into `sp`.
+void takePointsMap(const mrpt::maps::CPointsMap& pm, std::size_t dec, SensorPoints& sp);
+/// Points decoded into `local` (sensor frame, valid, decimated already), into `sp`.
+void takeLocal(const std::vector<Eigen::Vector3f>& local, SensorPoints& sp);
+/// Keys of the sensor-frame point cache: everything the decoded points depend on.
+std::uint64_t keyVelodyne(const mrpt::obs::CObservationVelodyneScan& v, std::size_t dec);
+std::uint64_t keyDepth(const mrpt::obs::CObservation3DRangeScan& d, std::size_t dec);
 
 }  // namespace rtog::detail

@@ -1,7 +1,5 @@
 #include "stream_input.hpp"
 
-#include <zlib.h>
-
 #include <stdexcept>
 #include <string>
 
@@ -10,6 +8,7 @@
 
 #include "rtog/mrpt/CRTreeOccupancyGridMap.h"
 #include "rtog/mrpt/register_classes.h"
+#include "gzip.hpp"
 
 namespace rtog {
 namespace {
@@ -51,51 +50,17 @@ class PlainInput : public ForwardInput {
 /// A gzip stream inflated as it is read.
 class GzipInput : public ForwardInput {
  public:
-  explicit GzipInput(std::istream& in) : in_(in) {
-    if (inflateInit2(&z_, 16 + MAX_WBITS) != Z_OK) throw std::runtime_error("zlib: cannot initialise");
-  }
-  ~GzipInput() override { inflateEnd(&z_); }
-  GzipInput(const GzipInput&) = delete;
-  GzipInput& operator=(const GzipInput&) = delete;
+  explicit GzipInput(std::istream& in) : in_(in), z_(in) {}
 
-  size_t Read(void* buf, size_t n) override {
-    z_.next_out = static_cast<Bytef*>(buf);
-    z_.avail_out = static_cast<uInt>(n);
-    while (z_.avail_out > 0 && !ended_) {
-      if (z_.avail_in == 0 && !refill()) {
-        truncated_ = true;
-        break;
-      }
-      const int r = inflate(&z_, Z_NO_FLUSH);
-      if (r == Z_STREAM_END) ended_ = true;
-      else if (r != Z_OK) throw std::runtime_error(std::string("corrupt gzip stream (") + (z_.msg ? z_.msg : "zlib error") + ")");
-    }
-    return n - z_.avail_out;
-  }
-  uint64_t getPosition() const override { return z_.total_out; }
-  bool truncated() const override { return truncated_; }
+  size_t Read(void* buf, size_t n) override { return z_.read(buf, n); }
+  uint64_t getPosition() const override { return z_.inflated(); }
+  bool truncated() const override { return z_.truncated(); }
   /// The rest of the inflated data, then what follows the gzip member.
-  std::uint64_t bytesLeft() override {
-    std::uint64_t left = 0;
-    char scratch[1 << 14];
-    for (std::size_t got; !ended_ && (got = Read(scratch, sizeof(scratch))) > 0;) left += got;
-    left += z_.avail_in;
-    z_.avail_in = 0;
-    return left + drain(in_);
-  }
+  std::uint64_t bytesLeft() override { return z_.bytesLeft() + drain(in_); }
 
  private:
-  bool refill() {
-    in_.read(in_buf_, sizeof(in_buf_));
-    z_.next_in = reinterpret_cast<Bytef*>(in_buf_);
-    z_.avail_in = static_cast<uInt>(in_.gcount());
-    return z_.avail_in > 0;
-  }
-
   std::istream& in_;
-  z_stream z_{};
-  char in_buf_[1 << 16];
-  bool ended_ = false, truncated_ = false;
+  gzip::Inflater z_;
 };
 
 }  // namespace
@@ -106,7 +71,7 @@ std::shared_ptr<CRTreeOccupancyGridMap> readMapStream(std::istream& in) {
   // Peeked, not seeked: a pipe cannot seek. A gzip member starts with 0x1f; anything else is
   // read as a plain CArchive (as CFileGZInputStream reads a file that is not compressed).
   std::unique_ptr<ForwardInput> src;
-  if (first == 0x1f) src = std::make_unique<GzipInput>(in);
+  if (gzip::startsMember(first)) src = std::make_unique<GzipInput>(in);
   else src = std::make_unique<PlainInput>(in);
   registerMrptClasses();  // ReadObject finds the class by name in MRPT's registry
   auto ar = mrpt::serialization::archiveFrom(*src);

@@ -1,6 +1,6 @@
 // A map file read from a std::istream, gzip or not, without seeking (a pipe works as a file
 // does), counting the bytes after the map: zlib's gzread, which CFileGZInputStream uses, skips
-// what follows a gzip member without a word.
+// what follows a gzip member without a word. The inflating is gzip/gzip.hpp's.
 #pragma once
 
 #include <istream>

@@ -311,14 +311,8 @@ class CRTreeOccupancyGridMap : public mrpt::maps::CMetricMap {
   void syncParams();
   /// loadFromGrid with the values drawn towards 0.5 by `confidence` (1: exact).
   void loadGridLayer(const mrpt::maps::COccupancyGridMap2D& grid, double confidence);
-  /// A CObservationRange's log-likelihood on the 2D view (doc/sonar.md): per echo, a Gaussian
-  /// (rayTracing_stdHit, mixed by LF_zHit / LF_zRandom) about the reading expected from the pose,
-  /// the shortest ray across its cone; nullopt where the view cannot score it (a non-finite pose).
-  std::optional<double> sonarLikelihood(const mrpt::obs::CObservationRange& o, const mrpt::poses::CPose3D& pose) const;
-  /// A CObservationRange's echoes as end points on the readings' axes, for the likelihood.
-  void sonarEndPoints(const mrpt::obs::CObservationRange& o, const mrpt::poses::CPose3D& robotPose,
-                      ObservationBeams& out) const;
-  /// Planar 2D scans scored on the 2D view (see scanLikelihoodOnGridView); nullopt: not so.
+  /// Planar 2D scans and sonar readings scored on the 2D view (see scanLikelihoodOnGridView);
+  /// nullopt: not so.
   std::optional<double> gridViewLikelihood(const mrpt::obs::CObservation& obs, const mrpt::poses::CPose3D& pose) const;
   struct GridView;  // CRTreeOccupancyGridMap_grid2d.hpp
   /// The view, grown (rebuilt) first if it does not cover `need` (x0, y0, x1, y1 [m]).
@@ -342,7 +336,7 @@ class CRTreeOccupancyGridMap : public mrpt::maps::CMetricMap {
   /// (capped) through the field's Gaussian-plus-uniform mixture. With the cache on, per lattice
   /// cell, as COccupancyGridMap2D's precomputed field. The caller holds caches_->mutex.
   float fieldTermLocked(const Eigen::Vector3d& p, const FieldParams& f) const;
-  /// An observation's beams in its sensor's frame (not a CObservationRange: see sonarEndPoints),
+  /// An observation's beams in its sensor's frame (not a CObservationRange: see sonar::endPoints),
   /// decimated for insertion or for the likelihood; false for an unsupported type.
   bool sensorPoints(const mrpt::obs::CObservation& obs, const mrpt::poses::CPose3D& robotPose, bool forInsertion,
                     detail::SensorPoints& sp) const;

@@ -1,28 +1,19 @@
-// rtog::CRTreeOccupancyGridMap: sonar and IR readings (CObservationRange) inserted as cones
-// (rtog/core/cone.hpp, doc/sonar.md), and their end points for the likelihood.
-//
-// MRPT 2.5's COccupancyGridMap2D inserts every reading of a CObservationRange at the pose of the
-// first one (sensedData[0].sensorPose) and centres each cone half an aperture clockwise of that
-// sensor's axis (COccupancyGridMap2D_insert.cpp: A = phi - aperture / 2, then the triangle
-// A +- aperture / 2). Here each reading is at its own sensorPose with its cone about its axis.
+#include "sonar_cones.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
 #include <string>
 
-#include <mrpt/obs/CObservationRange.h>
-
-#include "CRTreeOccupancyGridMap_grid2d.hpp"
 #include "mrpt_grid.hpp"
-#include "rtog/mrpt/CRTreeOccupancyGridMap.h"
 
-namespace rtog {
+namespace rtog::sonar {
 
 using mrpt::poses::CPose3D;
 
-std::vector<ConeReading> CRTreeOccupancyGridMap::sonarReadings(const mrpt::obs::CObservationRange& o,
-                                                               const CPose3D& robotPose, std::size_t& invalid) const {
+std::vector<ConeReading> readings(const mrpt::obs::CObservationRange& o, const CPose3D& robotPose,
+                                  const CRTreeOccupancyGridMap::TInsertionOptions& io, std::size_t& invalid) {
   constexpr double kPi = 3.14159265358979323846;
   const double aperture = o.sensorConeApperture;
   if (!(aperture >= 0.0 && aperture <= kPi))
@@ -39,7 +30,6 @@ std::vector<ConeReading> CRTreeOccupancyGridMap::sonarReadings(const mrpt::obs::
       if (!std::isfinite(o.sensedData[k].sensorPose[i]))
         throw std::invalid_argument("rtog::CRTreeOccupancyGridMap: a CObservationRange's reading " + std::to_string(k) +
                                     " has a non-finite sensor pose (" + o.sensedData[k].sensorPose.asString() + ")");
-  const TInsertionOptions& io = insertionOptions;
   const double cut = io.maxDistanceInsertion > 0.0f ? static_cast<double>(io.maxDistanceInsertion)
                                                     : std::numeric_limits<double>::infinity();
   std::vector<ConeReading> out;
@@ -71,90 +61,77 @@ std::vector<ConeReading> CRTreeOccupancyGridMap::sonarReadings(const mrpt::obs::
   return out;
 }
 
-bool CRTreeOccupancyGridMap::insertSonar(const mrpt::obs::CObservationRange& o, const CPose3D& robotPose) {
-  syncParams();
-  std::size_t invalid = 0;
-  const std::vector<ConeReading> readings = sonarReadings(o, robotPose, invalid);
+InsertStats insertOnGrid(OccupancyMap& map, TGridFrame2D& frame, const std::vector<ConeReading>& cones,
+                         const CRTreeOccupancyGridMap::TInsertionOptions& io) {
   InsertStats stats;
-  if (!insertionOptions.mrptGrid()) {
-    stats = map_.insertCones(readings.data(), readings.size(),
-                             coneWeightingFromString(insertionOptions.sonarConeWeighting),
-                             insertionOptions.toInsertParams());
-  } else if (!readings.empty()) {
-    // COccupancyGridMap2D's whole steps, every cone in the grid's one layer; the grid grows to
-    // hold the cones as it grows for a scan's end points.
-    const double res = map_.resolution();
-    TGridFrame2D grown = frame_;
-    if (!grown.has_layer) {
-      Key k;
-      if (!map_.lattice().tryKey(readings.front().origin, k))
-        throw std::out_of_range("rtog::CRTreeOccupancyGridMap: a sonar reading's height has no key");
-      grown.has_layer = true;
-      grown.layer = k.z;
+  if (cones.empty()) return stats;
+  const double res = map.resolution();
+  TGridFrame2D grown = frame;
+  if (!grown.has_layer) {
+    Key k;
+    if (!map.lattice().tryKey(cones.front().origin, k))
+      throw std::out_of_range("rtog::CRTreeOccupancyGridMap: a sonar reading's height has no key");
+    grown.has_layer = true;
+    grown.layer = k.z;
+  }
+  const std::uint32_t max_cells = io.toInsertParams().max_ray_cells;  // 0: unbounded
+  std::vector<std::vector<ConeCell>> cells(cones.size());
+  float x0 = std::numeric_limits<float>::max(), x1 = -x0, y0 = x0, y1 = -x0;
+  for (std::size_t i = 0; i < cones.size(); ++i) {
+    ConeReading r = cones[i];
+    r.origin.z() = (grown.layer + 0.5) * res;
+    if (max_cells > 0 && r.range / res > max_cells) {  // bounded as a beam is
+      ++stats.skipped_too_long;
+      continue;
     }
-    const std::uint32_t max_cells = insertionOptions.toInsertParams().max_ray_cells;  // 0: unbounded
-    std::vector<std::vector<ConeCell>> cells(readings.size());
-    float x0 = std::numeric_limits<float>::max(), x1 = -x0, y0 = x0, y1 = -x0;
-    for (std::size_t i = 0; i < readings.size(); ++i) {
-      ConeReading r = readings[i];
-      r.origin.z() = (grown.layer + 0.5) * res;
-      if (max_cells > 0 && r.range / res > max_cells) {  // bounded as a beam is
-        ++stats.skipped_too_long;
-        continue;
-      }
-      coneCells(map_.lattice(), r, ConeWeighting::Uniform, cells[i], nullptr);
-      ++(r.hit ? stats.rays_hit : stats.rays_truncated);
-      for (const ConeCell& c : cells[i]) {
-        x0 = std::min(x0, static_cast<float>(c.x * res)), x1 = std::max(x1, static_cast<float>((c.x + 1) * res));
-        y0 = std::min(y0, static_cast<float>(c.y * res)), y1 = std::max(y1, static_cast<float>((c.y + 1) * res));
-      }
-    }
-    if (x0 <= x1) {
-      float g[4];
-      mrpt_grid::growRect(grown, x0, x1, y0, y1, g);
-      mrpt_grid::resize(grown, g[0], g[1], g[2], g[3]);
-      std::vector<OccupancyMap::StepRun> runs;
-      for (const auto& rc : cells)
-        for (const ConeCell& c : rc) {
-          OccupancyMap::StepRun s{};
-          s.x = c.x, s.y = c.y;
-          s.kind = c.kind;
-          s.count = c.kind == StepKind::Occupied ? 0 : 1;
-          s.end = c.kind == StepKind::Occupied;
-          s.end_x = c.x, s.end_y = c.y;
-          runs.push_back(s);
-        }
-      const StepRule rule = mrpt_grid::stepRule(mrpt_grid::stepsOf(insertionOptions));
-      stats += map_.applyStepRuns(grown.layer, runs.data(), runs.size(), rule);
-      frame_ = grown;
+    coneCells(map.lattice(), r, ConeWeighting::Uniform, cells[i], nullptr);
+    ++(r.hit ? stats.rays_hit : stats.rays_truncated);
+    for (const ConeCell& c : cells[i]) {
+      x0 = std::min(x0, static_cast<float>(c.x * res)), x1 = std::max(x1, static_cast<float>((c.x + 1) * res));
+      y0 = std::min(y0, static_cast<float>(c.y * res)), y1 = std::max(y1, static_cast<float>((c.y + 1) * res));
     }
   }
-  invalidRangesSkipped += invalid;
-  lastInsertStats = stats;
-  totalInsertStats += stats;
-  notifyMapChanged();
-  return true;
+  if (x0 <= x1) {
+    float g[4];
+    mrpt_grid::growRect(grown, x0, x1, y0, y1, g);
+    mrpt_grid::resize(grown, g[0], g[1], g[2], g[3]);
+    std::vector<OccupancyMap::StepRun> runs;
+    for (const auto& rc : cells)
+      for (const ConeCell& c : rc) {
+        OccupancyMap::StepRun s{};
+        s.x = c.x, s.y = c.y;
+        s.kind = c.kind;
+        s.count = c.kind == StepKind::Occupied ? 0 : 1;
+        s.end = c.kind == StepKind::Occupied;
+        s.end_x = c.x, s.end_y = c.y;
+        runs.push_back(s);
+      }
+    const StepRule rule = mrpt_grid::stepRule(mrpt_grid::stepsOf(io));
+    stats += map.applyStepRuns(grown.layer, runs.data(), runs.size(), rule);
+    frame = grown;
+  }
+  return stats;
 }
 
-std::optional<double> CRTreeOccupancyGridMap::sonarLikelihood(const mrpt::obs::CObservationRange& o,
-                                                              const CPose3D& pose) const {
+bool scorable(const mrpt::obs::CObservationRange& o, const CPose3D& pose) {
+  if (!(std::isfinite(pose.x()) && std::isfinite(pose.y()) && std::isfinite(pose.yaw()))) return false;
+  const double aperture = o.sensorConeApperture, max_range = o.maxSensorDistance;
+  return (aperture >= 0.0 && aperture <= 3.14159265358979323846) && (max_range > 0.0 && std::isfinite(max_range));
+}
+
+std::optional<double> likelihood(const mrpt::obs::CObservationRange& o, const CPose3D& pose,
+                                 const CRTreeOccupancyGridMap::TLikelihoodOptions& lo,
+                                 const mrpt::maps::COccupancyGridMap2D& grid) {
   // A sonar echoes from the nearest surface anywhere in its cone: the reading expected from a
   // pose is the shortest of rays cast across the aperture on the 2D view (as MRPT's
   // sonarSimulator computes a reading), and each echo scores a Gaussian of rayTracing_stdHit
   // about it mixed with LF_zHit / LF_zRandom, as the ray-tracing likelihood of beams. A surface
   // nearer than the echo inside the cone counts against a pose, which a likelihood field of the
   // axis's end point cannot see (MRPT's grid scores that, doc/sonar.md).
-  likelihoodOptions.validate();
-  if (!(std::isfinite(pose.x()) && std::isfinite(pose.y()) && std::isfinite(pose.yaw()))) return std::nullopt;
   const double aperture = o.sensorConeApperture, max_range = o.maxSensorDistance;
-  if (!(aperture >= 0.0 && aperture <= 3.14159265358979323846) || !(max_range > 0.0 && std::isfinite(max_range)))
-    return std::nullopt;
-  const auto& lo = likelihoodOptions;
   const double inv2var = 1.0 / (2.0 * double(lo.rayTracing_stdHit) * lo.rayTracing_stdHit);
   const double z_random = double(lo.LF_zRandom) / lo.LF_maxRange;
-  const auto v = gridViewShared(nullptr);
-  std::lock_guard<std::mutex> lk(v->mutex);
-  const double res = v->grid.getResolution();
+  const double res = grid.getResolution();
   double sum = 0.0;
   for (const auto& d : o.sensedData) {
     const double z = d.sensedDistance;
@@ -168,7 +145,7 @@ std::optional<double> CRTreeOccupancyGridMap::sonarLikelihood(const mrpt::obs::C
       const double a = sensor.yaw() + (n == 1 ? 0.0 : aperture * (static_cast<double>(j) / (n - 1) - 0.5));
       float r = 0.0f;
       bool valid = false;
-      v->grid.simulateScanRay(sensor.x(), sensor.y(), a, r, valid, max_range, 0.5f, 0.0, 0.0);
+      grid.simulateScanRay(sensor.x(), sensor.y(), a, r, valid, max_range, 0.5f, 0.0, 0.0);
       if (valid) expected = std::min<double>(expected, r);
     }
     const double e = z - expected;
@@ -177,8 +154,7 @@ std::optional<double> CRTreeOccupancyGridMap::sonarLikelihood(const mrpt::obs::C
   return sum;
 }
 
-void CRTreeOccupancyGridMap::sonarEndPoints(const mrpt::obs::CObservationRange& o, const CPose3D& robotPose,
-                                            ObservationBeams& out) const {
+void endPoints(const mrpt::obs::CObservationRange& o, const CPose3D& robotPose, ObservationBeams& out) {
   // The likelihood of a reading is that of its axis's end point, as COccupancyGridMap2D scores a
   // CObservationRange (a points map of the readings, then its likelihood field).
   const CPose3D first = o.sensedData.empty() ? robotPose : robotPose + CPose3D(o.sensedData.front().sensorPose);
@@ -198,4 +174,4 @@ void CRTreeOccupancyGridMap::sonarEndPoints(const mrpt::obs::CObservationRange& 
   }
 }
 
-}  // namespace rtog
+}  // namespace rtog::sonar
