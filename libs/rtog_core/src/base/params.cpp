@@ -66,29 +66,27 @@ void InsertParams::validate() const {
                                 std::to_string(range_noise_cutoff));
 }
 
+namespace {
+// Every count of InsertStats, once: the sum and the comparison go over this list.
+constexpr std::size_t InsertStats::*kCounts[] = {
+    &InsertStats::rays_hit,         &InsertStats::rays_truncated,      &InsertStats::skipped_non_finite,
+    &InsertStats::skipped_zero_length, &InsertStats::skipped_out_of_range, &InsertStats::skipped_too_long,
+    &InsertStats::skipped_over_budget, &InsertStats::cells_occupied,   &InsertStats::cells_free,
+    &InsertStats::cells_unchanged,  &InsertStats::leaves_created,      &InsertStats::leaves_merged,
+    &InsertStats::leaves_split};
+static_assert(sizeof(kCounts) / sizeof(kCounts[0]) * sizeof(std::size_t) == sizeof(InsertStats),
+              "a count of InsertStats is missing from kCounts");
+}  // namespace
+
 InsertStats& InsertStats::operator+=(const InsertStats& o) {
-  rays_hit += o.rays_hit;
-  rays_truncated += o.rays_truncated;
-  skipped_non_finite += o.skipped_non_finite;
-  skipped_zero_length += o.skipped_zero_length;
-  skipped_out_of_range += o.skipped_out_of_range;
-  skipped_too_long += o.skipped_too_long;
-  skipped_over_budget += o.skipped_over_budget;
-  cells_occupied += o.cells_occupied;
-  cells_free += o.cells_free;
-  cells_unchanged += o.cells_unchanged;
-  leaves_created += o.leaves_created;
-  leaves_merged += o.leaves_merged;
-  leaves_split += o.leaves_split;
+  for (const auto count : kCounts) this->*count += o.*count;
   return *this;
 }
 
 bool InsertStats::operator==(const InsertStats& o) const {
-  return rays_hit == o.rays_hit && rays_truncated == o.rays_truncated && skipped_non_finite == o.skipped_non_finite &&
-         skipped_zero_length == o.skipped_zero_length && skipped_out_of_range == o.skipped_out_of_range &&
-         skipped_too_long == o.skipped_too_long && skipped_over_budget == o.skipped_over_budget &&
-         cells_occupied == o.cells_occupied && cells_free == o.cells_free && cells_unchanged == o.cells_unchanged &&
-         leaves_created == o.leaves_created && leaves_merged == o.leaves_merged && leaves_split == o.leaves_split;
+  for (const auto count : kCounts)
+    if (this->*count != o.*count) return false;
+  return true;
 }
 
 }  // namespace rtog
