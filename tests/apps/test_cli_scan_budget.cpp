@@ -54,7 +54,13 @@ TEST(CliScanBudget, WithNoRangeCutTheCellBudgetSkipsTheScans) {
   std::cout << "peak memory " << c.maxrss_kb / 1024 << " MiB\n";
   EXPECT_EQ(c.rc, 0) << c.output;
   EXPECT_NE(c.output.find("722 in scans over the cell budget (1073741824 cells)"), std::string::npos) << c.output;
-  EXPECT_LT(c.maxrss_kb, 600 * 1024) << "peak memory " << c.maxrss_kb / 1024 << " MiB";
+  // AddressSanitizer's shadow and quarantine add their own (752 MiB measured): the bound doubles.
+#if defined(__SANITIZE_ADDRESS__)
+  constexpr long kBoundMiB = 1200;
+#else
+  constexpr long kBoundMiB = 600;
+#endif
+  EXPECT_LT(c.maxrss_kb, kBoundMiB * 1024) << "peak memory " << c.maxrss_kb / 1024 << " MiB";
 }
 
 // The budget is an insertion option of the MRPT map (.ini key maxScanCells): a smaller one skips

@@ -62,7 +62,7 @@ void CRTreeBackedGridMap2D::serializeFrom(mrpt::serialization::CArchive& in, uin
   in >> archive::Flag{lo.enableLikelihoodCache, "enableLikelihoodCache"};
   lo.likelihoodMethod = static_cast<TLikelihoodMethod>(method);
   mrpt::maps::TMapGenericParams generic;
-  in >> generic;
+  archive::readGenericParams(in, generic);
   in >> io.CFD_features_gaussian_size >> io.CFD_features_median_size >> archive::Flag{io.wideningBeamsWithDistance, "wideningBeamsWithDistance"};
 
   CRTreeOccupancyGridMap rtree;  // bounded and validated by its own serializeFrom()

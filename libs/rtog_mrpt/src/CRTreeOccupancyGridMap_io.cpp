@@ -70,7 +70,7 @@ void CRTreeOccupancyGridMap::serializeFrom(mrpt::serialization::CArchive& in, ui
   constexpr const char* kWho = "rtog::CRTreeOccupancyGridMap";
   if (version > 4) MRPT_THROW_UNKNOWN_SERIALIZATION_VERSION(version);
   mrpt::maps::TMapGenericParams generic;
-  in >> generic;
+  archive::readGenericParams(in, generic);
   TInsertionOptions io;
   io.sensorModel = archive::readString(in, archive::kMaxName, kWho, "sensorModel");
   int32_t threads = 1;

@@ -140,4 +140,16 @@ mrpt::serialization::CArchive& operator>>(mrpt::serialization::CArchive& in, Fla
   return in;
 }
 
+void readGenericParams(mrpt::serialization::CArchive& in, mrpt::maps::TMapGenericParams& generic) {
+  in >> generic;
+  for (const bool* b : {&generic.enableSaveAs3DObject, &generic.enableObservationLikelihood,
+                        &generic.enableObservationInsertion}) {
+    unsigned char byte;
+    std::memcpy(&byte, b, 1);  // the object's byte, not a load of a bool that may be invalid
+    if (byte > 1)
+      throw std::runtime_error("rtog: corrupt stream (genericMapParams: a bool stored as " + std::to_string(int(byte)) +
+                               ")");
+  }
+}
+
 }  // namespace rtog::archive

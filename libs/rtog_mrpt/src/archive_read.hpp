@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include <mrpt/maps/metric_map_types.h>
 #include <mrpt/serialization/CArchive.h>
 
 namespace rtog::archive {
@@ -54,5 +55,10 @@ struct Flag {
   const char* what;
 };
 mrpt::serialization::CArchive& operator>>(mrpt::serialization::CArchive& in, Flag f);
+
+/// The generic map parameters as MRPT reads them (`in >> generic`), then their bools checked byte
+/// by byte before anything reads them as bools: MRPT copies each stored byte into its bool.
+/// Throws std::runtime_error "corrupt stream (genericMapParams: a bool stored as N)".
+void readGenericParams(mrpt::serialization::CArchive& in, mrpt::maps::TMapGenericParams& generic);
 
 }  // namespace rtog::archive
