@@ -16,6 +16,9 @@ namespace rtog {
 
 class Lattice;
 
+/// Points read from a PointSource at a time (24 KiB, on the reading thread's stack).
+constexpr std::size_t kSourcePiece = 2048;
+
 class BeamIntegrator {
  public:
   explicit BeamIntegrator(const IntegrationContext& ctx) : ctx_(ctx) {}
@@ -34,8 +37,6 @@ class BeamIntegrator {
                          InsertStats& stats, std::size_t max_bricks = 0);
 
  private:
-  /// Points read from a PointSource at a time (24 KiB, on the tracing thread's stack).
-  static constexpr std::size_t kSourcePiece = 2048;
   /// Traces beams [0, count) in chunks on the insertion threads, each chunk by
   /// trace(thread's batch, first, n, thread's stats, max_bricks); a scan whose batches touch more
   /// bricks than ip.max_scan_cells allows is skipped whole.

@@ -72,16 +72,29 @@ ResampledEvidence resample(const OccupancyMap& other, const Lattice& dst, const 
   return out;
 }
 
+/// The scratch's first graded scan, cleared: fusion's one update.
+GradedScan& fusionScan(InsertScratch& scratch) {
+  if (scratch.graded.empty()) scratch.graded.resize(1);
+  scratch.graded[0].clear();
+  return scratch.graded[0];
+}
+
+/// The finalized scan as fusion's update set.
+UpdateSet fusionSet(GradedScan& graded, const InsertStats& stats, int threads) {
+  graded.finalize();
+  UpdateSet set = UpdateSet::nothing(UpdateSet::Kind::Graded, stats);
+  set.graded.push_back(&graded);
+  set.threads = threads;
+  return set;
+}
+
 }  // namespace
 
 UpdateSet FusionIntegrator::trace(const OccupancyMap& other, const Eigen::Isometry3d& pose, int threads) {
   const float l0 = other.logOddsModel().prior();
   const Lattice& lattice = ctx_.store.lattice;
   InsertStats stats;
-  std::vector<GradedScan>& scratch = ctx_.scratch.graded;
-  if (scratch.empty()) scratch.resize(1);
-  GradedScan& graded = scratch[0];
-  graded.clear();
+  GradedScan& graded = fusionScan(ctx_.scratch);
   if (const auto shift = wholeCellShift(lattice, other.lattice(), pose)) {
     // Chunks of one log, maps of one frame: the leaves are disjoint and the shift one-to-one, so
     // each cell is reached once and goes in with no lookup.
@@ -96,11 +109,7 @@ UpdateSet FusionIntegrator::trace(const OccupancyMap& other, const Eigen::Isomet
     graded.reserve(r.keys().size());
     for (std::size_t i = 0; i < r.keys().size(); ++i) graded.markDistinct(r.keys()[i], static_cast<float>(r.sums()[i]));
   }
-  graded.finalize();
-  UpdateSet set = UpdateSet::nothing(UpdateSet::Kind::Graded, stats);
-  set.graded.push_back(&graded);
-  set.threads = threads;
-  return set;
+  return fusionSet(graded, stats, threads);
 }
 
 UpdateSet FusionIntegrator::trace(const OccupancyMap& other, const std::vector<OccupancyMap::WeightedPose>& poses,
@@ -124,16 +133,9 @@ UpdateSet FusionIntegrator::trace(const OccupancyMap& other, const std::vector<O
       sum[at] += mixture.term(w.weight, r.sums()[j]);
     }
   }
-  std::vector<GradedScan>& scratch = ctx_.scratch.graded;
-  if (scratch.empty()) scratch.resize(1);
-  GradedScan& graded = scratch[0];
-  graded.clear();
+  GradedScan& graded = fusionScan(ctx_.scratch);
   for (std::size_t i = 0; i < keys.size(); ++i) graded.mark(keys[i], mixture.change(sum[i]));
-  graded.finalize();
-  UpdateSet set = UpdateSet::nothing(UpdateSet::Kind::Graded, stats);
-  set.graded.push_back(&graded);
-  set.threads = threads;
-  return set;
+  return fusionSet(graded, stats, threads);
 }
 
 }  // namespace rtog

@@ -17,9 +17,8 @@ bool mayBePlanar(const Lattice& lattice, const Eigen::Vector3d& origin, const Po
   Key origin_key;
   if (!lattice.tryKey(origin, origin_key)) return true;  // the whole scan's path reports it
   // A volumetric scan leaves the origin's z-layer within its first beams.
-  constexpr std::size_t kPiece = 2048;
-  Eigen::Vector3f piece[kPiece];
-  const std::size_t kept = source.read(0, std::min(kPiece, source.count), piece);
+  Eigen::Vector3f piece[kSourcePiece];
+  const std::size_t kept = source.read(0, std::min(kSourcePiece, source.count), piece);
   const BeamRules rules(lattice, ip);
   Eigen::Vector3d end;
   Key end_key;
