@@ -22,7 +22,7 @@ void applyAssigned(MapStore& store, const std::vector<AssignedPiece>& pieces, In
     std::size_t last = first;
     while (last < pieces.size() && pieces[last].brick == pieces[first].brick) ++last;
     const std::uint32_t slot = index.brickSlot(pieces[first].brick);
-    std::vector<LeafEntry>& leaves = index.brick(slot).leaves;
+    std::vector<LeafEntry>& leaves = index.mutableBrick(slot).leaves;
     for (std::size_t i = first; i < last; ++i)
       pieces[i].leaf.forEachCell([&](int) { ++(pieces[i].leaf.value > l0 ? ctx.stats.cells_occupied : ctx.stats.cells_free); });
     if (leaves.empty()) {

@@ -162,7 +162,7 @@ void refreshFromContexts(LeafIndex& index, std::vector<ApplyContext>& contexts, 
     reshaped.insert(reshaped.end(), contexts[t].reshaped.begin(), contexts[t].reshaped.end());
   }
   index.refreshUpperTree(reshaped, static_cast<int>(n), [&] {
-    std::vector<const LocalBox*> boxes_of(index.bricks().size(), nullptr);
+    std::vector<const LocalBox*> boxes_of(index.brickCount(), nullptr);
     for (std::size_t c = 0; c < n; ++c)
       for (std::size_t i = 0; i < contexts[c].reshaped.size(); ++i)
         boxes_of[contexts[c].reshaped[i]] = contexts[c].node_boxes.data() + contexts[c].reshaped_boxes[i];

@@ -93,7 +93,7 @@ void paintLeaf(const std::uint8_t lo[3], const std::uint8_t hi[3], std::int32_t 
 
 void applyBrick(MapStore& store, const UpdateBatch::BrickUpdates& upd, std::uint32_t slot, ApplyContext& ctx) {
   const LogOddsModel& model = store.model;
-  std::vector<LeafEntry>& leaves = store.index.brick(slot).leaves;
+  std::vector<LeafEntry>& leaves = store.index.mutableBrick(slot).leaves;
   std::vector<std::int32_t>& local = ctx.local;
   InsertStats& stats = ctx.stats;
   const std::size_t updates_occupied = maskPopcount(upd.occupied), updates_free = maskPopcount(upd.free);
@@ -224,7 +224,7 @@ static void coverFreshBrick(MapStore& store, const UpdateBatch::BrickUpdates& up
   }
   ctx.stats.leaves_created += out.size();
   ctx.leaf_delta += static_cast<std::int64_t>(out.size());
-  assignByFirstCell(out, store.index.brick(slot).leaves);
+  assignByFirstCell(out, store.index.mutableBrick(slot).leaves);
   noteReshaped(store, slot, ctx);
 }
 
@@ -270,7 +270,7 @@ void updateDense(const LogOddsModel& model, std::size_t idx, float delta, std::v
 // splits; the known cells are covered with boxes of bit-identical (so lossless), mergeable values.
 void coverDense(MapStore& store, std::uint32_t slot, const std::vector<float>& value, const BrickMask& known,
                 const BrickMask& changed, ApplyContext& ctx) {
-  std::vector<LeafEntry>& leaves = store.index.brick(slot).leaves;
+  std::vector<LeafEntry>& leaves = store.index.mutableBrick(slot).leaves;
   InsertStats& stats = ctx.stats;
   for (const LeafEntry& e : leaves) {
     if (e.lo[0] == e.hi[0] && e.lo[1] == e.hi[1] && e.lo[2] == e.hi[2]) continue;

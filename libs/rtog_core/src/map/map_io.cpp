@@ -96,8 +96,8 @@ void OccupancyMap::write(std::ostream& os) const {
   w.put(static_cast<std::uint64_t>(store.index.leafCount()));
   // Bricks in key order so equal maps give equal files.
   std::vector<const Brick*> order;
-  order.reserve(store.index.bricks().size());
-  for (const Brick& b : store.index.bricks()) order.push_back(&b);
+  order.reserve(store.index.brickCount());
+  store.index.forEachBrick([&](const Brick& b) { order.push_back(&b); });
   std::sort(order.begin(), order.end(), [](const Brick* a, const Brick* b) { return a->brick < b->brick; });
   for (const Brick* b : order) {
     std::vector<LeafEntry> leaves = b->leaves;

@@ -143,7 +143,7 @@ MapStatistics OccupancyMap::statistics() const {
   });
   s.leaves = store.index.leafCount();
   s.cells = s.occupied_cells + s.free_cells;
-  s.bricks = store.index.bricks().size();
+  s.bricks = store.index.brickCount();
   s.tree_height = store.index.upper().height() + 1;
   s.tree_nodes = store.index.upper().nodeCount() + store.index.upper().size();
   s.memory_bytes = memoryBytes();
@@ -154,7 +154,7 @@ MapStatistics OccupancyMap::statistics() const {
 ClassCover OccupancyMap::classCover(const std::function<void(const Box&, CellState)>& emit) const {
   const MapStore& store = covered(*engine_);
   ClassCover counts;
-  for (const Brick& b : store.index.bricks()) {
+  store.index.forEachBrick([&](const Brick& b) {
     BrickMask by_class[2] = {};  // free, occupied
     for (const LeafEntry& e : b.leaves) {
       BrickMask& m = by_class[store.model.classify(e.value) == CellState::Occupied ? 1 : 0];
@@ -175,7 +175,7 @@ ClassCover OccupancyMap::classCover(const std::function<void(const Box&, CellSta
               emit(Box{Key{o.x + lo[0], o.y + lo[1], o.z + lo[2]}, Key{o.x + hi[0], o.y + hi[1], o.z + hi[2]}},
                    occupied ? CellState::Occupied : CellState::Free);
           });
-  }
+  });
   return counts;
 }
 

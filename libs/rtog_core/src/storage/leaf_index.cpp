@@ -8,22 +8,25 @@
 namespace rtog {
 
 void LeafIndex::clear() {
-  upper_.clear();
-  brick_index_.clear();
+  upper_.reset(UpperTree(upper_->tree.params()));
+  brick_index_.reset({});
   bricks_.clear();
   leaf_count_ = 0;
 }
 
 std::uint32_t LeafIndex::brickSlot(const Key& brick) {
-  const auto next = static_cast<std::uint32_t>(bricks_.size());
-  const std::uint32_t slot = brick_index_.findOrInsert(packKey(brick), next);
-  if (slot == next) bricks_.push_back(Brick{brick, {}, {}});
+  const std::uint64_t key = packKey(brick);
+  const std::uint32_t found = brick_index_->find(key);
+  if (found != detail::FlatHashMap64::kAbsent) return found;  // no clone of a shared hash to read it
+  const auto slot = static_cast<std::uint32_t>(bricks_.size());
+  brick_index_.write().findOrInsert(key, slot);
+  bricks_.emplace_back(Brick{brick, {}});
   return slot;
 }
 
 const Brick* LeafIndex::findBrick(const Key& brick) const {
-  const std::uint32_t slot = brick_index_.find(packKey(brick));
-  return slot == detail::FlatHashMap64::kAbsent ? nullptr : &bricks_[slot];
+  const std::uint32_t slot = brick_index_->find(packKey(brick));
+  return slot == detail::FlatHashMap64::kAbsent ? nullptr : bricks_[slot].get();
 }
 
 void LeafIndex::reserveBricks(std::size_t more) {
@@ -51,12 +54,15 @@ LocalBox LeafIndex::localNodeBox(const std::vector<LeafEntry>& leaves, std::size
 
 const LeafEntry* LeafIndex::findLeaf(const Key& k) const {
   if (!keyInRange(k)) return nullptr;
-  const Brick* b = findBrick(brickOf(k));
-  if (!b) return nullptr;
+  const std::uint32_t slot = brick_index_->find(packKey(brickOf(k)));
+  if (slot == detail::FlatHashMap64::kAbsent) return nullptr;
+  if (slot >= upper_->nodes.size()) return nullptr;  // a brick made but not yet in the tree
+  const Brick* b = bricks_[slot].get();
+  const auto& nodes = upper_->nodes[slot];
   const Key l = localKey(localIndex(k));
   // Leaf-node boxes first, then the entries of the one node that can hold the cell.
-  for (std::size_t n = 0; n < b->nodes.size(); ++n) {
-    if (!upper_.box(b->nodes[n]).contains(k)) continue;
+  for (std::size_t n = 0; n < nodes.size(); ++n) {
+    if (!upper_->tree.box(nodes[n]).contains(k)) continue;
     const std::size_t first = n * leafNodeSize(), last = std::min(b->leaves.size(), first + leafNodeSize());
     for (std::size_t i = first; i < last; ++i)
       if (b->leaves[i].contains(l)) return &b->leaves[i];
@@ -65,19 +71,22 @@ const LeafEntry* LeafIndex::findLeaf(const Key& k) const {
 }
 
 void LeafIndex::syncLeafNodes(std::uint32_t slot) {
-  Brick& br = bricks_[slot];
+  const Brick& br = *bricks_[slot];
+  UpperTree& up = upper_.write();
+  if (up.nodes.size() < bricks_.size()) up.nodes.resize(bricks_.size());
+  auto& handles = up.nodes[slot];
   const std::size_t nodes = leafNodeCount(br);
   for (std::size_t n = 0; n < nodes; ++n) {
     const Box box = leafNodeBox(br, n);
-    if (n < br.nodes.size()) {
-      if (upper_.box(br.nodes[n]) != box) upper_.updateBox(br.nodes[n], box);
+    if (n < handles.size()) {
+      if (up.tree.box(handles[n]) != box) up.tree.updateBox(handles[n], box);
     } else {
-      br.nodes.push_back(upper_.insert(box, LeafNodeRef{slot, static_cast<std::uint32_t>(n)}));
+      handles.push_back(up.tree.insert(box, LeafNodeRef{slot, static_cast<std::uint32_t>(n)}));
     }
   }
-  while (br.nodes.size() > nodes) {
-    upper_.remove(br.nodes.back());
-    br.nodes.pop_back();
+  while (handles.size() > nodes) {
+    up.tree.remove(handles.back());
+    handles.pop_back();
   }
 }
 
@@ -86,8 +95,8 @@ void LeafIndex::refreshUpperTree(std::vector<std::uint32_t>& reshaped, int threa
   // Leaf nodes whose boxes changed go into the upper tree one by one, unless they are many
   // compared with the tree (a first scan, a new area): then one bulk load is cheaper.
   std::size_t touched_nodes = 0;
-  for (const std::uint32_t slot : reshaped) touched_nodes += leafNodeCount(bricks_[slot]);
-  if (touched_nodes * 2 > upper_.size()) {
+  for (const std::uint32_t slot : reshaped) touched_nodes += leafNodeCount(*bricks_[slot]);
+  if (touched_nodes * 2 > upper_->tree.size()) {
     rebuildUpperTree(threads, boxes_of ? boxes_of() : std::vector<const LocalBox*>{});
   } else {
     // In slot order: the tree must not depend on which thread applied which brick.
@@ -102,28 +111,32 @@ void LeafIndex::rebuildUpperTree(int threads, const std::vector<const LocalBox*>
   // of the nodes' own Morton codes without sorting the nodes (the load runs on one thread).
   const auto slots = static_cast<std::uint32_t>(bricks_.size());
   std::vector<std::pair<std::uint64_t, std::uint32_t>> order(slots);
-  for (std::uint32_t slot = 0; slot < slots; ++slot) order[slot] = {mortonCode(bricks_[slot].brick), slot};
+  for (std::uint32_t slot = 0; slot < slots; ++slot) order[slot] = {mortonCode(bricks_[slot]->brick), slot};
   // A first scan's bricks got their slots in this order already (update batches are in it).
   if (!std::is_sorted(order.begin(), order.end())) std::sort(order.begin(), order.end());
   // Handles are the nodes' positions in the load, so each brick knows its own before the load.
   std::vector<std::uint32_t> first_node(slots + 1, 0);
   for (std::uint32_t i = 0; i < slots; ++i)
-    first_node[i + 1] = first_node[i] + static_cast<std::uint32_t>(leafNodeCount(bricks_[order[i].second]));
+    first_node[i + 1] = first_node[i] + static_cast<std::uint32_t>(leafNodeCount(*bricks_[order[i].second]));
   std::vector<std::pair<Box, LeafNodeRef>> nodes(first_node[slots]);
   std::vector<std::uint32_t> rank(slots);  // of each slot in `order`
   for (std::uint32_t i = 0; i < slots; ++i) rank[order[i].second] = i;
+  // A new tree (a shared one is left to its other owners, not cloned to be overwritten).
+  UpperTree fresh(upper_->tree.params());
+  fresh.nodes.resize(slots);
   // The leaf nodes' boxes read every leaf of the map: the threads take ranges of slots, not of
-  // `order`, whose neighbours' bricks (written here) would share cache lines.
+  // `order`, whose neighbours' handles (written here) would share cache lines.
   const auto collect = [&](std::size_t begin, std::size_t end) {
     for (auto slot = static_cast<std::uint32_t>(begin); slot < end; ++slot) {
       const std::uint32_t i = rank[slot];
-      Brick& br = bricks_[slot];
-      br.nodes.resize(first_node[i + 1] - first_node[i]);
+      const Brick& br = *bricks_[slot];
+      auto& handles = fresh.nodes[slot];
+      handles.resize(first_node[i + 1] - first_node[i]);
       const LocalBox* boxes = boxes_of.empty() ? nullptr : boxes_of[slot];
       const Key origin = brickOrigin(br.brick);
-      for (std::uint32_t k = 0; k < br.nodes.size(); ++k) {
-        br.nodes[k] = first_node[i] + k;
-        nodes[br.nodes[k]] = {boxes ? boxes[k].global(origin) : leafNodeBox(br, k), LeafNodeRef{slot, k}};
+      for (std::uint32_t k = 0; k < handles.size(); ++k) {
+        handles[k] = first_node[i] + k;
+        nodes[handles[k]] = {boxes ? boxes[k].global(origin) : leafNodeBox(br, k), LeafNodeRef{slot, k}};
       }
     }
   };
@@ -132,14 +145,15 @@ void LeafIndex::rebuildUpperTree(int threads, const std::vector<const LocalBox*>
     return std::min<std::size_t>(static_cast<std::size_t>(std::max(threads, 1)), 1 + count / 1024);
   };
   parallel::forRanges(slots, parts(slots), collect);
-  upper_.bulkLoad(std::move(nodes), RTree<LeafNodeRef>::Packing::AsGiven,
-                  [&](std::size_t count, const std::function<void(std::size_t, std::size_t)>& fn) {
-                    parallel::forRanges(count, parts(count), fn);
-                  });
+  fresh.tree.bulkLoad(std::move(nodes), RTree<LeafNodeRef>::Packing::AsGiven,
+                      [&](std::size_t count, const std::function<void(std::size_t, std::size_t)>& fn) {
+                        parallel::forRanges(count, parts(count), fn);
+                      });
+  upper_.reset(std::move(fresh));
 }
 
 void LeafIndex::packLeaves(std::uint32_t slot, const std::vector<std::int32_t>& local) {
-  Brick& br = bricks_[slot];
+  Brick& br = mutableBrick(slot);
   std::vector<LeafEntry> live, packed;  // packed: exact capacity
   if (br.leaves.size() * 16 >= static_cast<std::size_t>(kBrickCells)) {
     // Dense brick: one pass over the cells in Morton order, taking each live leaf at its first cell.
@@ -160,29 +174,40 @@ void LeafIndex::packLeaves(std::uint32_t slot, const std::vector<std::int32_t>& 
 }
 
 std::size_t LeafIndex::memoryBytes() const {
-  std::size_t bytes = upper_.memoryBytes() + brick_index_.memoryBytes() + bricks_.capacity() * sizeof(Brick);
-  for (const Brick& b : bricks_) bytes += b.leaves.capacity() * sizeof(LeafEntry) + b.nodes.heapBytes();
+  std::size_t bytes = upper_->tree.memoryBytes() + upper_->nodes.capacity() * sizeof(upper_->nodes[0]) +
+                      brick_index_->memoryBytes() + bricks_.capacity() * sizeof(bricks_[0]);
+  for (const auto& h : upper_->nodes) bytes += h.heapBytes();
+  for (const auto& b : bricks_) bytes += sizeof(Brick) + b->leaves.capacity() * sizeof(LeafEntry);
   return bytes;
+}
+
+std::size_t LeafIndex::sharedBricks() const {
+  std::size_t n = 0;
+  for (const auto& b : bricks_) n += b.shared();
+  return n;
 }
 
 std::string LeafIndex::checkInvariants(const LogOddsModel& model, const std::function<bool(float)>& mergeable) const {
   // Leaf-node boxes may overlap (inner boxes of an R-tree); leaves may not, checked below.
-  std::string err = upper_.checkInvariants(false);
+  const RTree<LeafNodeRef>& upper = upper_->tree;
+  std::string err = upper.checkInvariants(false);
   if (!err.empty()) return "R-tree: " + err;
   std::size_t leaves = 0, nodes = 0;
   std::vector<std::uint8_t> painted(kBrickCells);
   for (std::size_t slot = 0; slot < bricks_.size(); ++slot) {
-    const Brick& b = bricks_[slot];
-    if (brick_index_.find(packKey(b.brick)) != slot) return "brick index does not point at brick " + toString(b.brick);
-    if (b.nodes.size() != leafNodeCount(b)) return "brick " + toString(b.brick) + " has the wrong number of leaf nodes";
-    for (std::size_t n = 0; n < b.nodes.size(); ++n) {
-      const Handle h = b.nodes[n];
-      if (!upper_.valid(h)) return "leaf node with a dead handle";
-      const LeafNodeRef r = upper_.payload(h);
+    const Brick& b = *bricks_[slot];
+    if (brick_index_->find(packKey(b.brick)) != slot) return "brick index does not point at brick " + toString(b.brick);
+    static const detail::SmallVector<Handle, 4> none{};
+    const auto& handles = slot < upper_->nodes.size() ? upper_->nodes[slot] : none;
+    if (handles.size() != leafNodeCount(b)) return "brick " + toString(b.brick) + " has the wrong number of leaf nodes";
+    for (std::size_t n = 0; n < handles.size(); ++n) {
+      const Handle h = handles[n];
+      if (!upper.valid(h)) return "leaf node with a dead handle";
+      const LeafNodeRef r = upper.payload(h);
       if (r.brick != slot || r.node != n) return "leaf node reference mismatch";
-      if (upper_.box(h) != leafNodeBox(b, n)) return "leaf node box is not the tight union of its entries";
+      if (upper.box(h) != leafNodeBox(b, n)) return "leaf node box is not the tight union of its entries";
     }
-    nodes += b.nodes.size();
+    nodes += handles.size();
     std::fill(painted.begin(), painted.end(), 0);
     for (const LeafEntry& e : b.leaves) {
       ++leaves;
@@ -198,7 +223,8 @@ std::string LeafIndex::checkInvariants(const LogOddsModel& model, const std::fun
     }
   }
   if (leaves != leaf_count_) return "leaf count mismatch";
-  if (nodes != upper_.size()) return "upper tree and bricks disagree on the number of leaf nodes";
+  if (brick_index_->size() != bricks_.size()) return "brick index and bricks disagree on the number of bricks";
+  if (nodes != upper.size()) return "upper tree and bricks disagree on the number of leaf nodes";
   return {};
 }
 

@@ -1,6 +1,10 @@
 // The leaf level of the map and its index: the bricks with their leaves, the brick hash, and
 // the upper R-tree over the leaf nodes.
 //
+// Copies share: each brick, the brick hash and the upper tree (with the leaf nodes' handles)
+// are copy-on-write objects, so a copy of the index costs a pointer per brick, and a write
+// clones what it touches first (mutableBrick(), and the hash or the tree on their first change).
+//
 // The R-tree's leaf level is clustered by brick: a brick's cuboids (in Morton order of their
 // first cell when packed; later updates append and fill holes from the end) are cut into leaf
 // nodes of at most M consecutive entries. The levels above are a Guttman R-tree over the leaf
@@ -16,6 +20,7 @@
 #include "rtog/core/log_odds.hpp"
 #include "rtog/core/rtree.hpp"
 #include "storage/brick.hpp"
+#include "util/cow_ptr.hpp"
 #include "util/flat_hash_map.hpp"
 #include "util/small_vector.hpp"
 
@@ -42,21 +47,37 @@ struct LeafNodeRef {
 struct Brick {
   Key brick;
   std::vector<LeafEntry> leaves;
-  detail::SmallVector<Handle, 4> nodes;  // upper-tree handle of each leaf node
+};
+
+/// The upper tree and, per brick slot, the tree's handle of each of its leaf nodes: one object,
+/// shared between copies until either changes.
+struct UpperTree {
+  explicit UpperTree(const RTreeParams& params = {}) : tree(params) {}
+  RTree<LeafNodeRef> tree;
+  std::vector<detail::SmallVector<Handle, 4>> nodes;
 };
 
 class LeafIndex {
  public:
-  explicit LeafIndex(const RTreeParams& params) : upper_(params) {}
+  explicit LeafIndex(const RTreeParams& params) : upper_(UpperTree(params)) {}
 
   void clear();
   /// The slot of a brick, made (without leaves) if new. Slots are stable: bricks are never removed.
   std::uint32_t brickSlot(const Key& brick);
   const Brick* findBrick(const Key& brick) const;
   const LeafEntry* findLeaf(const Key& k) const;
-  Brick& brick(std::uint32_t slot) { return bricks_[slot]; }
-  const Brick& brick(std::uint32_t slot) const { return bricks_[slot]; }
-  const std::vector<Brick>& bricks() const { return bricks_; }
+  const Brick& brick(std::uint32_t slot) const { return *bricks_[slot]; }
+  /// The brick for writing: cloned first if a copy of the map shares it. Appliers on several
+  /// threads may call it for distinct slots at once.
+  Brick& mutableBrick(std::uint32_t slot) { return bricks_[slot].write(); }
+  std::size_t brickCount() const { return bricks_.size(); }
+  /// Calls fn(const Brick&) for every brick in slot order.
+  template <class Fn>
+  void forEachBrick(Fn&& fn) const {
+    for (const auto& b : bricks_) fn(*b);
+  }
+  /// How many bricks this index shares with copies of it.
+  std::size_t sharedBricks() const;
   /// Room for `more` new bricks: the array must not move while appliers hold bricks.
   void reserveBricks(std::size_t more);
 
@@ -64,9 +85,9 @@ class LeafIndex {
   void addLeafCount(std::int64_t delta) {
     leaf_count_ = static_cast<std::size_t>(static_cast<std::int64_t>(leaf_count_) + delta);
   }
-  const RTree<LeafNodeRef>& upper() const { return upper_; }
+  const RTree<LeafNodeRef>& upper() const { return upper_->tree; }
 
-  std::size_t leafNodeSize() const { return upper_.params().max_entries; }
+  std::size_t leafNodeSize() const { return upper_->tree.params().max_entries; }
   std::size_t leafNodeCount(const Brick& b) const { return (b.leaves.size() + leafNodeSize() - 1) / leafNodeSize(); }
   Box leafNodeBox(const Brick& b, std::size_t node) const;
   /// The union of a leaf node's entries in brick-local cells.
@@ -89,15 +110,15 @@ class LeafIndex {
   /// Calls fn(box, value) for every leaf.
   template <class Fn>
   void forEachLeaf(Fn&& fn) const {
-    for (const Brick& b : bricks_) {
-      const Key o = brickOrigin(b.brick);
-      for (const LeafEntry& e : b.leaves) fn(e.global(o), e.value);
+    for (const auto& p : bricks_) {
+      const Key o = brickOrigin(p->brick);
+      for (const LeafEntry& e : p->leaves) fn(e.global(o), e.value);
     }
   }
   /// Calls fn(box, value) for every leaf that intersects `region`, through the R-tree.
   template <class Fn>
   void forEachLeafIn(const Box& region, Fn&& fn) const {
-    upper_.queryBox(region, [&](Handle h, const Box&) {
+    upper_->tree.queryBox(region, [&](Handle h, const Box&) {
       forEachInLeafNode(h, [&](const Box& b, float v) {
         if (b.intersects(region)) fn(b, v);
       });
@@ -106,8 +127,8 @@ class LeafIndex {
   /// Visits the leaf entries of one upper-tree item.
   template <class Fn>
   void forEachInLeafNode(Handle h, Fn&& fn) const {
-    const LeafNodeRef r = upper_.payload(h);
-    const Brick& b = bricks_[r.brick];
+    const LeafNodeRef r = upper_->tree.payload(h);
+    const Brick& b = *bricks_[r.brick];
     const Key o = brickOrigin(b.brick);
     const std::size_t first = r.node * leafNodeSize(), last = std::min(b.leaves.size(), first + leafNodeSize());
     for (std::size_t i = first; i < last; ++i) fn(b.leaves[i].global(o), b.leaves[i].value);
@@ -117,17 +138,17 @@ class LeafIndex {
   /// A lower bound of memoryBytes() in O(1) (leaves counted at their size, not capacity): for the
   /// insertion path, which must not walk every brick after every scan.
   std::size_t memoryBytesAtLeast() const {
-    return upper_.memoryBytes() + brick_index_.memoryBytes() + bricks_.capacity() * sizeof(Brick) +
-           leaf_count_ * sizeof(LeafEntry);
+    return upper_->tree.memoryBytes() + brick_index_->memoryBytes() + bricks_.capacity() * sizeof(bricks_[0]) +
+           bricks_.size() * sizeof(Brick) + leaf_count_ * sizeof(LeafEntry);
   }
   /// Empty if the R-tree, the brick index and the leaves are sound and agree; else the first
   /// problem. Leaf values must lie in the model's bounds, merged ones be `mergeable`.
   std::string checkInvariants(const LogOddsModel& model, const std::function<bool(float)>& mergeable) const;
 
  private:
-  RTree<LeafNodeRef> upper_;
-  detail::FlatHashMap64 brick_index_;
-  std::vector<Brick> bricks_;
+  detail::CowPtr<UpperTree> upper_;
+  detail::CowPtr<detail::FlatHashMap64> brick_index_;
+  std::vector<detail::CowPtr<Brick>> bricks_;
   std::size_t leaf_count_ = 0;
 };
 

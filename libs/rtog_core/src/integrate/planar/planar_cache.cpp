@@ -193,7 +193,7 @@ InsertStats PlanarCache::cover(MapStore& store) {
       std::copy(layer.known.begin(), layer.known.end(), known.begin() + layer.z * kLayerWords);
     }
     // Leaves outside the cached layers stay; those crossing them keep their parts outside.
-    std::vector<LeafEntry>& leaves = index.brick(slot).leaves;
+    std::vector<LeafEntry>& leaves = index.mutableBrick(slot).leaves;
     out.clear();
     for (const LeafEntry& e : leaves) {
       bool crosses = false;
