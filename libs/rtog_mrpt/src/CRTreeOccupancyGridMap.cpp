@@ -76,6 +76,7 @@ void CRTreeOccupancyGridMap::notifyMapChanged() {
   caches_->lf.clear();
   caches_->points_dirty = true;
   caches_->grid_view.reset();
+  caches_->tiles.reset();
   caches_->band_points_dirty = true;
 }
 

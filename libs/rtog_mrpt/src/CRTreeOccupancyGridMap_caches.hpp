@@ -8,6 +8,7 @@
 #include <optional>
 #include <vector>
 
+#include "grid_tiles.hpp"
 #include "rtog/mrpt/CRTreeOccupancyGridMap.h"
 #include "util/flat_hash_map.hpp"
 
@@ -20,9 +21,10 @@ struct CRTreeOccupancyGridMap::ScanAngles {
   std::vector<double> cos, sin;
 };
 
-/// Derived data; copies start empty (a copy rebuilds them on demand).
+/// Derived data. A copy shares the 2D view's tiles (the particles of a filter share their map's
+/// view that way) and starts without the rest (rebuilt on demand).
 struct CRTreeOccupancyGridMap::Caches {
-  std::mutex mutex;
+  mutable std::mutex mutex;
   /// packed key -> likelihood-field term (its float bits): the project's one hash map, which
   /// mixes the key (a packed key's low bits are its x, shared by a block of cells).
   detail::FlatHashMap64 lf;
@@ -43,10 +45,20 @@ struct CRTreeOccupancyGridMap::Caches {
   /// that a scan is turned into points without trigonometry, as MRPT's grids do.
   std::shared_ptr<const ScanAngles> scan_angles;
   std::shared_ptr<GridView> grid_view;  ///< gridView(); reset when the map changes
+  /// The 2D view as copy-on-write tiles, in the mrpt_grid preset: followed by grid scans,
+  /// dropped by any other change. Owned by this map (its tiles are what copies share).
+  std::unique_ptr<GridTiles> tiles;
+  /// What the tiles' likelihood reads of the options (COccupancyGridMap2D's own structs).
+  mrpt::maps::COccupancyGridMap2D::TLikelihoodOptions tiles_likelihood;
   Caches() = default;
-  Caches(const Caches&) {}
-  Caches& operator=(const Caches&) {
-    std::lock_guard<std::mutex> lk(mutex);
+  Caches(const Caches& o) {
+    std::lock_guard<std::mutex> lk(o.mutex);
+    if (o.tiles) tiles = std::make_unique<GridTiles>(*o.tiles);
+  }
+  Caches& operator=(const Caches& o) {
+    if (this == &o) return *this;
+    std::scoped_lock lk(mutex, o.mutex);
+    tiles = o.tiles ? std::make_unique<GridTiles>(*o.tiles) : nullptr;
     lf.clear();
     lf_params.reset();
     points_dirty = true;

@@ -184,8 +184,7 @@ void CRTreeOccupancyGridMap::GridView::fillCells(const OccupancyMap& m, const Bo
   });
 }
 
-void CRTreeOccupancyGridMap::GridView::setOptions(const TLikelihoodOptions& o, const TInsertionOptions& io) {
-  auto& g = grid.likelihoodOptions;
+bool toGridLikelihoodOptions(const CRTreeOccupancyGridMap::TLikelihoodOptions& o, Grid2D::TLikelihoodOptions& g) {
   // MRPT keeps its per-cell likelihood-field values until the cells change, whatever the options.
   const bool lfChanged = g.LF_stdHit != o.LF_stdHit || g.LF_zHit != o.LF_zHit || g.LF_zRandom != o.LF_zRandom ||
                          g.LF_maxRange != o.LF_maxRange || g.LF_maxCorrsDistance != o.LF_maxCorrsDistance ||
@@ -208,8 +207,14 @@ void CRTreeOccupancyGridMap::GridView::setOptions(const TLikelihoodOptions& o, c
   g.consensus_takeEachRange = o.consensus_takeEachRange;
   g.consensus_pow = o.consensus_pow;
   // Only lmConsensusOWA reads the weights (a hundred by default): not compared per call otherwise.
-  if (o.likelihoodMethod == lmConsensusOWA && g.OWA_weights != o.OWA_weights) g.OWA_weights = o.OWA_weights;
+  if (o.likelihoodMethod == CRTreeOccupancyGridMap::lmConsensusOWA && g.OWA_weights != o.OWA_weights)
+    g.OWA_weights = o.OWA_weights;
   g.enableLikelihoodCache = o.enableLikelihoodCache;
+  return lfChanged;
+}
+
+void CRTreeOccupancyGridMap::GridView::setOptions(const TLikelihoodOptions& o, const TInsertionOptions& io) {
+  const bool lfChanged = toGridLikelihoodOptions(o, grid.likelihoodOptions);
   // MI and ray tracing read the grid's insertion range.
   grid.insertionOptions.maxDistanceInsertion = io.maxDistanceInsertion;
   if (lfChanged) {

@@ -30,6 +30,10 @@ void saveGridLikelihoodKeys(const CRTreeOccupancyGridMap::TLikelihoodOptions& o,
 /// -16 v when that is an MRPT value, else MRPT's own p2l of P(free).
 int8_t toMrptCell(float v);
 
+/// Copies the options to COccupancyGridMap2D's struct; true if the likelihood field's changed.
+bool toGridLikelihoodOptions(const CRTreeOccupancyGridMap::TLikelihoodOptions& o,
+                             mrpt::maps::COccupancyGridMap2D::TLikelihoodOptions& g);
+
 /// Reads a .gridmap / .gridmap.gz (a CArchive of a COccupancyGridMap2D, gzip or not) into `g`;
 /// false if the file cannot be read as one.
 bool readGridmapFile(const std::string& file, mrpt::maps::COccupancyGridMap2D& g);

@@ -22,6 +22,8 @@
 #include "fingerprint.hpp"
 #include "rotating_scan.hpp"
 #include "grid_scan.hpp"
+#include "CRTreeOccupancyGridMap_grid2d.hpp"
+#include "mrpt_grid.hpp"
 #include "pose_sigma.hpp"
 #include "sensor_points.hpp"
 #include "sonar_cones.hpp"
@@ -266,12 +268,45 @@ bool CRTreeOccupancyGridMap::insertGridScan(const mrpt::obs::CObservation2DRange
   syncParams();
   InsertStats stats;
   std::size_t invalid = 0;
-  if (!mrpt_grid::insertScan(map_, frame_, scan, robotPose, insertionOptions, update, stats, invalid)) return false;
+  // With the view's tiles kept, the scan's steps are what they follow.
+  bool follow;
+  {
+    std::lock_guard<std::mutex> lk(caches_->mutex);
+    follow = caches_->tiles != nullptr;
+  }
+  GridScanUpdate own;
+  GridScanUpdate* upd = update ? update : follow ? &own : nullptr;
+  if (!mrpt_grid::insertScan(map_, frame_, scan, robotPose, insertionOptions, upd, stats, invalid)) return false;
   invalidRangesSkipped += invalid;
   lastInsertStats = stats;
   totalInsertStats += stats;
-  notifyMapChanged();
+  if (follow)
+    followGridScan(*upd);
+  else
+    notifyMapChanged();
   return true;
+}
+
+// The 2D view's tiles (grid_tiles.hpp) follow the scan's steps: see tilesLikelihood() for when
+// they stand for the view.
+void CRTreeOccupancyGridMap::followGridScan(const GridScanUpdate& upd) {
+  std::lock_guard<std::mutex> lk(caches_->mutex);
+  caches_->lf.clear();
+  caches_->points_dirty = true;
+  caches_->grid_view.reset();
+  caches_->band_points_dirty = true;
+  GridTiles* tiles = caches_->tiles.get();
+  if (!tiles) return;
+  if (!mrpt_grid::layerInBand(frame_, map_.resolution(), gridViewOptions.gridView_minZ, gridViewOptions.gridView_maxZ)) {
+    caches_->tiles.reset();  // the first scan's layer is not in the view: made again when needed
+    return;
+  }
+  if (!tiles->frame().sameGeometry(frame_)) tiles->setFrame(frame_);
+  const float* after = upd.after.data();
+  for (const auto& run : upd.runs)
+    OccupancyMap::forEachRunCell(run, [&](std::int32_t x, std::int32_t y, StepKind) { tiles->setCell(x, y, toMrptCell(*after++)); });
+  const FieldConstants f(caches_->tiles_likelihood, frame_.resolution);
+  tiles->dropStaleTerms(f.window);
 }
 
 std::vector<ConeReading> CRTreeOccupancyGridMap::sonarReadings(const mrpt::obs::CObservationRange& o,

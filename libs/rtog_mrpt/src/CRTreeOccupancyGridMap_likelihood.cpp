@@ -18,6 +18,7 @@
 #include "CRTreeOccupancyGridMap_caches.hpp"
 #include "CRTreeOccupancyGridMap_grid2d.hpp"
 #include "grid_consensus.hpp"
+#include "mrpt_grid.hpp"
 #include "sonar_cones.hpp"
 
 namespace rtog {
@@ -26,6 +27,12 @@ using detail::kImpossibleLogLik;
 
 bool CRTreeOccupancyGridMap::internal_canComputeObservationLikelihood(const mrpt::obs::CObservation& obs) const {
   using namespace mrpt::obs;
+  // In the mrpt_grid preset as COccupancyGridMap2D: a planar scan can be scored on an empty map
+  // (its grid of the creation extent, all unknown), and particle filters ask before they weigh.
+  if (insertionOptions.mrptGrid() && likelihoodOptions.scanLikelihoodOnGridView)
+    if (const auto* scan = dynamic_cast<const CObservation2DRangeScan*>(&obs))
+      return scan->isPlanarScan(mrpt::maps::COccupancyGridMap2D::TInsertionOptions().horizontalTolerance) &&
+             !(insertionOptions.useMapAltitude && std::fabs(insertionOptions.mapAltitude - scan->sensorPose.z()) > 0.01);
   if (isEmpty()) return false;
   return dynamic_cast<const CObservation2DRangeScan*>(&obs) || dynamic_cast<const CObservationPointCloud*>(&obs) ||
          dynamic_cast<const CObservationVelodyneScan*>(&obs) || dynamic_cast<const CObservationRotatingScan*>(&obs) ||
@@ -203,6 +210,10 @@ std::optional<double> CRTreeOccupancyGridMap::gridViewLikelihood(const mrpt::obs
     if ((*need)[0] < lo.x() - r || (*need)[1] < lo.y() - r || (*need)[2] > hi.x() + r || (*need)[3] > hi.y() + r)
       return std::nullopt;
   }
+  // The likelihood field on the view's shared tiles where they stand for it: no view rebuilt
+  // after each scan, terms kept across scans away from what the scan changed.
+  if (method == lmLikelihoodField_Thrun)
+    if (const std::optional<double> l = tilesLikelihood(*scan, pose)) return l;
   const auto v = gridViewShared(need ? need->data() : nullptr);
   std::lock_guard<std::mutex> lk(v->mutex);
   v->setOptions(likelihoodOptions, insertionOptions);
@@ -220,6 +231,57 @@ std::optional<double> CRTreeOccupancyGridMap::gridViewLikelihood(const mrpt::obs
   if (method == lmConsensus && v->grid.genericMapParams.enableObservationLikelihood)
     if (const std::optional<double> l = boundedConsensusLikelihood(v->grid, *scored, mrpt::poses::CPose2D(pose))) return *l;
   return v->grid.computeObservationLikelihood(*scored, pose);
+}
+
+// ---- the likelihood field on the 2D view's copy-on-write tiles --------------------------------
+//
+// The tiles stand for the view where the view is exactly the grid the scans were stepped in:
+// the mrpt_grid preset, a grid frame, every known cell in its layer, and the layer inside the
+// view's height band (or no cell yet: the stock grid's empty grid of its creation extent). Then
+// a column's view cell is its layer cell, and a grid scan's steps (GridScanUpdate) say every
+// cell it changed. Anything else that changes the map drops the tiles (notifyMapChanged); they
+// are made again from the map when next needed.
+std::optional<double> CRTreeOccupancyGridMap::tilesLikelihood(const mrpt::obs::CObservation2DRangeScan& scan,
+                                                              const mrpt::poses::CPose3D& pose) const {
+  if (!insertionOptions.mrptGrid() || frame_.size_x == 0 || frame_.size_y == 0) return std::nullopt;
+  // The options as the dense view's grid holds them: its insertion options are MRPT's defaults
+  // (the planar and altitude tests read them), its likelihood options ours.
+  static const mrpt::maps::COccupancyGridMap2D::TInsertionOptions kGridInsertion;
+  const auto likelihood = [&](GridTiles& t) {
+    const bool changed = toGridLikelihoodOptions(likelihoodOptions, caches_->tiles_likelihood);
+    (void)changed;  // the tiles compare what their kept terms were computed with
+    const FieldGrid g{&kGridInsertion, &caches_->tiles_likelihood, frame_.resolution, frame_.x_min, frame_.y_min,
+                      frame_.size_x, frame_.size_y};
+    return t.scanLogLikelihood(g, scan, pose);
+  };
+  {
+    std::lock_guard<std::mutex> lk(caches_->mutex);
+    if (caches_->tiles) return likelihood(*caches_->tiles);
+  }
+  const Box kb = map_.keyBounds();
+  auto tiles = std::make_unique<GridTiles>(frame_);
+  if (!kb.isEmpty()) {
+    if (!frame_.has_layer || kb.min.z != frame_.layer || kb.max.z != frame_.layer) return std::nullopt;
+    if (!mrpt_grid::layerInBand(frame_, map_.resolution(), gridViewOptions.gridView_minZ, gridViewOptions.gridView_maxZ))
+      return std::nullopt;
+    // Made from the dense view on the frame, which reads the map as every view does.
+    const auto v = gridViewShared(nullptr);
+    std::lock_guard<std::mutex> lk(v->mutex);
+    const mrpt::maps::COccupancyGridMap2D& g = v->grid;
+    if (g.getSizeX() != frame_.size_x || g.getSizeY() != frame_.size_y || g.getXMin() != frame_.x_min ||
+        g.getYMin() != frame_.y_min)
+      return std::nullopt;  // the view left the frame: not the grid the steps are in
+    const auto& raw = g.getRawMap();
+    const std::int32_t ox = mrpt_grid::keyOffsetX(frame_), oy = mrpt_grid::keyOffsetY(frame_);
+    for (std::uint32_t cy = 0; cy < frame_.size_y; ++cy)
+      for (std::uint32_t cx = 0; cx < frame_.size_x; ++cx)
+        if (const auto c = raw[std::size_t{cy} * frame_.size_x + cx])
+          tiles->setCell(ox + static_cast<std::int32_t>(cx), oy + static_cast<std::int32_t>(cy), c);
+  }
+  tiles->dropStaleTerms(0);  // none kept yet: only forgets the cells it set
+  std::lock_guard<std::mutex> lk(caches_->mutex);
+  if (!caches_->tiles) caches_->tiles = std::move(tiles);
+  return likelihood(*caches_->tiles);
 }
 
 }  // namespace rtog

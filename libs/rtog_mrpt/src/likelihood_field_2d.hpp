@@ -1,11 +1,15 @@
 // Private to librtog_mrpt: the likelihood field (lmLikelihoodField_Thrun) of a planar scan on
-// the 2D view, each cell's term computed once and kept with its logarithm. The value is
-// COccupancyGridMap2D::computeObservationLikelihood's for the same grid, scan and pose, bit for
+// a 2D grid of MRPT cells, each cell's term computed once and kept. The value is
+// COccupancyGridMap2D::computeObservationLikelihood's for the same cells, scan and pose, bit for
 // bit (tested); what it saves is the sine and cosine of the pose and the logarithm of the term
-// that the stock grid computes again for every point.
+// that the stock grid computes again for every point. One rule for two kinds of cells: the dense
+// 2D view (a COccupancyGridMap2D) and the copy-on-write tiles particles share (grid_tiles.hpp).
 #pragma once
 
+#include <cmath>
 #include <cstddef>
+#include <cstdint>
+#include <functional>
 #include <memory>
 #include <vector>
 
@@ -14,6 +18,63 @@
 #include <mrpt/poses/CPose3D.h>
 
 namespace rtog {
+
+/// The field's constants in the precision the stock grid computes them in (floats where its
+/// options are floats), so that every term is the same number.
+struct FieldConstants {
+  FieldConstants(const mrpt::maps::COccupancyGridMap2D::TLikelihoodOptions& o, double resolution);
+  float zRandomTerm, zHit, q;  // q = -1 / (2 stdHit^2)
+  double maxCorrDistSq;         // a float square, widened
+  double unitsPerSqMetre;       // squared distances counted in (cell / 10)^2
+  unsigned capUnits;            // the search's cap in those units
+  int window;                   // cells searched either side
+  bool squareDist;
+  float threshold;              // a cell below it counts as occupied (P(occupied) > 0.5)
+  bool operator==(const FieldConstants& o) const {
+    return zRandomTerm == o.zRandomTerm && zHit == o.zHit && q == o.q && maxCorrDistSq == o.maxCorrDistSq &&
+           unitsPerSqMetre == o.unitsPerSqMetre && capUnits == o.capUnits && window == o.window &&
+           squareDist == o.squareDist && threshold == o.threshold;
+  }
+  /// The mixture at squared distance `best` (in units) to the nearest occupied cell.
+  double termOfBest(unsigned best) const {
+    float dist = static_cast<float>(best * (1.0 / unitsPerSqMetre));
+    if (squareDist) dist *= dist;
+    return zRandomTerm + zHit * std::exp(q * dist);  // in floats, as the stock grid
+  }
+  /// The squared distance (units, capped) of the nearest occupied cell in the window about
+  /// (cx, cy), clipped to [0, sx) x [0, sy); row(y, x0, x1) gives the cells x0..x1 of row y.
+  template <class Row>
+  unsigned bestAt(int cx, int cy, int sx, int sy, Row&& row) const {
+    const int x0 = std::max(0, cx - window), x1 = std::min(sx - 1, cx + window);
+    const int y0 = std::max(0, cy - window), y1 = std::min(sy - 1, cy + window);
+    unsigned best = capUnits;
+    for (int y = y0; y <= y1; ++y) {
+      const auto dy = static_cast<unsigned>(10 * (y - cy));
+      const unsigned dy2 = dy * dy;
+      row(y, x0, x1, [&](int x, std::int8_t c) {
+        if (c < threshold) {
+          const auto dx = static_cast<unsigned>(10 * (x - cx));  // squared modulo 2^32: the same
+          best = std::min(best, dx * dx + dy2);
+        }
+      });
+    }
+    return best;
+  }
+};
+
+/// What the field reads of a grid besides its cells.
+struct FieldGrid {
+  const mrpt::maps::COccupancyGridMap2D::TInsertionOptions* insertion;
+  const mrpt::maps::COccupancyGridMap2D::TLikelihoodOptions* likelihood;
+  float resolution, x_min, y_min;
+  unsigned size_x, size_y;
+};
+
+/// The log-likelihood of `scan` from `pose` on grid `g` (lmLikelihoodField_Thrun), with
+/// value(cx, cy, logs) giving a cell's log term (its term if !logs) for cells inside the border.
+double fieldScanLogLikelihood(const FieldGrid& g, const mrpt::obs::CObservation2DRangeScan& scan,
+                              const mrpt::poses::CPose3D& pose,
+                              const std::function<double(int, int, bool)>& value);
 
 class LikelihoodField2D {
  public:

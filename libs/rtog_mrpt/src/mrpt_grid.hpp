@@ -6,6 +6,8 @@
 // tests/mrpt/test_mrpt_grid_fidelity.cpp holds the result against the grid itself.
 #pragma once
 
+#include <cmath>
+
 #include <cstdint>
 #include <vector>
 
@@ -43,6 +45,10 @@ inline int y2idx(const TGridFrame2D& f, float y) { return static_cast<int>((y - 
 /// frame never set (a map first saved before format version 2: no cells, no layer) passes.
 void checkFrame(const TGridFrame2D& f, double resolution);
 /// Lattice key of the grid's cell 0 along x / y (the grid's minima lie on multiples of its resolution).
+/// The frame's layer lies in a 2D view's height band [lo, hi] (its z-layers as bandRegion takes them).
+inline bool layerInBand(const TGridFrame2D& f, double res, float lo, float hi) {
+  return std::floor(lo / res) <= f.layer && f.layer <= std::floor(hi / res);
+}
 std::int32_t keyOffsetX(const TGridFrame2D& f);
 std::int32_t keyOffsetY(const TGridFrame2D& f);
 

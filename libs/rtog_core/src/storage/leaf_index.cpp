@@ -9,7 +9,7 @@ namespace rtog {
 
 void LeafIndex::clear() {
   upper_.reset(UpperTree(upper_->tree.params()));
-  brick_index_.reset({});
+  brick_index_.reset(detail::FlatHashMap64{});
   bricks_.clear();
   leaf_count_ = 0;
 }

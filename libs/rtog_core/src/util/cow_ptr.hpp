@@ -41,7 +41,7 @@ class CowPtr {
   /// Replaces the object (no clone of the old one).
   void reset(T value) { p_ = std::make_shared<T>(std::move(value)); }
   /// Drops this copy's object (null until the next write()).
-  void reset(std::nullptr_t) { p_.reset(); }
+  void drop() { p_.reset(); }
   /// True if another copy holds the object.
   bool shared() const { return p_.use_count() > 1; }
   /// Owners of the object, this one included (for memory accounting: a shared object's bytes

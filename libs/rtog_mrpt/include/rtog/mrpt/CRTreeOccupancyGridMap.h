@@ -347,12 +347,12 @@ class CRTreeOccupancyGridMap : public mrpt::maps::CMetricMap {
                          std::size_t& invalid) const;
 
   /// Derived data (likelihood-field terms, point clouds, decoded points, the 2D view), defined
-  /// in src/ so that this header needs no hash map. Copies start empty (a copy rebuilds them on
-  /// demand); assigning a map invalidates the target's caches. Guarded by Caches::mutex.
+  /// in src/ so that this header needs no hash map. Copies share the 2D view's tiles (copy on
+  /// write) and start without the rest (rebuilt on demand). Guarded by Caches::mutex.
   struct Caches;
   /// cos/sin of the beam angles of the last 2D scan geometry (defined with Caches).
   struct ScanAngles;
-  /// Owns the caches; copying yields empty caches, assignment invalidates (see Caches).
+  /// Owns the caches; copies and assignments share the tiles and drop the rest (see Caches).
   class CachesHolder {
    public:
     CachesHolder();
@@ -375,6 +375,13 @@ class CRTreeOccupancyGridMap : public mrpt::maps::CMetricMap {
 
   /// cos/sin of the scan's beam angles, from the cache when the geometry is the last one's.
   std::shared_ptr<const ScanAngles> scanAngles(const mrpt::obs::CObservation2DRangeScan& scan) const;
+  /// After a grid scan: the 2D view's copy-on-write tiles, if kept, take its steps; the other
+  /// caches are dropped as by notifyMapChanged().
+  void followGridScan(const GridScanUpdate& upd);
+  /// lmLikelihoodField_Thrun of a planar scan on the view's tiles (made from the map first if
+  /// none are kept); nullopt where the tiles cannot stand for the view (see the .cpp).
+  std::optional<double> tilesLikelihood(const mrpt::obs::CObservation2DRangeScan& scan,
+                                        const mrpt::poses::CPose3D& pose) const;
 };
 
 }  // namespace rtog

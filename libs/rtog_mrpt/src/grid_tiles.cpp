@@ -1,0 +1,146 @@
+#include "grid_tiles.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "mrpt_grid.hpp"
+
+namespace rtog {
+
+GridTiles::GridTiles(const TGridFrame2D& frame) { setFrame(frame); }
+
+void GridTiles::setFrame(const TGridFrame2D& f) {
+  const std::int32_t ox = mrpt_grid::keyOffsetX(f), oy = mrpt_grid::keyOffsetY(f);
+  const std::int32_t tx0 = tileCoord(ox), ty0 = tileCoord(oy);
+  const std::int32_t tx1 = tileCoord(ox + static_cast<std::int32_t>(std::max(f.size_x, 1u)) - 1);
+  const std::int32_t ty1 = tileCoord(oy + static_cast<std::int32_t>(std::max(f.size_y, 1u)) - 1);
+  std::vector<Tile> tiles(static_cast<std::size_t>(tx1 - tx0 + 1) * static_cast<std::size_t>(ty1 - ty0 + 1));
+  for (std::int32_t ty = std::max(ty0, ty0_); ty <= std::min(ty1, ty0_ + nty_ - 1); ++ty)
+    for (std::int32_t tx = std::max(tx0, tx0_); tx <= std::min(tx1, tx0_ + ntx_ - 1); ++tx)
+      tiles[static_cast<std::size_t>(ty - ty0) * static_cast<std::size_t>(tx1 - tx0 + 1) + (tx - tx0)] =
+          std::move(tiles_[static_cast<std::size_t>(ty - ty0_) * static_cast<std::size_t>(ntx_) + (tx - tx0_)]);
+  // Cells of a tile beyond the old grid were unknown and are still; its kept terms were clipped
+  // at the old border, where unknown cells lay anyway: they stand.
+  tiles_ = std::move(tiles);
+  changed_.clear();
+  frame_ = f;
+  ox_ = ox, oy_ = oy, tx0_ = tx0, ty0_ = ty0, ntx_ = tx1 - tx0 + 1, nty_ = ty1 - ty0 + 1;
+}
+
+void GridTiles::setCell(std::int32_t kx, std::int32_t ky, std::int8_t v) {
+  const std::size_t t = tileOf(kx, ky);
+  Tile& tile = tiles_[t];
+  const std::size_t i = within(kx, ky);
+  if ((tile.cells ? tile.cells->v[i] : 0) == v) return;
+  tile.cells.write().v[i] = v;
+  if (changed_.empty() || changed_.back() != t) changed_.push_back(static_cast<std::uint32_t>(t));
+}
+
+void GridTiles::dropStaleTerms(int window) {
+  if (changed_.empty()) return;
+  if (window >= kSide) {
+    // A window wider than a tile: every kept term may have changed.
+    for (Tile& t : tiles_) t.terms.drop();
+  } else {
+    // A cell's term reads the cells within `window` of it: those of its own tile and the eight
+    // around it.
+    std::sort(changed_.begin(), changed_.end());
+    changed_.erase(std::unique(changed_.begin(), changed_.end()), changed_.end());
+    for (const std::uint32_t t : changed_) {
+      const std::int32_t tx = static_cast<std::int32_t>(t % static_cast<std::uint32_t>(ntx_));
+      const std::int32_t ty = static_cast<std::int32_t>(t / static_cast<std::uint32_t>(ntx_));
+      for (std::int32_t y = std::max(0, ty - 1); y <= std::min(nty_ - 1, ty + 1); ++y)
+        for (std::int32_t x = std::max(0, tx - 1); x <= std::min(ntx_ - 1, tx + 1); ++x)
+          tiles_[static_cast<std::size_t>(y) * static_cast<std::size_t>(ntx_) + static_cast<std::size_t>(x)].terms.drop();
+    }
+  }
+  changed_.clear();
+}
+
+void GridTiles::copyTo(std::int8_t* dense) const {
+  const std::size_t sx = frame_.size_x;
+  for (std::uint32_t cy = 0; cy < frame_.size_y; ++cy)
+    for (std::uint32_t cx = 0; cx < frame_.size_x;) {
+      const std::int32_t kx = static_cast<std::int32_t>(cx) + ox_, ky = static_cast<std::int32_t>(cy) + oy_;
+      const Tile& t = tiles_[tileOf(kx, ky)];
+      // The rest of this tile's row at once.
+      const std::uint32_t n = std::min<std::uint32_t>(frame_.size_x - cx, static_cast<std::uint32_t>(kSide - (kx - tileCoord(kx) * kSide)));
+      std::int8_t* out = dense + cy * sx + cx;
+      if (t.cells)
+        std::copy_n(t.cells->v.data() + within(kx, ky), n, out);
+      else
+        std::fill_n(out, n, std::int8_t{0});
+      cx += n;
+    }
+}
+
+void GridTiles::useOptions(const FieldConstants& f, bool logs) {
+  if (field_ && (f.capUnits != field_->capUnits || f.window != field_->window || f.threshold != field_->threshold))
+    for (Tile& t : tiles_) t.terms.drop();  // the kept distances are other distances
+  field_ = f;
+  logs_ = logs;
+  // Distances are capped: one term per distance up to the cap, the same numbers termOfBest gives.
+  value_of_best_.clear();
+  if (f.capUnits < Terms::kNone) {
+    value_of_best_.resize(f.capUnits + 1);
+    for (unsigned b = 0; b <= f.capUnits; ++b) {
+      const double t = f.termOfBest(b);
+      value_of_best_[b] = logs ? std::log(t) : t;
+    }
+  }
+}
+
+double GridTiles::scanLogLikelihood(const FieldGrid& g, const mrpt::obs::CObservation2DRangeScan& scan,
+                                    const mrpt::poses::CPose3D& pose) {
+  const FieldConstants f(*g.likelihood, g.resolution);
+  const bool logs = !g.likelihood->LF_alternateAverageMethod;
+  if (!field_ || !(*field_ == f) || logs != logs_) useOptions(f, logs);
+  const bool keep = g.likelihood->enableLikelihoodCache && !value_of_best_.empty();
+  const int sx = static_cast<int>(frame_.size_x), sy = static_cast<int>(frame_.size_y);
+  const auto row = [&](int y, int x0, int x1, auto&& visit) {
+    const std::int32_t ky = y + oy_;
+    for (int x = x0; x <= x1;) {
+      const std::int32_t kx = x + ox_;
+      const Tile& t = tiles_[tileOf(kx, ky)];
+      const int n = std::min(x1 - x + 1, kSide - (kx - tileCoord(kx) * kSide));
+      if (t.cells) {
+        const std::int8_t* c = t.cells->v.data() + within(kx, ky);
+        for (int i = 0; i < n; ++i) visit(x + i, c[i]);
+      }  // else unknown cells: none occupied
+      x += n;
+    }
+  };
+  return fieldScanLogLikelihood(g, scan, pose, [&](int cx, int cy, bool lg) {
+    const std::int32_t kx = cx + ox_, ky = cy + oy_;
+    if (!keep) {
+      const double t = f.termOfBest(f.bestAt(cx, cy, sx, sy, row));
+      return lg ? std::log(t) : t;
+    }
+    Tile& tile = tiles_[tileOf(kx, ky)];
+    const std::size_t i = within(kx, ky);
+    if (tile.terms && tile.terms->best[i] != Terms::kNone) return value_of_best_[tile.terms->best[i]];
+    const unsigned best = f.bestAt(cx, cy, sx, sy, row);
+    tile.terms.write().best[i] = static_cast<std::uint16_t>(best);  // this copy's own page
+    return value_of_best_[best];
+  });
+}
+
+std::size_t GridTiles::memoryBytes() const {
+  double bytes = sizeof(*this) + tiles_.capacity() * sizeof(Tile) + changed_.capacity() * sizeof(std::uint32_t) +
+                 value_of_best_.capacity() * sizeof(double);
+  for (const Tile& t : tiles_) {
+    if (t.cells) bytes += double(sizeof(Cells)) / double(t.cells.owners());
+    if (t.terms) bytes += double(sizeof(Terms)) / double(t.terms.owners());
+  }
+  return static_cast<std::size_t>(bytes);
+}
+
+std::size_t GridTiles::tileCount() const {
+  return static_cast<std::size_t>(std::count_if(tiles_.begin(), tiles_.end(), [](const Tile& t) { return bool(t.cells); }));
+}
+
+std::size_t GridTiles::sharedTiles() const {
+  return static_cast<std::size_t>(std::count_if(tiles_.begin(), tiles_.end(), [](const Tile& t) { return t.cells && t.cells.shared(); }));
+}
+
+}  // namespace rtog

@@ -1,0 +1,136 @@
+// Copies of CRTreeOccupancyGridMap as a particle filter makes them: the stock rbpf-slam grid
+// section pasted as rtreeOccupancyGrid, copied between scans, each copy taking scans at its own
+// poses. Every copy must score scans exactly as a COccupancyGridMap2D that took the same scans
+// (the 2D view's copy-on-write tiles follow each copy's own scans), an empty map must be scored as
+// the stock grid scores its empty grid, and copies must score on several threads at once while
+// another copy inserts (TSan runs the MapConcurrency cases).
+#include <gtest/gtest.h>
+
+#include <mrpt/config/CConfigFileMemory.h>
+#include <mrpt/maps/COccupancyGridMap2D.h>
+#include <mrpt/maps/CMultiMetricMap.h>
+#include <mrpt/obs/CObservation2DRangeScan.h>
+#include <mrpt/obs/CRawlog.h>
+
+#include <atomic>
+#include <fstream>
+#include <random>
+#include <sstream>
+#include <thread>
+
+#include "rtog/mrpt/CRTreeOccupancyGridMap.h"
+#include "test_helpers.hpp"
+
+using mrpt::maps::COccupancyGridMap2D;
+using mrpt::obs::CObservation2DRangeScan;
+using mrpt::poses::CPose3D;
+using rtog::CRTreeOccupancyGridMap;
+using namespace rtog_test;
+
+namespace {
+
+/// The stock rbpf-slam config's grid, as shipped and renamed to rtreeOccupancyGrid.
+struct Pair {
+  COccupancyGridMap2D::Ptr grid;
+  CRTreeOccupancyGridMap::Ptr rtog;
+};
+
+Pair stockPair() {
+  std::ifstream f("/usr/share/mrpt/config_files/rbpf-slam/gridmapping_optimal_sampling.ini");
+  std::stringstream ss;
+  ss << f.rdbuf();
+  std::string text = ss.str(), renamed = text;
+  for (auto [from, to] : {std::pair<std::string, std::string>{"occupancyGrid_count", "rtreeOccupancyGrid_count"},
+                          {"_occupancyGrid_00_", "_rtreeOccupancyGrid_00_"}})
+    for (std::size_t p = 0; (p = renamed.find(from, p)) != std::string::npos; p += to.size()) renamed.replace(p, from.size(), to);
+  Pair out;
+  out.grid = std::dynamic_pointer_cast<COccupancyGridMap2D>(multiMapFromIni(text).maps.at(0));
+  out.rtog = std::dynamic_pointer_cast<CRTreeOccupancyGridMap>(multiMapFromIni(renamed).maps.at(0));
+  return out;
+}
+
+const std::vector<PosedFrame>& senaFrames() {
+  static const std::vector<PosedFrame> frames = loadOdometryFrames(dataset(kSena), 120);
+  return frames;
+}
+
+CObservation2DRangeScan::Ptr scanOf(std::size_t i) {
+  return senaFrames()[i].sf->getObservationByClass<CObservation2DRangeScan>();
+}
+
+/// Scores of scan `s` at poses about `at` (seed fixed), on `m`.
+std::vector<double> scores(const mrpt::maps::CMetricMap& m, const CObservation2DRangeScan& s, const CPose3D& at,
+                           unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> d(-0.5, 0.5), a(-0.3, 0.3);
+  std::vector<double> out;
+  for (int i = 0; i < 40; ++i)
+    out.push_back(m.computeObservationLikelihood(s, CPose3D(at.x() + d(rng), at.y() + d(rng), 0, at.yaw() + a(rng), 0, 0)));
+  return out;
+}
+
+TEST(MapCopies, AnEmptyMapIsScoredAsTheStockGridScoresItsEmptyGrid) {
+  const Pair p = stockPair();
+  const auto s = scanOf(3);
+  ASSERT_TRUE(p.grid->canComputeObservationLikelihood(*s));
+  EXPECT_TRUE(p.rtog->canComputeObservationLikelihood(*s));  // was false: the first weighing skipped
+  EXPECT_EQ(scores(*p.rtog, *s, CPose3D(), 1), scores(*p.grid, *s, CPose3D(), 1));
+}
+
+// Each copy takes scans at poses of its own, as particles do: its scores stay the stock grid's
+// that took the same scans, bit for bit, and the map it was copied from is not touched.
+TEST(MapCopies, CopiesTakingScansAtTheirOwnPosesScoreAsStockGridsThatTookThem) {
+  Pair a = stockPair();
+  for (std::size_t i = 0; i < 20; ++i) {
+    a.grid->insertObservation(*scanOf(i), senaFrames()[i].pose);
+    a.rtog->insertObservation(*scanOf(i), senaFrames()[i].pose);
+  }
+  const CPose3D probe = senaFrames()[20].pose;
+  ASSERT_EQ(scores(*a.rtog, *scanOf(20), probe, 2), scores(*a.grid, *scanOf(20), probe, 2));
+  const std::vector<double> before = scores(*a.rtog, *scanOf(20), probe, 3);
+  // Two copies of each, every one going on with poses nudged its own way.
+  std::vector<Pair> copies;
+  for (int c = 0; c < 2; ++c)
+    copies.push_back({std::make_shared<COccupancyGridMap2D>(*a.grid), std::make_shared<CRTreeOccupancyGridMap>(*a.rtog)});
+  for (std::size_t i = 20; i < 60; ++i)
+    for (int c = 0; c < 2; ++c) {
+      const CPose3D pose = senaFrames()[i].pose + CPose3D(0.02 * (c + 1), -0.01 * c, 0, 0.01 * c, 0, 0);
+      copies[c].grid->insertObservation(*scanOf(i), pose);
+      copies[c].rtog->insertObservation(*scanOf(i), pose);
+      if (i % 10 == 9) {
+        const CPose3D at = senaFrames()[i + 1].pose;
+        ASSERT_EQ(scores(*copies[c].rtog, *scanOf(i + 1), at, 4), scores(*copies[c].grid, *scanOf(i + 1), at, 4))
+            << "copy " << c << " after scan " << i;
+        // A copy of a copy, as resampling makes them, scores as its source.
+        const CRTreeOccupancyGridMap again(*copies[c].rtog);
+        ASSERT_EQ(scores(again, *scanOf(i + 1), at, 5), scores(*copies[c].rtog, *scanOf(i + 1), at, 5));
+      }
+    }
+  EXPECT_EQ(scores(*a.rtog, *scanOf(20), probe, 3), before) << "scans into copies changed the original";
+  EXPECT_NE(scores(*copies[0].rtog, *scanOf(60), senaFrames()[60].pose, 6),
+            scores(*copies[1].rtog, *scanOf(60), senaFrames()[60].pose, 6));
+}
+
+// Copies sharing tiles and bricks score on two threads while a third copy takes scans.
+TEST(MapConcurrency, CopiesSharingTheirViewScoreOnThreadsWhileAnotherCopyInserts) {
+  Pair a = stockPair();
+  for (std::size_t i = 0; i < 30; ++i) a.rtog->insertObservation(*scanOf(i), senaFrames()[i].pose);
+  const CRTreeOccupancyGridMap c1(*a.rtog), c2(*a.rtog);
+  const CPose3D at = senaFrames()[30].pose;
+  const auto s = scanOf(30);
+  const std::vector<double> want = scores(*a.rtog, *s, at, 7);
+  std::atomic<int> wrong{0};
+  std::thread t1([&] {
+    for (int k = 0; k < 5; ++k) wrong += scores(c1, *s, at, 7) != want;
+  });
+  std::thread t2([&] {
+    for (int k = 0; k < 5; ++k) wrong += scores(c2, *s, at, 7) != want;
+  });
+  CRTreeOccupancyGridMap c3(*a.rtog);
+  for (std::size_t i = 30; i < 45; ++i) c3.insertObservation(*scanOf(i), senaFrames()[i].pose);
+  t1.join();
+  t2.join();
+  EXPECT_EQ(wrong.load(), 0);
+}
+
+}  // namespace
