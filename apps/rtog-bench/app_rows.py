@@ -35,6 +35,10 @@ MAPS = ("COccupancyGridMap2D", "rtreeOccupancyGrid", "rtreeGridMap2D")
 QUIET = {"logOutput_dir": "OUT", "SHOW_PROGRESS_IN_WINDOW": 0, "SHOW_PROGRESS_3D_REAL_TIME": 0, "SAVE_3D_SCENE": 0,
          "SAVE_MAP_IMAGES": 0, "LOG_FREQUENCY": 0}
 PATH_FILE = os.path.join("OUT", "log_estimated_path.txt")
+# The class each map type makes. An app whose config names a map type nobody registered (the
+# plugin not loaded) runs on without that map, quietly and fast: its row would be a lie.
+MAP_CLASS = {"COccupancyGridMap2D": "mrpt::maps::COccupancyGridMap2D", "rtreeOccupancyGrid": "rtog::CRTreeOccupancyGridMap",
+             "rtreeGridMap2D": "rtog::CRTreeBackedGridMap2D"}
 
 
 def has_key(text, key):
@@ -62,7 +66,7 @@ def run_once(a, app, cfg_text, rawlog, maptype, run_dir):
     with open(cfg, "w") as f:
         f.write(cfg_text)
     env = dict(os.environ, RTOG_TEST_SEED="1")
-    env["LD_PRELOAD"] = " ".join([a.seed_shim] + ([a.plugin] if maptype != MAPS[0] else []))
+    env["LD_PRELOAD"] = " ".join(a.preload_first + [a.seed_shim] + ([a.plugin] if maptype != MAPS[0] else []))
     env.pop("DISPLAY", None)
     timing = os.path.join(run_dir, "time.txt")
     with open(os.path.join(run_dir, "app.log"), "w") as log:
@@ -71,6 +75,9 @@ def run_once(a, app, cfg_text, rawlog, maptype, run_dir):
                            stdin=subprocess.DEVNULL, stdout=log, stderr=subprocess.STDOUT, timeout=a.timeout)
     if p.returncode != 0:
         return "exit %d: %s" % (p.returncode, why(os.path.join(run_dir, "app.log")))
+    with open(os.path.join(run_dir, "app.log"), errors="replace") as f:
+        if "C++ Class: '%s'" % MAP_CLASS[maptype] not in f.read():
+            return "the app made no %s (is the plugin loaded? does the config hold a grid?)" % MAP_CLASS[maptype]
     with open(timing) as f:
         wall, rss_kb = f.read().split()[-2:]
     return float(wall), float(rss_kb) / 1024.0
@@ -165,6 +172,8 @@ def main():
     p.add_argument("--work-dir", default="app_rows_runs", help="where the runs happen (default: ./app_rows_runs)")
     p.add_argument("--timeout", type=float, default=3600, help="seconds before a run is killed (default: 3600)")
     p.add_argument("--json", help="also write the rows as JSON here")
+    # A sanitized build's libraries need the sanitizer's runtime loaded first (tests/mrpt).
+    p.add_argument("--preload-first", action="append", default=[], help=argparse.SUPPRESS)
     a = p.parse_args()
     a.maps = a.maps.split(",")
     if a.maps[0] != MAPS[0] or any(m not in MAPS for m in a.maps):
