@@ -39,6 +39,7 @@ struct Options {
   std::string png;          ///< the map with the loop drawn (empty: none)
   std::size_t scans = 3000;  ///< action/sensory-frame pairs; the loop is driven once, end at start
   std::uint32_t seed = 1;   ///< odometry and range noise
+  double odometry_noise = 1.0;  ///< scales every odometry error term (0: exact odometry)
   LoopOptions loop;
 };
 

@@ -1,6 +1,7 @@
 // rtog-simlog as a process on Debian's Malaga campus gridmap: the rawlog MRPT reads back (pairs,
-// labels, ranges, timestamps), the scans taken where the ground truth says, odometry close to
-// the true motion but noisy, one seed one set of bytes, and bad input refused with one line.
+// labels, ranges, timestamps), every beam ending at the first wall seen from the ground truth,
+// odometry close to the true motion but noisy, one seed one set of bytes, and bad input refused
+// with one line.
 #include <cmath>
 #include <string>
 #include <vector>
@@ -90,7 +91,7 @@ TEST(Simlog, MrptReadsActionSensoryFramePairsOfValidScans) {
   }
 }
 
-TEST(Simlog, ScansAreTakenAtTheGroundTruthInFreeSpaceAndOdometryIsNoisyButClose) {
+TEST(Simlog, GroundTruthIsInFreeSpaceAndOdometryNoisyButClose) {
   const Made& m = made();
   ASSERT_EQ(m.run.rc, 0) << m.run.output;
   const std::vector<Pose> gt = readGt(m.gt);
@@ -100,22 +101,12 @@ TEST(Simlog, ScansAreTakenAtTheGroundTruthInFreeSpaceAndOdometryIsNoisyButClose)
   mrpt::obs::CRawlog log;
   ASSERT_TRUE(log.loadFromRawLogFile(m.rawlog));
   const mrpt::maps::COccupancyGridMap2D map = malaga();
-  // The world the tool drives in: free where the map knows free, solid elsewhere.
-  mrpt::maps::COccupancyGridMap2D world = map;
-  for (unsigned y = 0; y < map.getSizeY(); ++y)
-    for (unsigned x = 0; x < map.getSizeX(); ++x) world.setCell(int(x), int(y), map.getCell(x, y) > 0.6f ? 1.0f : 0.0f);
   std::size_t odometry_differs = 0;
   for (std::size_t i = 0; i < gt.size(); ++i) {
     const mrpt::poses::CPose2D pose(gt[i].x, gt[i].y, gt[i].phi);
     EXPECT_GT(map.getPos(gt[i].x, gt[i].y), 0.6f) << "pose " << i << " is not in the map's free space";
     const auto scan = log.getAsObservations(2 * i + 1)->getObservationByClass<mrpt::obs::CObservation2DRangeScan>();
     EXPECT_NEAR(mrpt::Clock::toDouble(scan->timestamp), gt[i].t, 1e-3);
-    // The front beam, measured again from the ground-truth pose: the same wall.
-    mrpt::obs::CObservation2DRangeScan again = *scan;
-    world.laserScanSimulator(again, pose, 0.6f, again.getScanSize());
-    if (scan->getScanRangeValidity(180) && again.getScanRangeValidity(180)) {
-      EXPECT_NEAR(scan->getScanRange(180), again.getScanRange(180), 0.1) << "scan " << i;
-    }
     if (i == 0) continue;
     const mrpt::poses::CPose2D moved = pose - mrpt::poses::CPose2D(gt[i - 1].x, gt[i - 1].y, gt[i - 1].phi);
     const auto move = log.getAsAction(2 * i)->getActionByClass<mrpt::obs::CActionRobotMovement2D>();
@@ -128,6 +119,46 @@ TEST(Simlog, ScansAreTakenAtTheGroundTruthInFreeSpaceAndOdometryIsNoisyButClose)
     odometry_differs += std::abs(odometry.x() - moved.x()) > 1e-6;
   }
   EXPECT_GT(odometry_differs, gt.size() / 2) << "the odometry has no noise";
+}
+
+// Every beam ends where it meets the first cell the map does not know free (the tool's world:
+// walls and unknown space are solid), seen from the ground-truth pose: up to a little short of
+// its end the beam crosses free cells only, and around its end it meets a solid one. MRPT 2.5's
+// laserScanSimulator fails this (a sixth of the beams pass through a wall): it steps along a
+// direction rounded to 1/1024 of a step, so each beam leans by up to a quarter degree.
+TEST(Simlog, EveryBeamEndsAtTheFirstWallSeenFromTheGroundTruth) {
+  const Made& m = made();
+  ASSERT_EQ(m.run.rc, 0) << m.run.output;
+  const std::vector<Pose> gt = readGt(m.gt);
+  mrpt::obs::CRawlog log;
+  ASSERT_TRUE(log.loadFromRawLogFile(m.rawlog));
+  ASSERT_EQ(log.size(), 2 * gt.size());
+  const mrpt::maps::COccupancyGridMap2D map = malaga();
+  auto free_at = [&](const Pose& p, double angle, double range) {
+    const int cx = map.x2idx(p.x + range * std::cos(angle)), cy = map.y2idx(p.y + range * std::sin(angle));
+    return cx >= 0 && cy >= 0 && cx < int(map.getSizeX()) && cy < int(map.getSizeY()) && map.getCell(cx, cy) > 0.6f;
+  };
+  const double margin = 0.06;  // six standard deviations of the range noise
+  std::size_t beams = 0, through_wall = 0, in_free_space = 0;
+  for (std::size_t i = 0; i < gt.size(); ++i) {
+    const auto scan = log.getAsObservations(2 * i + 1)->getObservationByClass<mrpt::obs::CObservation2DRangeScan>();
+    const std::size_t n = scan->getScanSize();
+    for (std::size_t b = 0; b < n; ++b) {
+      if (!scan->getScanRangeValidity(b)) continue;
+      ++beams;
+      const double a = gt[i].phi - scan->aperture / 2 + scan->aperture * double(b) / double(n - 1);
+      const double r = scan->getScanRange(b);
+      bool crossed_solid = false, met_solid = false;
+      for (double t = 0; t < r - margin && !crossed_solid; t += 0.02) crossed_solid = !free_at(gt[i], a, t);
+      for (double t = r - margin; t <= r + margin && !met_solid; t += 0.005) met_solid = !free_at(gt[i], a, t);
+      through_wall += crossed_solid;
+      in_free_space += !met_solid;
+    }
+  }
+  // A beam grazing a corner or along a wall may meet it a hair off the line sampled here (the
+  // ground truth is written to a micrometre): one in a hundred is allowed.
+  EXPECT_LT(through_wall, beams / 100) << "of " << beams << " beams, " << through_wall << " pass through a wall";
+  EXPECT_LT(in_free_space, beams / 100) << "of " << beams << " beams, " << in_free_space << " end in free space";
 }
 
 TEST(Simlog, OneSeedGivesTheSameBytesAnotherSeedOtherNoiseOnTheSamePath) {
