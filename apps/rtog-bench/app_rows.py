@@ -8,8 +8,9 @@ then rename its grid section exactly as the drop-in app tests do (tests/mrpt/app
 nothing else changes. Every run has MRPT's clock-seeded generator pinned by the tests' seed shim
 (RTOG_TEST_SEED=1); the rtog runs also preload the plugin. Time and memory are /usr/bin/time's
 "%e %M"; with --repeats N the median of N runs. The path of each map is compared with the stock
-grid's path of the same app, log and particle count (OUT/log_estimated_path.txt, written by both
-rbpf-slam and icp-slam).
+grid's path of the same app, log and particle count: the running estimate at every step
+(OUT/log_estimated_path.txt, written by both rbpf-slam and icp-slam) and rbpf-slam's final path,
+its most likely particle's in hindsight (OUT/most_likely_path.txt).
 
   app_rows.py --plugin build/libs/rtog_mrpt/librtog_mrpt.so \\
       --seed-shim build/tests/mrpt/librtog_test_seed.so --rawlog LOG.rawlog \\
@@ -34,7 +35,9 @@ MAPS = ("COccupancyGridMap2D", "rtreeOccupancyGrid", "rtreeGridMap2D")
 # periodic logs. Keys a config does not have are left alone.
 QUIET = {"logOutput_dir": "OUT", "SHOW_PROGRESS_IN_WINDOW": 0, "SHOW_PROGRESS_3D_REAL_TIME": 0, "SAVE_3D_SCENE": 0,
          "SAVE_MAP_IMAGES": 0, "LOG_FREQUENCY": 0}
-PATH_FILE = os.path.join("OUT", "log_estimated_path.txt")
+PATH_FILE = os.path.join("OUT", "log_estimated_path.txt")  # "i x y z yaw pitch roll t": the running estimate
+# rbpf-slam's final path, "x y phi" per filter step: the most likely particle's, in hindsight.
+FINAL_PATH_FILE = os.path.join("OUT", "most_likely_path.txt")
 # The class each map type makes. An app whose config names a map type nobody registered (the
 # plugin not loaded) runs on without that map, quietly and fast: its row would be a lie.
 MAP_CLASS = {"COccupancyGridMap2D": "mrpt::maps::COccupancyGridMap2D", "rtreeOccupancyGrid": "rtog::CRTreeOccupancyGridMap",
@@ -93,13 +96,21 @@ def why(log_path):
     return next((l for l in reversed(lines) if l), "")[:200]
 
 
-def path_distance(ref_dir, dir_):
+def read_final_path(path):
+    with open(path) as f:
+        return [tuple(float(v) for v in line.split()[0:2]) for line in f if line.strip()]
+
+
+def path_distance(ref_dir, dir_, name=PATH_FILE, read=read_path):
+    """(mean, max) distance of the poses of two runs, pose by pose; a string if they cannot be
+    paired (rbpf-slam's filter steps depend on its estimate, so two maps may take a different
+    number of them)."""
     try:
-        ref, ours = read_path(os.path.join(ref_dir, PATH_FILE)), read_path(os.path.join(dir_, PATH_FILE))
+        ref, ours = read(os.path.join(ref_dir, name)), read(os.path.join(dir_, name))
     except OSError:
         return None
     if not ref or len(ref) != len(ours):
-        return None
+        return "%d vs %d poses" % (len(ours), len(ref))
     d = [math.hypot(p[0] - q[0], p[1] - q[1]) for p, q in zip(ref, ours)]
     return sum(d) / len(d), max(d)
 
@@ -137,23 +148,30 @@ def measure(a):
                     elif stock and row["ok"]:
                         row["wall_ratio"] = row["wall_s"] / stock["wall_s"]
                         row["rss_ratio"] = row["peak_rss_mb"] / stock["peak_rss_mb"]
-                        dist = path_distance(stock_dir, run_dir)
-                        if dist:
-                            row["path_mean_m"], row["path_max_m"] = dist
+                        for key, dist in (("path", path_distance(stock_dir, run_dir)),
+                                          ("final_path", path_distance(stock_dir, run_dir, FINAL_PATH_FILE, read_final_path))):
+                            if isinstance(dist, str):
+                                row[key + "_unpaired"] = dist
+                            elif dist:
+                                row[key + "_mean_m"], row[key + "_max_m"] = dist
                     rows.append(row)
     return rows, failed
 
 
 def markdown(rows):
-    out = ["| app | log | particles | map | wall | peak RSS | path vs stock (mean / max) |", "|---|---|---|---|---|---|---|"]
+    out = ["| app | log | particles | map | wall | peak RSS | path vs stock (mean / max) | final path vs stock |",
+           "|---|---|---|---|---|---|---|---|"]
     for r in rows:
         if not r["ok"]:
-            cells = ["failed (%s)" % r["error"].replace("|", "/"), "–", "–"]
+            cells = ["failed (%s)" % r["error"].replace("|", "/"), "–", "–", "–"]
         else:
             ratio = lambda k: " (%.2f×)" % r[k] if k in r else ""  # noqa: E731
-            path = "%.3f m / %.3f m" % (r["path_mean_m"], r["path_max_m"]) if "path_mean_m" in r else "–"
+            def path(k):
+                if k + "_unpaired" in r:
+                    return "unpaired: " + r[k + "_unpaired"]
+                return "%.3f m / %.3f m" % (r[k + "_mean_m"], r[k + "_max_m"]) if k + "_mean_m" in r else "–"
             cells = ["%.2f s%s" % (r["wall_s"], ratio("wall_ratio")), "%.0f MB%s" % (r["peak_rss_mb"], ratio("rss_ratio")),
-                     path if r["map"] != MAPS[0] else "–"]
+                     path("path"), path("final_path")]
         out.append("| %s | %s | %s | `%s` | %s |" % (r["app"], r["log"], r["particles"] if r["particles"] else "–", r["map"],
                                                     " | ".join(cells)))
     return "\n".join(out)

@@ -145,3 +145,5 @@ def case_app_rows(r):
             fail("a row without its comparison to the stock grid: %s" % row)
         if row["map"] == "rtreeGridMap2D" and row["path_mean_m"] > 0.05:
             fail("%s with rtreeGridMap2D departs from the stock grid's path by %.3f m" % (row["app"], row["path_mean_m"]))
+        if row["map"] == "rtreeGridMap2D" and row["app"] == "rbpf-slam" and not row.get("final_path_mean_m", 1) <= 0.05:
+            fail("rbpf-slam's final path with rtreeGridMap2D is not the stock grid's: %s" % row)
