@@ -34,6 +34,7 @@ int main(int argc, char** argv, std::ostream& out, std::ostream& err) {
                  "Scales the odometry's error (1: 1 % bias and 3 % noise of distance and turn, 1 deg/m heading noise; 0: exact)")
       ->capture_default_str()
       ->check(number(Sign::NonNegative, 100.0));
+  cli.add_flag("--reverse", o.reverse, "Drive the loop the other way round");
   cli.add_option("--gt", o.gt, "Ground-truth path, t x y phi per line [s m m rad], in the gridmap's frame")->check(app::checks::path());
   cli.add_option("--png", o.png, "The map with the loop drawn (PNG; the start in green)")->check(app::checks::path());
   cli.add_option("--clearance", o.loop.clearance, "The loop keeps this far from walls and unknown space [m]")

@@ -18,7 +18,9 @@
 #include <limits>
 #include <ostream>
 #include <queue>
+#include <sstream>
 #include <stdexcept>
+#include <string>
 #include <vector>
 
 #include <mrpt/maps/COccupancyGridMap2D.h>
@@ -107,6 +109,12 @@ std::vector<TPoint2D> resample(const std::vector<TPoint2D>& p, double h) {
   return out;
 }
 
+std::string metres(double v) {
+  std::ostringstream s;
+  s << v << " m";
+  return s.str();
+}
+
 }  // namespace
 
 std::vector<TPoint2D> planLoop(const mrpt::maps::COccupancyGridMap2D& world, const LoopOptions& opts, std::ostream& log) {
@@ -119,7 +127,7 @@ std::vector<TPoint2D> planLoop(const mrpt::maps::COccupancyGridMap2D& world, con
   std::vector<std::size_t> region_sizes;
   const std::vector<int> region = label(g, fits, false, region_sizes);
   if (region_sizes.empty())
-    throw std::runtime_error("no free space with " + std::to_string(opts.clearance) + " m clearance in the map");
+    throw std::runtime_error("no free space with " + metres(opts.clearance) + " clearance in the map");
   const int main_region = int(std::max_element(region_sizes.begin(), region_sizes.end()) - region_sizes.begin());
   auto inside = [&](std::size_t c) { return region[c] == main_region; };
 
@@ -137,8 +145,8 @@ std::vector<TPoint2D> planLoop(const mrpt::maps::COccupancyGridMap2D& world, con
   for (std::size_t h = 0; h < hole_sizes.size(); ++h)
     if (!touches_border[h] && (hole < 0 || hole_sizes[h] > hole_sizes[std::size_t(hole)])) hole = int(h);
   if (hole < 0)
-    throw std::runtime_error("no closed loop in the map: its largest free region (" + std::to_string(opts.clearance) +
-                             " m clearance) encloses no obstacle");
+    throw std::runtime_error("no closed loop in the map: its largest free region (" + metres(opts.clearance) +
+                             " clearance) encloses no obstacle");
 
   // The obstacle's rightmost cell (the lowest such row): the cut runs right from it, between rows
   // y0 and y0 + 1.

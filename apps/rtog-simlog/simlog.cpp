@@ -185,7 +185,8 @@ void run(const Options& o, std::ostream& log) {
 
   const mrpt::maps::COccupancyGridMap2D world = solidWorld(grid);
   const FreeCells cells(world);
-  const std::vector<TPoint2D> loop = planLoop(world, o.loop, log);
+  std::vector<TPoint2D> loop = planLoop(world, o.loop, log);
+  if (o.reverse) std::reverse(loop.begin(), loop.end());
   const std::vector<CPose2D> path = poses(loop, o.scans);
 
   mrpt::random::CRandomGenerator rng(o.seed);

@@ -40,6 +40,7 @@ struct Options {
   std::size_t scans = 3000;  ///< action/sensory-frame pairs; the loop is driven once, end at start
   std::uint32_t seed = 1;   ///< odometry and range noise
   double odometry_noise = 1.0;  ///< scales every odometry error term (0: exact odometry)
+  bool reverse = false;         ///< drive the loop the other way round
   LoopOptions loop;
 };
 

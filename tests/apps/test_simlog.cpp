@@ -173,6 +173,27 @@ TEST(Simlog, OneSeedGivesTheSameBytesAnotherSeedOtherNoiseOnTheSamePath) {
   EXPECT_EQ(readAll(other + ".gt"), readAll(m.gt)) << "the ground truth depends on the map only";
 }
 
+// Twice the area the path encloses, positive if it turns counterclockwise (shoelace).
+double signedArea2(const std::vector<Pose>& path) {
+  double a = 0;
+  for (std::size_t i = 0; i < path.size(); ++i) {
+    const Pose& p = path[i];
+    const Pose& q = path[(i + 1) % path.size()];
+    a += p.x * q.y - q.x * p.y;
+  }
+  return a;
+}
+
+TEST(Simlog, ReverseDrivesTheSameLoopTheOtherWayRound) {
+  const Made& m = made();
+  ASSERT_EQ(m.run.rc, 0) << m.run.output;
+  const std::string back = m.dir + "/back.rawlog";
+  ASSERT_EQ(spawn({kMalaga, back, "--scans", std::to_string(kScans), "--reverse", "--gt", back + ".gt"}).rc, 0);
+  const double forward = signedArea2(readGt(m.gt)), reverse = signedArea2(readGt(back + ".gt"));
+  EXPECT_LT(forward * reverse, 0) << "both ways turn the same way";
+  EXPECT_NEAR(std::abs(reverse), std::abs(forward), 0.05 * std::abs(forward)) << "not the same loop";
+}
+
 // A one-line message naming the problem, a non-zero exit, and no output file left.
 void expectRefused(const std::vector<std::string>& args, int rc, const std::string& message, const std::string& out) {
   const rtog_cli_test::Child c = spawn(args);
