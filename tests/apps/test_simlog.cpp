@@ -2,7 +2,9 @@
 // labels, ranges, timestamps), every beam ending at the first wall seen from the ground truth,
 // odometry close to the true motion but noisy, one seed one set of bytes, and bad input refused
 // with one line.
+#include <algorithm>
 #include <cmath>
+#include <fstream>
 #include <string>
 #include <vector>
 
