@@ -1,9 +1,12 @@
 """The drop-in cases: a stock MRPT app config as Debian ships it, run once as shipped and once with
 its COccupancyGridMap2D section renamed to rtog's type and nothing else changed; the two runs must
 give the same path (or estimates)."""
+import json
 import math
 import os
 import re
+import subprocess
+import sys
 
 from app_common import PDF_RE, SENA, fail
 
@@ -101,3 +104,53 @@ def case_pf_localization_dropin(r):
     if len(ref) < 20:
         fail("pf-localization printed only %d estimates" % len(ref))
     compare_paths(ref, ours, "pf-localization, rtreeGridMap2D", 0.05)
+
+
+def case_app_rows(r):
+    """apps/rtog-bench/app_rows.py on SENA, short: rbpf-slam with one particle on the three maps,
+    icp-slam on the two it can match against (rtreeOccupancyGrid is no COccupancyGridMap2D).
+    Every row measured, and rtreeGridMap2D on the stock grid's path."""
+    script = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "apps", "rtog-bench", "app_rows.py")
+    d = r.run_dir("app_rows")
+    rows = []
+    for app, cfg, counts, maps in (
+            ("rbpf-slam", "rbpf-slam/gridmapping_optimal_sampling.ini", "1",
+             "COccupancyGridMap2D,rtreeOccupancyGrid,rtreeGridMap2D"),
+            ("icp-slam", "icp-slam/icp-slam_demo_classic_gridmatch.ini", "-", "COccupancyGridMap2D,rtreeGridMap2D")):
+        out_json = os.path.join(d, app + ".json")
+        args = [sys.executable, script, "--plugin", r.a.plugin, "--seed-shim", r.a.seed_shim,
+                "--rawlog", os.path.join(r.a.datasets, SENA), "--app", app, cfg, counts, "--maps", maps,
+                "--work-dir", os.path.join(d, "runs"), "--json", out_json]
+        for lib in r.a.preload_first:
+            args += ["--preload-first", lib]
+        p = subprocess.run(args, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, timeout=280)
+        out = p.stdout.decode(errors="replace")
+        print(out)
+        if p.returncode != 0:
+            fail("app_rows.py (%s) exited %d" % (app, p.returncode))
+        table = [line for line in out.splitlines() if line.startswith("| %s |" % app)]
+        with open(out_json) as f:
+            got = json.load(f)
+        if len(table) != len(maps.split(",")) or len(got) != len(table):
+            fail("app_rows.py (%s): %d table rows, %d JSON rows for %d maps" % (app, len(table), len(got), len(maps.split(","))))
+        rows += got
+    # A library that registers no map type in place of the plugin: the app runs on without the
+    # map; the row must say so, not report its (short) time.
+    args = [sys.executable, script, "--plugin", r.a.seed_shim, "--seed-shim", r.a.seed_shim, "--rawlog",
+            os.path.join(r.a.datasets, SENA), "--app", "rbpf-slam", "rbpf-slam/gridmapping_optimal_sampling.ini", "1",
+            "--maps", "COccupancyGridMap2D,rtreeGridMap2D", "--work-dir", os.path.join(d, "runs_no_plugin")]
+    p = subprocess.run(args + sum((["--preload-first", lib] for lib in r.a.preload_first), []), stdin=subprocess.DEVNULL,
+                       stdout=subprocess.PIPE, stderr=subprocess.STDOUT, timeout=280)
+    out = p.stdout.decode(errors="replace")
+    print(out)
+    if p.returncode != 1 or "made no rtog::CRTreeBackedGridMap2D" not in out:
+        fail("app_rows.py measured rbpf-slam without the plugin as if it had run rtreeGridMap2D (exit %d)" % p.returncode)
+    for row in rows:
+        if not (row["ok"] and row["wall_s"] > 0 and row["peak_rss_mb"] > 0):
+            fail("a row without figures: %s" % row)
+        if row["map"] != "COccupancyGridMap2D" and not ("wall_ratio" in row and "rss_ratio" in row and "path_mean_m" in row):
+            fail("a row without its comparison to the stock grid: %s" % row)
+        if row["map"] == "rtreeGridMap2D" and row["path_mean_m"] > 0.05:
+            fail("%s with rtreeGridMap2D departs from the stock grid's path by %.3f m" % (row["app"], row["path_mean_m"]))
+        if row["map"] == "rtreeGridMap2D" and row["app"] == "rbpf-slam" and not row.get("final_path_mean_m", 1) <= 0.05:
+            fail("rbpf-slam's final path with rtreeGridMap2D is not the stock grid's: %s" % row)
