@@ -129,6 +129,12 @@ void writeTaskSections(const std::vector<Result>& results, std::ostream& md);
 /// Whether a row belongs to those sections (not to the insertion tables).
 bool isTaskRow(const Result& r);
 
+/// The rows of the MRPT apps as processes, from app_rows.py's JSON (dataset "MRPT apps: <log>",
+/// method "<app> | <map>"); throws std::runtime_error for a file that is not such a list.
+std::vector<Result> readAppRows(const std::string& file);
+/// Their section of the report, if any.
+void writeAppRows(const std::vector<Result>& results, std::ostream& md);
+
 /// The Markdown report with target ratios and PASS/FAIL; its bar charts are added to `files`
 /// as PNGs in `img_dir` (the report links them as img/NAME.png).
 void writeMarkdown(const std::vector<Result>& results, const RunInfo& run, std::ostream& md,
@@ -147,6 +153,9 @@ struct Command {
   /// Rows of datasets not measured in this run are taken from this JSON (a partial run merged
   /// into a full report). (Default: none)
   std::string merge_json;
+  /// app_rows.py --json files: their rows join the results (replacing rows of the same app, log
+  /// and map), in the JSON and the report. (Default: none)
+  std::vector<std::string> app_rows;
 };
 /// Measures (or reads --from-json), then writes the report's files all or none. Progress goes
 /// to `out`. Returns the exit code.

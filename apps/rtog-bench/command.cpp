@@ -17,6 +17,7 @@ int runCommand(const Command& cmd, std::ostream& out, std::ostream& err) {
     std::vector<app::InputFile> inputs;
     if (!cmd.from_json.empty()) inputs.push_back({"--from-json", cmd.from_json});
     if (!cmd.merge_json.empty()) inputs.push_back({"--merge-json", cmd.merge_json});
+    for (const auto& f : cmd.app_rows) inputs.push_back({"--app-rows", f});
     app::OutputSet files(std::move(inputs));
     std::ostream* json = cmd.from_json.empty() ? &files.add("--json", cmd.json) : nullptr;
     std::ostream& markdown = files.add("--markdown", cmd.markdown);
@@ -73,6 +74,13 @@ int runCommand(const Command& cmd, std::ostream& out, std::ostream& err) {
         run.machine["merged_rows_cpu"] = kept;
       }
     }
+    for (const auto& file : cmd.app_rows)
+      for (auto& row : readAppRows(file)) {
+        results.erase(std::remove_if(results.begin(), results.end(),
+                                     [&](const Result& r) { return r.dataset == row.dataset && r.method == row.method; }),
+                      results.end());
+        results.push_back(std::move(row));
+      }
     if (json) writeJson(results, run, *json);
     writeMarkdown(results, run, markdown, cmd.img_dir, files);
     files.commit();

@@ -60,6 +60,9 @@ int main(int argc, char** argv) {
   app.add_option("--img-dir", cmd.img_dir, "Directory for PNG plots")->capture_default_str()->check(CLI::ExistingDirectory);
   app.add_option("--from-json", cmd.from_json, "Render the Markdown report and plots from this JSON; measure nothing")
       ->check(CLI::ExistingFile);
+  app.add_option("--app-rows", cmd.app_rows,
+                 "app_rows.py --json files: the MRPT apps' rows join the report (repeatable)")
+      ->check(CLI::ExistingFile);
   app.add_option("--raster-dir", opts.raster_dir, "Write each dataset's first rtog map as a byte-per-cell raster here")
       ->check(CLI::ExistingDirectory);
   app.add_option("--first-scan-helper", cmd.first_scan_helper, "The rtog-first-scan executable (fresh-process rows)")

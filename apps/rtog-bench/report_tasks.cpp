@@ -18,7 +18,9 @@ double get(const Result& r, const char* key) {
 
 }  // namespace
 
-bool isTaskRow(const Result& r) { return r.extra.count("plan") > 0 || r.extra.count("chunks") > 0; }
+bool isTaskRow(const Result& r) {
+  return r.extra.count("plan") > 0 || r.extra.count("chunks") > 0 || r.extra.count("app_row") > 0;
+}
 
 void writeTaskSections(const std::vector<Result>& results, std::ostream& md) {
   std::set<std::string> plans;

@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <limits>
 #include <regex>
@@ -160,3 +161,53 @@ TEST(BenchReport, MachineFactsComeFromTheSystem) {
 }
 
 }  // namespace
+
+// The MRPT apps' rows (app_rows.py --json) join the report through --app-rows, render as their
+// section, and survive a render from the bench's JSON; a file that is not such a list is refused.
+TEST(BenchReport, AppRowsJoinTheReportAndSurviveTheJson) {
+  const std::string dir = ::testing::TempDir() + "/app_rows_" + std::to_string(getpid());
+  ASSERT_EQ(std::system(("mkdir -p " + dir).c_str()), 0);
+  {
+    std::ofstream f(dir + "/rows.json");
+    f << R"([{"app": "rbpf-slam", "log": "SENA.rawlog", "particles": 25, "map": "COccupancyGridMap2D", "repeats": 3,
+              "ok": true, "wall_s": 4.4, "peak_rss_mb": 503.2},
+             {"app": "rbpf-slam", "log": "SENA.rawlog", "particles": 25, "map": "rtreeOccupancyGrid", "repeats": 3,
+              "ok": true, "wall_s": 3.15, "peak_rss_mb": 203.8, "wall_ratio": 0.716, "rss_ratio": 0.406,
+              "path_mean_m": 0.0, "path_max_m": 0.0},
+             {"app": "icp-slam", "log": "SENA.rawlog", "particles": null, "map": "rtreeGridMap2D", "repeats": 1,
+              "ok": false}])";
+  }
+  const auto run = [&](const std::string& args) {
+    FILE* p = popen((std::string(RTOG_BENCH_EXE) + " " + args + " 2>&1").c_str(), "r");
+    std::string out;
+    char buf[512];
+    while (p && std::fgets(buf, sizeof buf, p)) out += buf;
+    return std::make_pair(p ? pclose(p) : -1, out);
+  };
+  const auto [rc, out] = run("--from-json " + std::string(RTOG_BENCH_JSON) + " --app-rows " + dir +
+                             "/rows.json --markdown " + dir + "/report.md --img-dir " + dir);
+  ASSERT_EQ(rc, 0) << out;
+  std::ifstream md(dir + "/report.md");
+  std::stringstream text;
+  text << md.rdbuf();
+  const std::string report = text.str();
+  EXPECT_NE(report.find("## The MRPT apps as processes"), std::string::npos);
+  EXPECT_NE(report.find("| rbpf-slam | SENA.rawlog | 25 | `rtreeOccupancyGrid` | 3.15 (0.72×) | 204 (0.41×) | 0.000 / 0.000 | 3 |"),
+            std::string::npos)
+      << report.substr(report.find("## The MRPT apps"));
+  EXPECT_NE(report.find("| icp-slam | SENA.rawlog | – | `rtreeGridMap2D` | failed |"), std::string::npos);
+  // Read back: the rows are results like the others.
+  const auto rows = readAppRows(dir + "/rows.json");
+  ASSERT_EQ(rows.size(), 3u);
+  EXPECT_EQ(rows[1].dataset, "MRPT apps: SENA.rawlog");
+  EXPECT_TRUE(isTaskRow(rows[1]));
+  {
+    std::ofstream f(dir + "/bad.json");
+    f << R"({"app": "rbpf-slam"})";
+  }
+  const auto [bad_rc, bad_out] = run("--from-json " + std::string(RTOG_BENCH_JSON) + " --app-rows " + dir +
+                                     "/bad.json --markdown " + dir + "/bad.md --img-dir " + dir);
+  EXPECT_NE(bad_rc, 0);
+  EXPECT_NE(bad_out.find("not a list"), std::string::npos) << bad_out;
+  EXPECT_FALSE(std::ifstream(dir + "/bad.md").good()) << "a refused run writes nothing";
+}

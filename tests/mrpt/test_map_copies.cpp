@@ -18,6 +18,7 @@
 #include <sstream>
 #include <thread>
 
+#include "rtog/mrpt/CRTreeBackedGridMap2D.h"
 #include "rtog/mrpt/CRTreeOccupancyGridMap.h"
 #include "test_helpers.hpp"
 
@@ -35,18 +36,24 @@ struct Pair {
   CRTreeOccupancyGridMap::Ptr rtog;
 };
 
+/// The stock rbpf-slam config's maps: its grid as shipped, and renamed to `type`.
+std::pair<COccupancyGridMap2D::Ptr, mrpt::maps::CMetricMap::Ptr> stockAnd(const std::string& type);
+
 Pair stockPair() {
+  auto [grid, ours] = stockAnd("rtreeOccupancyGrid");
+  return {grid, std::dynamic_pointer_cast<CRTreeOccupancyGridMap>(ours)};
+}
+
+std::pair<COccupancyGridMap2D::Ptr, mrpt::maps::CMetricMap::Ptr> stockAnd(const std::string& type) {
   std::ifstream f("/usr/share/mrpt/config_files/rbpf-slam/gridmapping_optimal_sampling.ini");
   std::stringstream ss;
   ss << f.rdbuf();
   std::string text = ss.str(), renamed = text;
-  for (auto [from, to] : {std::pair<std::string, std::string>{"occupancyGrid_count", "rtreeOccupancyGrid_count"},
-                          {"_occupancyGrid_00_", "_rtreeOccupancyGrid_00_"}})
+  for (auto [from, to] : {std::pair<std::string, std::string>{"occupancyGrid_count", type + "_count"},
+                          {"_occupancyGrid_00_", "_" + type + "_00_"}})
     for (std::size_t p = 0; (p = renamed.find(from, p)) != std::string::npos; p += to.size()) renamed.replace(p, from.size(), to);
-  Pair out;
-  out.grid = std::dynamic_pointer_cast<COccupancyGridMap2D>(multiMapFromIni(text).maps.at(0));
-  out.rtog = std::dynamic_pointer_cast<CRTreeOccupancyGridMap>(multiMapFromIni(renamed).maps.at(0));
-  return out;
+  return {std::dynamic_pointer_cast<COccupancyGridMap2D>(multiMapFromIni(text).maps.at(0)),
+          multiMapFromIni(renamed).maps.at(0)};
 }
 
 const std::vector<PosedFrame>& senaFrames() {
@@ -109,6 +116,45 @@ TEST(MapCopies, CopiesTakingScansAtTheirOwnPosesScoreAsStockGridsThatTookThem) {
   EXPECT_EQ(scores(*a.rtog, *scanOf(20), probe, 3), before) << "scans into copies changed the original";
   EXPECT_NE(scores(*copies[0].rtog, *scanOf(60), senaFrames()[60].pose, 6),
             scores(*copies[1].rtog, *scanOf(60), senaFrames()[60].pose, 6));
+}
+
+// An rtreeGridMap2D copy (its R-tree map's bricks shared, its grid and kept likelihood-field terms
+// copied) scores as its source; after a scan of its own, as a map that took every scan.
+TEST(MapCopies, ABackedGridCopyScoresAsItsSource) {
+  const std::string ini = "[MappingApplication]\nrtreeGridMap2D_count=1\n"
+                          "[MappingApplication_rtreeGridMap2D_00_creationOpts]\nresolution=0.07\n"
+                          "[MappingApplication_rtreeGridMap2D_00_likelihoodOpts]\nlikelihoodMethod=4\nenableLikelihoodCache=1\n";
+  const auto make = [&] { return std::dynamic_pointer_cast<rtog::CRTreeBackedGridMap2D>(multiMapFromIni(ini).maps.at(0)); };
+  auto g = make(), fresh = make();
+  ASSERT_TRUE(g && fresh);
+  for (std::size_t i = 0; i < 20; ++i) g->insertObservation(*scanOf(i), senaFrames()[i].pose);
+  const CPose3D at = senaFrames()[20].pose;
+  const std::vector<double> want = scores(*g, *scanOf(20), at, 8);  // fills the source's kept values
+  const rtog::CRTreeBackedGridMap2D copy(*g);
+  EXPECT_EQ(scores(copy, *scanOf(20), at, 8), want);
+  EXPECT_EQ(scores(*g, *scanOf(20), at, 8), want);
+  // A copy of the copy takes one more scan: it scores as a map that took all the scans.
+  rtog::CRTreeBackedGridMap2D moved(copy);
+  moved.insertObservation(*scanOf(21), senaFrames()[21].pose);
+  for (std::size_t i = 0; i < 20; ++i) fresh->insertObservation(*scanOf(i), senaFrames()[i].pose);
+  fresh->insertObservation(*scanOf(21), senaFrames()[21].pose);
+  EXPECT_EQ(scores(moved, *scanOf(22), senaFrames()[22].pose, 9), scores(*fresh, *scanOf(22), senaFrames()[22].pose, 9));
+  EXPECT_EQ(scores(*g, *scanOf(20), at, 8), want);
+}
+
+// rtreeGridMap2D drops only the kept likelihood-field terms a scan's cells can reach (the stock
+// grid drops them all) and scores on the grid's own kept terms: scored between scans, as a
+// particle filter does, it gives the stock grid's values at every step.
+TEST(MapCopies, ABackedGridScoredBetweenScansScoresAsTheStockGrid) {
+  auto [grid, ours] = stockAnd("rtreeGridMap2D");
+  ASSERT_TRUE(grid && ours);
+  for (std::size_t i = 0; i + 1 < 80; ++i) {
+    const CPose3D next = senaFrames()[i + 1].pose;
+    ASSERT_EQ(scores(*ours, *scanOf(i + 1), next, 10 + unsigned(i)), scores(*grid, *scanOf(i + 1), next, 10 + unsigned(i)))
+        << "before scan " << i;
+    grid->insertObservation(*scanOf(i), senaFrames()[i].pose);
+    ours->insertObservation(*scanOf(i), senaFrames()[i].pose);
+  }
 }
 
 // Copies sharing tiles and bricks score on two threads while a third copy takes scans.

@@ -4,6 +4,7 @@
 #include "CRTreeOccupancyGridMap_grid2d.hpp"
 #include "finite_pose.hpp"
 #include "grid_consensus.hpp"
+#include "likelihood_field_2d.hpp"
 #include "rtog/core/band.hpp"
 #include "mrpt_grid.hpp"
 #include "options_check.hpp"
@@ -137,15 +138,44 @@ bool CRTreeBackedGridMap2D::insertGridScan(const mrpt::obs::CObservation2DRangeS
   mine.size_x = getSizeX(), mine.size_y = getSizeY();
   if (!mine.sameGeometry(f)) throw std::logic_error("rtog::CRTreeBackedGridMap2D: the grid grew unlike its mirror");
   const std::int32_t ox = mrpt_grid::keyOffsetX(f), oy = mrpt_grid::keyOffsetY(f);
+  // MRPT drops every kept likelihood-field value after an insertion (a pass over the whole grid,
+  // then every term computed again): only the values the changed cells can reach are dropped
+  // here, unless the grid grew (resizeGrid dropped them all, as MRPT does) or none are kept.
+  const bool keep = !m_likelihoodCacheOutDated && likelihoodOptions.enableLikelihoodCache &&
+                    m_precomputedLikelihood.size() == m_map.size();
+  constexpr int kBlock = 16;
+  const std::size_t bx = m_size_x / kBlock + 1, by = m_size_y / kBlock + 1;
+  std::vector<std::uint8_t> touched(keep ? bx * by : 0, 0);
   const float* value = upd.after.data();
   for (const auto& run : upd.runs)
     rtog::OccupancyMap::forEachRunCell(run, [&](std::int32_t x, std::int32_t y, rtog::StepKind) {
-      m_map[static_cast<std::size_t>(x - ox) + static_cast<std::size_t>(y - oy) * m_size_x] =
-          static_cast<cellType>(mrpt_grid::cellOfValue(*value++));
+      const auto cx = static_cast<std::size_t>(x - ox), cy = static_cast<std::size_t>(y - oy);
+      const auto c = static_cast<cellType>(mrpt_grid::cellOfValue(*value++));
+      cellType& cell = m_map[cx + cy * m_size_x];
+      if (keep && cell != c) touched[cy / kBlock * bx + cx / kBlock] = 1;
+      cell = c;
     });
-  m_likelihoodCacheOutDated = true;
+  if (keep)
+    forgetKeptFieldNear(touched, bx, kBlock);
+  else
+    m_likelihoodCacheOutDated = true;
   m_is_empty = false;
   return true;
+}
+
+void CRTreeBackedGridMap2D::forgetKeptFieldNear(const std::vector<std::uint8_t>& touched, std::size_t bx, int block) {
+  // A cell's term reads the cells within K of it (COccupancyGridMap2D's likelihood field): the
+  // terms within K of a changed block are dropped, as MRPT marks a term not computed.
+  const int k = static_cast<int>(std::ceil(likelihoodOptions.LF_maxCorrsDistance / m_resolution));
+  const int sx = static_cast<int>(m_size_x), sy = static_cast<int>(m_size_y);
+  for (std::size_t b = 0; b < touched.size(); ++b) {
+    if (!touched[b]) continue;
+    const int x0 = std::max(0, static_cast<int>(b % bx) * block - k), x1 = std::min(sx - 1, static_cast<int>(b % bx) * block + block - 1 + k);
+    const int y0 = std::max(0, static_cast<int>(b / bx) * block - k), y1 = std::min(sy - 1, static_cast<int>(b / bx) * block + block - 1 + k);
+    for (int y = y0; y <= y1; ++y)
+      std::fill(m_precomputedLikelihood.begin() + (static_cast<std::ptrdiff_t>(y) * sx + x0),
+                m_precomputedLikelihood.begin() + (static_cast<std::ptrdiff_t>(y) * sx + x1 + 1), kTermNotComputed);
+  }
 }
 
 double CRTreeBackedGridMap2D::internal_computeObservationLikelihood(const mrpt::obs::CObservation& obs,
@@ -170,7 +200,11 @@ double CRTreeBackedGridMap2D::internal_computeObservationLikelihood(const mrpt::
       return l ? *l : computeObservationLikelihood_Consensus(obs, pose);
     }
     case lmCellsDifference: return computeObservationLikelihood_CellsDifference(obs, pose);
-    case lmLikelihoodField_Thrun: return computeObservationLikelihood_likelihoodField_Thrun(obs, pose);
+    case lmLikelihoodField_Thrun:
+      // The stock method's value on the grid's own kept terms, one sine and cosine per pose.
+      if (const auto* scan = dynamic_cast<const mrpt::obs::CObservation2DRangeScan*>(&obs))
+        return keptFieldScanLogLikelihood(*this, m_precomputedLikelihood, m_likelihoodCacheOutDated, *scan, takenFrom);
+      return computeObservationLikelihood_likelihoodField_Thrun(obs, pose);
     case lmLikelihoodField_II: return computeObservationLikelihood_likelihoodField_II(obs, pose);
     case lmConsensusOWA: return computeObservationLikelihood_ConsensusOWA(obs, pose);
     case lmRayTracing:

@@ -119,4 +119,35 @@ double LikelihoodField2D::scanLogLikelihood(const Grid& g, const mrpt::obs::CObs
   });
 }
 
+double keptFieldScanLogLikelihood(const Grid& g, std::vector<double>& kept, bool& outdated,
+                                  const mrpt::obs::CObservation2DRangeScan& scan, const mrpt::poses::CPose3D& pose) {
+  const auto& lo = g.likelihoodOptions;
+  const bool keep = lo.enableLikelihoodCache;
+  if (keep && outdated) {
+    // As MRPT resets it (an empty grid keeps none).
+    if (!g.getRawMap().empty())
+      kept.assign(g.getRawMap().size(), kTermNotComputed);
+    else
+      kept.clear();
+    outdated = false;
+  }
+  const FieldConstants f(lo, g.getResolution());
+  const int sx = static_cast<int>(g.getSizeX()), sy = static_cast<int>(g.getSizeY());
+  const auto& raw = g.getRawMap();
+  const auto row = [&](int y, int x0, int x1, auto&& visit) {
+    const auto* r = raw.data() + static_cast<std::size_t>(y) * static_cast<std::size_t>(sx);
+    for (int x = x0; x <= x1; ++x) visit(x, r[x]);
+  };
+  const FieldGrid fg{&g.insertionOptions, &lo, g.getResolution(), g.getXMin(), g.getYMin(), g.getSizeX(), g.getSizeY()};
+  return fieldScanLogLikelihood(fg, scan, pose, [&](int cx, int cy, bool lg) {
+    double* slot = keep ? &kept[static_cast<std::size_t>(cx) + static_cast<std::size_t>(cy) * g.getSizeX()] : nullptr;
+    double t = slot ? *slot : kTermNotComputed;
+    if (t == kTermNotComputed) {
+      t = f.termOfBest(f.bestAt(cx, cy, sx, sy, row));
+      if (slot) *slot = t;
+    }
+    return lg ? std::log(t) : t;
+  });
+}
+
 }  // namespace rtog

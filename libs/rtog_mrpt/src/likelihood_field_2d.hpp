@@ -76,6 +76,16 @@ double fieldScanLogLikelihood(const FieldGrid& g, const mrpt::obs::CObservation2
                               const mrpt::poses::CPose3D& pose,
                               const std::function<double(int, int, bool)>& value);
 
+/// As LikelihoodField2D::scanLogLikelihood, with the terms kept in the grid's own cache
+/// (COccupancyGridMap2D's precomputed field `kept`, its flag `outdated`, its mark of a term not
+/// computed) as MRPT's computeLikelihoodField_Thrun keeps them: the grid's methods and this one
+/// share it, and whatever marks it outdated (MRPT's own resizing) holds for both.
+double keptFieldScanLogLikelihood(const mrpt::maps::COccupancyGridMap2D& grid, std::vector<double>& kept,
+                                  bool& outdated, const mrpt::obs::CObservation2DRangeScan& scan,
+                                  const mrpt::poses::CPose3D& pose);
+/// MRPT's mark of a kept term not computed (LIK_LF_CACHE_INVALID).
+constexpr double kTermNotComputed = 66;
+
 class LikelihoodField2D {
  public:
   /// Forgets every kept term (the grid's cells or the field's options changed).

@@ -63,6 +63,9 @@ class CRTreeBackedGridMap2D : public mrpt::maps::COccupancyGridMap2D {
   /// mrpt_grid preset, 2D scans: grows the grid as COccupancyGridMap2D does and writes the int8
   /// values the R-tree map's cells took, step by step (the R-tree map decided them).
   bool insertGridScan(const mrpt::obs::CObservation2DRangeScan& scan, const mrpt::poses::CPose3D& pose);
+  /// Drops the kept likelihood-field values that the cells of the marked blocks (block x block
+  /// cells, bx blocks a row) can have changed.
+  void forgetKeptFieldNear(const std::vector<std::uint8_t>& touched, std::size_t bx, int block);
   /// Size the grid and the R-tree map's grid geometry alike (COccupancyGridMap2D::setSize).
   void setExtent(float x_min, float x_max, float y_min, float y_max);
 
