@@ -40,11 +40,19 @@ void CRTreeOccupancyGridMap::getVisualizationInto(mrpt::opengl::CSetOfObjects& o
   const LogOddsModel& lm = map_.logOddsModel();
   const Box kb = map_.keyBounds();
   const double z0 = kb.isEmpty() ? 0.0 : lat.boxMin(kb).z(), z1 = kb.isEmpty() ? 1.0 : lat.boxMax(kb).z();
+  const auto shown = [&](float v) {
+    const bool occ = lm.classify(v) == CellState::Occupied;
+    return occ ? renderingOptions.showOccupied : renderingOptions.showFree;
+  };
+  // Counted first: the triangles' array grown by doubling would hold up to twice them (apps
+  // save the map's scene last, when the process holds the most).
+  std::size_t boxes = 0;
+  map_.forEachLeaf([&](const Box&, float v) { boxes += shown(v) ? 1 : 0; });
+  tris->reserve(12 * std::min<std::size_t>(boxes, renderingOptions.maxBoxes));
   std::size_t drawn = 0;
   map_.forEachLeaf([&](const Box& b, float v) {
-    if (drawn >= renderingOptions.maxBoxes) return;
+    if (drawn >= renderingOptions.maxBoxes || !shown(v)) return;
     const bool occ = lm.classify(v) == CellState::Occupied;
-    if ((occ && !renderingOptions.showOccupied) || (!occ && !renderingOptions.showFree)) return;
     const Eigen::Vector3d lo = lat.boxMin(b), hi = lat.boxMax(b);
     mrpt::img::TColor col;
     if (renderingOptions.colorByHeight) {

@@ -21,7 +21,7 @@ namespace rtog {
 
 class GridTiles {
  public:
-  static constexpr int kBits = 6, kSide = 1 << kBits;
+  static constexpr int kBits = 5, kSide = 1 << kBits;
   static constexpr std::size_t kCells = std::size_t{kSide} * kSide;
 
   /// All cells unknown, on the grid `frame`.
