@@ -15,13 +15,14 @@ void GridTiles::setFrame(const TGridFrame2D& f) {
   const std::int32_t tx1 = tileCoord(ox + static_cast<std::int32_t>(std::max(f.size_x, 1u)) - 1);
   const std::int32_t ty1 = tileCoord(oy + static_cast<std::int32_t>(std::max(f.size_y, 1u)) - 1);
   std::vector<Tile> tiles(static_cast<std::size_t>(tx1 - tx0 + 1) * static_cast<std::size_t>(ty1 - ty0 + 1));
-  for (std::int32_t ty = std::max(ty0, ty0_); ty <= std::min(ty1, ty0_ + nty_ - 1); ++ty)
-    for (std::int32_t tx = std::max(tx0, tx0_); tx <= std::min(tx1, tx0_ + ntx_ - 1); ++tx)
-      tiles[static_cast<std::size_t>(ty - ty0) * static_cast<std::size_t>(tx1 - tx0 + 1) + (tx - tx0)] =
-          std::move(tiles_[static_cast<std::size_t>(ty - ty0_) * static_cast<std::size_t>(ntx_) + (tx - tx0_)]);
+  if (tiles_)
+    for (std::int32_t ty = std::max(ty0, ty0_); ty <= std::min(ty1, ty0_ + nty_ - 1); ++ty)
+      for (std::int32_t tx = std::max(tx0, tx0_); tx <= std::min(tx1, tx0_ + ntx_ - 1); ++tx)
+        tiles[static_cast<std::size_t>(ty - ty0) * static_cast<std::size_t>(tx1 - tx0 + 1) + (tx - tx0)] =
+            (*tiles_)[static_cast<std::size_t>(ty - ty0_) * static_cast<std::size_t>(ntx_) + (tx - tx0_)];
   // Cells of a tile beyond the old grid were unknown and are still; its kept terms were clipped
   // at the old border, where unknown cells lay anyway: they stand.
-  tiles_ = std::move(tiles);
+  tiles_.reset(std::move(tiles));
   changed_.clear();
   frame_ = f;
   ox_ = ox, oy_ = oy, tx0_ = tx0, ty0_ = ty0, ntx_ = tx1 - tx0 + 1, nty_ = ty1 - ty0 + 1;
@@ -29,9 +30,10 @@ void GridTiles::setFrame(const TGridFrame2D& f) {
 
 void GridTiles::setCell(std::int32_t kx, std::int32_t ky, std::int8_t v) {
   const std::size_t t = tileOf(kx, ky);
-  Tile& tile = tiles_[t];
+  const Tile& seen = (*tiles_)[t];
   const std::size_t i = within(kx, ky);
-  if ((tile.cells ? tile.cells->v[i] : 0) == v) return;
+  if ((seen.cells ? seen.cells->v[i] : 0) == v) return;
+  Tile& tile = tiles_.write()[t];
   tile.cells.write().v[i] = v;
   if (changed_.empty() || changed_.back() != t) changed_.push_back(static_cast<std::uint32_t>(t));
 }
@@ -40,7 +42,7 @@ void GridTiles::dropStaleTerms(int window) {
   if (changed_.empty()) return;
   if (window >= kSide) {
     // A window wider than a tile: every kept term may have changed.
-    for (Tile& t : tiles_) t.terms.drop();
+    for (Tile& t : tiles_.write()) t.terms.drop();
   } else {
     // A cell's term reads the cells within `window` of it: those of its own tile and the eight
     // around it.
@@ -51,7 +53,7 @@ void GridTiles::dropStaleTerms(int window) {
       const std::int32_t ty = static_cast<std::int32_t>(t / static_cast<std::uint32_t>(ntx_));
       for (std::int32_t y = std::max(0, ty - 1); y <= std::min(nty_ - 1, ty + 1); ++y)
         for (std::int32_t x = std::max(0, tx - 1); x <= std::min(ntx_ - 1, tx + 1); ++x)
-          tiles_[static_cast<std::size_t>(y) * static_cast<std::size_t>(ntx_) + static_cast<std::size_t>(x)].terms.drop();
+          tiles_.write()[static_cast<std::size_t>(y) * static_cast<std::size_t>(ntx_) + static_cast<std::size_t>(x)].terms.drop();
     }
   }
   changed_.clear();
@@ -62,7 +64,7 @@ void GridTiles::copyTo(std::int8_t* dense) const {
   for (std::uint32_t cy = 0; cy < frame_.size_y; ++cy)
     for (std::uint32_t cx = 0; cx < frame_.size_x;) {
       const std::int32_t kx = static_cast<std::int32_t>(cx) + ox_, ky = static_cast<std::int32_t>(cy) + oy_;
-      const Tile& t = tiles_[tileOf(kx, ky)];
+      const Tile& t = (*tiles_)[tileOf(kx, ky)];
       // The rest of this tile's row at once.
       const std::uint32_t n = std::min<std::uint32_t>(frame_.size_x - cx, static_cast<std::uint32_t>(kSide - (kx - tileCoord(kx) * kSide)));
       std::int8_t* out = dense + cy * sx + cx;
@@ -76,7 +78,7 @@ void GridTiles::copyTo(std::int8_t* dense) const {
 
 void GridTiles::useOptions(const FieldConstants& f, bool logs) {
   if (field_ && (f.capUnits != field_->capUnits || f.window != field_->window || f.threshold != field_->threshold))
-    for (Tile& t : tiles_) t.terms.drop();  // the kept distances are other distances
+    for (Tile& t : tiles_.write()) t.terms.drop();  // the kept distances are other distances
   field_ = f;
   logs_ = logs;
   // Distances are capped: one term per distance up to the cap, the same numbers termOfBest gives.
@@ -101,7 +103,7 @@ double GridTiles::scanLogLikelihood(const FieldGrid& g, const mrpt::obs::CObserv
     const std::int32_t ky = y + oy_;
     for (int x = x0; x <= x1;) {
       const std::int32_t kx = x + ox_;
-      const Tile& t = tiles_[tileOf(kx, ky)];
+      const Tile& t = (*tiles_)[tileOf(kx, ky)];
       const int n = std::min(x1 - x + 1, kSide - (kx - tileCoord(kx) * kSide));
       if (t.cells) {
         const std::int8_t* c = t.cells->v.data() + within(kx, ky);
@@ -116,19 +118,20 @@ double GridTiles::scanLogLikelihood(const FieldGrid& g, const mrpt::obs::CObserv
       const double t = f.termOfBest(f.bestAt(cx, cy, sx, sy, row));
       return lg ? std::log(t) : t;
     }
-    Tile& tile = tiles_[tileOf(kx, ky)];
+    const std::size_t t = tileOf(kx, ky);
     const std::size_t i = within(kx, ky);
-    if (tile.terms && tile.terms->best[i] != Terms::kNone) return value_of_best_[tile.terms->best[i]];
+    const Tile& seen = (*tiles_)[t];
+    if (seen.terms && seen.terms->best[i] != Terms::kNone) return value_of_best_[seen.terms->best[i]];
     const unsigned best = f.bestAt(cx, cy, sx, sy, row);
-    tile.terms.write().best[i] = static_cast<std::uint16_t>(best);  // this copy's own page
+    tiles_.write()[t].terms.write().best[i] = static_cast<std::uint16_t>(best);  // this copy's own page
     return value_of_best_[best];
   });
 }
 
 std::size_t GridTiles::memoryBytes() const {
-  double bytes = sizeof(*this) + tiles_.capacity() * sizeof(Tile) + changed_.capacity() * sizeof(std::uint32_t) +
-                 value_of_best_.capacity() * sizeof(double);
-  for (const Tile& t : tiles_) {
+  double bytes = sizeof(*this) + double(tiles_->capacity() * sizeof(Tile)) / double(tiles_.owners()) +
+                 changed_.capacity() * sizeof(std::uint32_t) + value_of_best_.capacity() * sizeof(double);
+  for (const Tile& t : *tiles_) {
     if (t.cells) bytes += double(sizeof(Cells)) / double(t.cells.owners());
     if (t.terms) bytes += double(sizeof(Terms)) / double(t.terms.owners());
   }
@@ -136,11 +139,12 @@ std::size_t GridTiles::memoryBytes() const {
 }
 
 std::size_t GridTiles::tileCount() const {
-  return static_cast<std::size_t>(std::count_if(tiles_.begin(), tiles_.end(), [](const Tile& t) { return bool(t.cells); }));
+  return static_cast<std::size_t>(std::count_if(tiles_->begin(), tiles_->end(), [](const Tile& t) { return bool(t.cells); }));
 }
 
 std::size_t GridTiles::sharedTiles() const {
-  return static_cast<std::size_t>(std::count_if(tiles_.begin(), tiles_.end(), [](const Tile& t) { return t.cells && t.cells.shared(); }));
+  if (tiles_.shared()) return tileCount();
+  return static_cast<std::size_t>(std::count_if(tiles_->begin(), tiles_->end(), [](const Tile& t) { return t.cells && t.cells.shared(); }));
 }
 
 }  // namespace rtog

@@ -4,8 +4,9 @@
 // the terms near them, so that no operation on the likelihood path costs O(map) per scan, and a
 // copy costs a pointer per tile.
 //
-// Tiles are aligned to the lattice (key / 64), not to the grid's cells, so that a grid that grows
-// (MRPT's resizeGrid moves its origin) keeps every tile.
+// Tiles are aligned to the lattice (key / 32), not to the grid's cells, so that a grid that grows
+// (MRPT's resizeGrid moves its origin) keeps every tile. The array of tile pointers is shared too:
+// a copy costs a few pointers, and its first change clones the array.
 #pragma once
 
 #include <array>
@@ -32,7 +33,7 @@ class GridTiles {
 
   /// The cell at grid indices (cx, cy), which must lie in the grid.
   std::int8_t cell(int cx, int cy) const {
-    const Tile& t = tiles_[tileOf(cx + ox_, cy + oy_)];
+    const Tile& t = (*tiles_)[tileOf(cx + ox_, cy + oy_)];
     return t.cells ? t.cells->v[within(cx + ox_, cy + oy_)] : std::int8_t{0};
   }
   /// Sets the cell of lattice column (kx, ky), which must lie in the grid.
@@ -82,7 +83,8 @@ class GridTiles {
   std::int32_t ox_ = 0, oy_ = 0;    // lattice key of grid cell (0, 0)
   std::int32_t tx0_ = 0, ty0_ = 0;  // first tile
   std::int32_t ntx_ = 0, nty_ = 0;  // tiles across, up
-  std::vector<Tile> tiles_;
+  /// The tiles, row by row; the array itself is shared by copies until one changes a tile.
+  detail::CowPtr<std::vector<Tile>> tiles_{nullptr};
   std::vector<std::uint32_t> changed_;  // tiles whose cells were set since dropStaleTerms()
   // What the kept distances were computed with, and the term of each distance.
   std::optional<FieldConstants> field_;

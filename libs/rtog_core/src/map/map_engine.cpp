@@ -7,6 +7,7 @@ namespace rtog {
 InsertStats MapEngine::flush() {
   // Under the lock, so that concurrent readers cover once: the later ones find no layers.
   const std::lock_guard<std::mutex> lock(cover_mutex);
+  if (!planar.empty()) store.index.unshareBricks();  // before the appliers write bricks
   const InsertStats stats = planar.cover(store);
   cover_pending.store(false, std::memory_order_release);
   return stats;
@@ -20,6 +21,7 @@ void MapEngine::clear() {
 
 InsertStats MapEngine::apply(UpdateSet&& set) {
   InsertStats stats = set.stats;
+  store.index.unshareBricks();  // a copy's array of bricks cloned once, before appliers on threads
   switch (set.kind) {
     case UpdateSet::Kind::Planar:
       planar.apply(store, *set.planar, set.planar_count, set.z, stats);

@@ -10,7 +10,7 @@ namespace rtog {
 void LeafIndex::clear() {
   upper_.reset(UpperTree(upper_->tree.params()));
   brick_index_.reset(detail::FlatHashMap64{});
-  bricks_.clear();
+  bricks_.reset({});
   leaf_count_ = 0;
 }
 
@@ -18,21 +18,22 @@ std::uint32_t LeafIndex::brickSlot(const Key& brick) {
   const std::uint64_t key = packKey(brick);
   const std::uint32_t found = brick_index_->find(key);
   if (found != detail::FlatHashMap64::kAbsent) return found;  // no clone of a shared hash to read it
-  const auto slot = static_cast<std::uint32_t>(bricks_.size());
+  auto& bricks = bricks_.write();
+  const auto slot = static_cast<std::uint32_t>(bricks.size());
   brick_index_.write().findOrInsert(key, slot);
-  bricks_.emplace_back(Brick{brick, {}});
+  bricks.emplace_back(Brick{brick, {}});
   return slot;
 }
 
 const Brick* LeafIndex::findBrick(const Key& brick) const {
   const std::uint32_t slot = brick_index_->find(packKey(brick));
-  return slot == detail::FlatHashMap64::kAbsent ? nullptr : bricks_[slot].get();
+  return slot == detail::FlatHashMap64::kAbsent ? nullptr : (*bricks_)[slot].get();
 }
 
 void LeafIndex::reserveBricks(std::size_t more) {
   // Still growing geometrically.
-  if (bricks_.capacity() < bricks_.size() + more)
-    bricks_.reserve(std::max(bricks_.size() + more, 2 * bricks_.capacity()));
+  auto& bricks = bricks_.write();
+  if (bricks.capacity() < bricks.size() + more) bricks.reserve(std::max(bricks.size() + more, 2 * bricks.capacity()));
 }
 
 Box LeafIndex::leafNodeBox(const Brick& b, std::size_t node) const {
@@ -57,7 +58,7 @@ const LeafEntry* LeafIndex::findLeaf(const Key& k) const {
   const std::uint32_t slot = brick_index_->find(packKey(brickOf(k)));
   if (slot == detail::FlatHashMap64::kAbsent) return nullptr;
   if (slot >= upper_->nodes.size()) return nullptr;  // a brick made but not yet in the tree
-  const Brick* b = bricks_[slot].get();
+  const Brick* b = (*bricks_)[slot].get();
   const auto& nodes = upper_->nodes[slot];
   const Key l = localKey(localIndex(k));
   // Leaf-node boxes first, then the entries of the one node that can hold the cell.
@@ -71,9 +72,9 @@ const LeafEntry* LeafIndex::findLeaf(const Key& k) const {
 }
 
 void LeafIndex::syncLeafNodes(std::uint32_t slot) {
-  const Brick& br = *bricks_[slot];
+  const Brick& br = brick(slot);
   UpperTree& up = upper_.write();
-  if (up.nodes.size() < bricks_.size()) up.nodes.resize(bricks_.size());
+  if (up.nodes.size() < brickCount()) up.nodes.resize(brickCount());
   auto& handles = up.nodes[slot];
   const std::size_t nodes = leafNodeCount(br);
   for (std::size_t n = 0; n < nodes; ++n) {
@@ -95,7 +96,7 @@ void LeafIndex::refreshUpperTree(std::vector<std::uint32_t>& reshaped, int threa
   // Leaf nodes whose boxes changed go into the upper tree one by one, unless they are many
   // compared with the tree (a first scan, a new area): then one bulk load is cheaper.
   std::size_t touched_nodes = 0;
-  for (const std::uint32_t slot : reshaped) touched_nodes += leafNodeCount(*bricks_[slot]);
+  for (const std::uint32_t slot : reshaped) touched_nodes += leafNodeCount(brick(slot));
   if (touched_nodes * 2 > upper_->tree.size()) {
     rebuildUpperTree(threads, boxes_of ? boxes_of() : std::vector<const LocalBox*>{});
   } else {
@@ -109,15 +110,15 @@ void LeafIndex::rebuildUpperTree(int threads, const std::vector<const LocalBox*>
   // Leaf nodes go to the bulk load in Morton order of their bricks, and a brick's nodes follow
   // its leaves, which are in Morton order of their first cells when packed: close to the order
   // of the nodes' own Morton codes without sorting the nodes (the load runs on one thread).
-  const auto slots = static_cast<std::uint32_t>(bricks_.size());
+  const auto slots = static_cast<std::uint32_t>(brickCount());
   std::vector<std::pair<std::uint64_t, std::uint32_t>> order(slots);
-  for (std::uint32_t slot = 0; slot < slots; ++slot) order[slot] = {mortonCode(bricks_[slot]->brick), slot};
+  for (std::uint32_t slot = 0; slot < slots; ++slot) order[slot] = {mortonCode(brick(slot).brick), slot};
   // A first scan's bricks got their slots in this order already (update batches are in it).
   if (!std::is_sorted(order.begin(), order.end())) std::sort(order.begin(), order.end());
   // Handles are the nodes' positions in the load, so each brick knows its own before the load.
   std::vector<std::uint32_t> first_node(slots + 1, 0);
   for (std::uint32_t i = 0; i < slots; ++i)
-    first_node[i + 1] = first_node[i] + static_cast<std::uint32_t>(leafNodeCount(*bricks_[order[i].second]));
+    first_node[i + 1] = first_node[i] + static_cast<std::uint32_t>(leafNodeCount(brick(order[i].second)));
   std::vector<std::pair<Box, LeafNodeRef>> nodes(first_node[slots]);
   std::vector<std::uint32_t> rank(slots);  // of each slot in `order`
   for (std::uint32_t i = 0; i < slots; ++i) rank[order[i].second] = i;
@@ -129,7 +130,7 @@ void LeafIndex::rebuildUpperTree(int threads, const std::vector<const LocalBox*>
   const auto collect = [&](std::size_t begin, std::size_t end) {
     for (auto slot = static_cast<std::uint32_t>(begin); slot < end; ++slot) {
       const std::uint32_t i = rank[slot];
-      const Brick& br = *bricks_[slot];
+      const Brick& br = brick(slot);
       auto& handles = fresh.nodes[slot];
       handles.resize(first_node[i + 1] - first_node[i]);
       const LocalBox* boxes = boxes_of.empty() ? nullptr : boxes_of[slot];
@@ -175,15 +176,17 @@ void LeafIndex::packLeaves(std::uint32_t slot, const std::vector<std::int32_t>& 
 
 std::size_t LeafIndex::memoryBytes() const {
   std::size_t bytes = upper_->tree.memoryBytes() + upper_->nodes.capacity() * sizeof(upper_->nodes[0]) +
-                      brick_index_->memoryBytes() + bricks_.capacity() * sizeof(bricks_[0]);
+                      brick_index_->memoryBytes() + bricks_->capacity() * sizeof(BrickPtr);
   for (const auto& h : upper_->nodes) bytes += h.heapBytes();
-  for (const auto& b : bricks_) bytes += sizeof(Brick) + b->leaves.capacity() * sizeof(LeafEntry);
+  for (const auto& b : *bricks_) bytes += sizeof(Brick) + b->leaves.capacity() * sizeof(LeafEntry);
   return bytes;
 }
 
 std::size_t LeafIndex::sharedBricks() const {
   std::size_t n = 0;
-  for (const auto& b : bricks_) n += b.shared();
+  // A shared array shares every brick.
+  if (bricks_.shared()) return bricks_->size();
+  for (const auto& b : *bricks_) n += b.shared();
   return n;
 }
 
@@ -194,8 +197,8 @@ std::string LeafIndex::checkInvariants(const LogOddsModel& model, const std::fun
   if (!err.empty()) return "R-tree: " + err;
   std::size_t leaves = 0, nodes = 0;
   std::vector<std::uint8_t> painted(kBrickCells);
-  for (std::size_t slot = 0; slot < bricks_.size(); ++slot) {
-    const Brick& b = *bricks_[slot];
+  for (std::size_t slot = 0; slot < brickCount(); ++slot) {
+    const Brick& b = brick(static_cast<std::uint32_t>(slot));
     if (brick_index_->find(packKey(b.brick)) != slot) return "brick index does not point at brick " + toString(b.brick);
     static const detail::SmallVector<Handle, 4> none{};
     const auto& handles = slot < upper_->nodes.size() ? upper_->nodes[slot] : none;
@@ -223,7 +226,7 @@ std::string LeafIndex::checkInvariants(const LogOddsModel& model, const std::fun
     }
   }
   if (leaves != leaf_count_) return "leaf count mismatch";
-  if (brick_index_->size() != bricks_.size()) return "brick index and bricks disagree on the number of bricks";
+  if (brick_index_->size() != brickCount()) return "brick index and bricks disagree on the number of bricks";
   if (nodes != upper.size()) return "upper tree and bricks disagree on the number of leaf nodes";
   return {};
 }

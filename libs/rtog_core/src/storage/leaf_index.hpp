@@ -1,9 +1,11 @@
 // The leaf level of the map and its index: the bricks with their leaves, the brick hash, and
 // the upper R-tree over the leaf nodes.
 //
-// Copies share: each brick, the brick hash and the upper tree (with the leaf nodes' handles)
-// are copy-on-write objects, so a copy of the index costs a pointer per brick, and a write
-// clones what it touches first (mutableBrick(), and the hash or the tree on their first change).
+// Copies share: each brick, the array of the bricks' pointers, the brick hash and the upper tree
+// (with the leaf nodes' handles) are copy-on-write objects, so a copy of the index costs a few
+// pointers, and a write clones what it touches first: the array (once after a copy, before any
+// applier runs: unshareBricks()), the bricks it changes (mutableBrick()), the hash or the tree on
+// their first change.
 //
 // The R-tree's leaf level is clustered by brick: a brick's cuboids (in Morton order of their
 // first cell when packed; later updates append and fill holes from the end) are cut into leaf
@@ -66,15 +68,18 @@ class LeafIndex {
   std::uint32_t brickSlot(const Key& brick);
   const Brick* findBrick(const Key& brick) const;
   const LeafEntry* findLeaf(const Key& k) const;
-  const Brick& brick(std::uint32_t slot) const { return *bricks_[slot]; }
+  const Brick& brick(std::uint32_t slot) const { return *(*bricks_)[slot]; }
+  /// Makes this index's array of brick pointers its own (cloned if a copy shares it): called
+  /// before appliers run, so that their mutableBrick() calls on several threads only read it.
+  void unshareBricks() { bricks_.write(); }
   /// The brick for writing: cloned first if a copy of the map shares it. Appliers on several
-  /// threads may call it for distinct slots at once.
-  Brick& mutableBrick(std::uint32_t slot) { return bricks_[slot].write(); }
-  std::size_t brickCount() const { return bricks_.size(); }
+  /// threads may call it for distinct slots at once, after unshareBricks().
+  Brick& mutableBrick(std::uint32_t slot) { return bricks_.write()[slot].write(); }
+  std::size_t brickCount() const { return bricks_->size(); }
   /// Calls fn(const Brick&) for every brick in slot order.
   template <class Fn>
   void forEachBrick(Fn&& fn) const {
-    for (const auto& b : bricks_) fn(*b);
+    for (const auto& b : *bricks_) fn(*b);
   }
   /// How many bricks this index shares with copies of it.
   std::size_t sharedBricks() const;
@@ -110,7 +115,7 @@ class LeafIndex {
   /// Calls fn(box, value) for every leaf.
   template <class Fn>
   void forEachLeaf(Fn&& fn) const {
-    for (const auto& p : bricks_) {
+    for (const auto& p : *bricks_) {
       const Key o = brickOrigin(p->brick);
       for (const LeafEntry& e : p->leaves) fn(e.global(o), e.value);
     }
@@ -128,7 +133,7 @@ class LeafIndex {
   template <class Fn>
   void forEachInLeafNode(Handle h, Fn&& fn) const {
     const LeafNodeRef r = upper_->tree.payload(h);
-    const Brick& b = *bricks_[r.brick];
+    const Brick& b = *(*bricks_)[r.brick];
     const Key o = brickOrigin(b.brick);
     const std::size_t first = r.node * leafNodeSize(), last = std::min(b.leaves.size(), first + leafNodeSize());
     for (std::size_t i = first; i < last; ++i) fn(b.leaves[i].global(o), b.leaves[i].value);
@@ -138,8 +143,8 @@ class LeafIndex {
   /// A lower bound of memoryBytes() in O(1) (leaves counted at their size, not capacity): for the
   /// insertion path, which must not walk every brick after every scan.
   std::size_t memoryBytesAtLeast() const {
-    return upper_->tree.memoryBytes() + brick_index_->memoryBytes() + bricks_.capacity() * sizeof(bricks_[0]) +
-           bricks_.size() * sizeof(Brick) + leaf_count_ * sizeof(LeafEntry);
+    return upper_->tree.memoryBytes() + brick_index_->memoryBytes() + bricks_->capacity() * sizeof(BrickPtr) +
+           bricks_->size() * sizeof(Brick) + leaf_count_ * sizeof(LeafEntry);
   }
   /// Empty if the R-tree, the brick index and the leaves are sound and agree; else the first
   /// problem. Leaf values must lie in the model's bounds, merged ones be `mergeable`.
@@ -148,7 +153,8 @@ class LeafIndex {
  private:
   detail::CowPtr<UpperTree> upper_;
   detail::CowPtr<detail::FlatHashMap64> brick_index_;
-  std::vector<detail::CowPtr<Brick>> bricks_;
+  using BrickPtr = detail::CowPtr<Brick>;
+  detail::CowPtr<std::vector<BrickPtr>> bricks_;
   std::size_t leaf_count_ = 0;
 };
 
