@@ -21,6 +21,26 @@ int cellIndex(double v, double lo, double res) {
 
 using Grid = mrpt::maps::COccupancyGridMap2D;
 
+/// The field on a dense grid's cells: value(at, logs, term_of) gives the value of cell `at`
+/// (row-major), from term_of() (its term, computed) or from what it kept.
+template <class Value>
+double onDenseGrid(const Grid& g, const mrpt::obs::CObservation2DRangeScan& scan, const mrpt::poses::CPose3D& pose,
+                   Value&& value) {
+  const FieldConstants f(g.likelihoodOptions, g.getResolution());
+  const int sx = static_cast<int>(g.getSizeX()), sy = static_cast<int>(g.getSizeY());
+  const auto& raw = g.getRawMap();
+  const auto row = [&](int y, int x0, int x1, auto&& visit) {
+    const auto* r = raw.data() + static_cast<std::size_t>(y) * static_cast<std::size_t>(sx);
+    for (int x = x0; x <= x1; ++x) visit(x, r[x]);
+  };
+  const FieldGrid fg{&g.insertionOptions, &g.likelihoodOptions, g.getResolution(), g.getXMin(), g.getYMin(),
+                     g.getSizeX(), g.getSizeY()};
+  return fieldScanLogLikelihood(fg, scan, pose, [&](int cx, int cy, bool lg) {
+    return value(static_cast<std::size_t>(cx) + static_cast<std::size_t>(cy) * g.getSizeX(), lg,
+                 [&] { return f.termOfBest(f.bestAt(cx, cy, sx, sy, row)); });
+  });
+}
+
 }  // namespace
 
 FieldConstants::FieldConstants(const Grid::TLikelihoodOptions& o, double res) {
@@ -98,20 +118,11 @@ double LikelihoodField2D::scanLogLikelihood(const Grid& g, const mrpt::obs::CObs
     cells_ = cells;
     logs_ = logs;
   }
-  const FieldConstants f(lo, g.getResolution());
-  const int sx = static_cast<int>(g.getSizeX()), sy = static_cast<int>(g.getSizeY());
-  const auto& raw = g.getRawMap();
-  const auto row = [&](int y, int x0, int x1, auto&& visit) {
-    const auto* r = raw.data() + static_cast<std::size_t>(y) * static_cast<std::size_t>(sx);
-    for (int x = x0; x <= x1; ++x) visit(x, r[x]);
-  };
-  const FieldGrid fg{&g.insertionOptions, &lo, g.getResolution(), g.getXMin(), g.getYMin(), g.getSizeX(), g.getSizeY()};
-  return fieldScanLogLikelihood(fg, scan, pose, [&](int cx, int cy, bool lg) {
-    const std::size_t at = static_cast<std::size_t>(cx) + static_cast<std::size_t>(cy) * g.getSizeX();
+  return onDenseGrid(g, scan, pose, [&](std::size_t at, bool lg, auto&& term_of) {
     double* kept = keep ? &term(at) : nullptr;
     double v = kept ? *kept : std::numeric_limits<double>::quiet_NaN();
     if (std::isnan(v)) {
-      const double t = f.termOfBest(f.bestAt(cx, cy, sx, sy, row));
+      const double t = term_of();
       v = lg ? std::log(t) : t;
       if (kept) *kept = v;
     }
@@ -131,19 +142,11 @@ double keptFieldScanLogLikelihood(const Grid& g, std::vector<double>& kept, bool
       kept.clear();
     outdated = false;
   }
-  const FieldConstants f(lo, g.getResolution());
-  const int sx = static_cast<int>(g.getSizeX()), sy = static_cast<int>(g.getSizeY());
-  const auto& raw = g.getRawMap();
-  const auto row = [&](int y, int x0, int x1, auto&& visit) {
-    const auto* r = raw.data() + static_cast<std::size_t>(y) * static_cast<std::size_t>(sx);
-    for (int x = x0; x <= x1; ++x) visit(x, r[x]);
-  };
-  const FieldGrid fg{&g.insertionOptions, &lo, g.getResolution(), g.getXMin(), g.getYMin(), g.getSizeX(), g.getSizeY()};
-  return fieldScanLogLikelihood(fg, scan, pose, [&](int cx, int cy, bool lg) {
-    double* slot = keep ? &kept[static_cast<std::size_t>(cx) + static_cast<std::size_t>(cy) * g.getSizeX()] : nullptr;
+  return onDenseGrid(g, scan, pose, [&](std::size_t at, bool lg, auto&& term_of) {
+    double* slot = keep ? &kept[at] : nullptr;
     double t = slot ? *slot : kTermNotComputed;
     if (t == kTermNotComputed) {
-      t = f.termOfBest(f.bestAt(cx, cy, sx, sy, row));
+      t = term_of();
       if (slot) *slot = t;
     }
     return lg ? std::log(t) : t;
