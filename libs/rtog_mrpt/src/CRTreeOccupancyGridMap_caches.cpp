@@ -1,5 +1,5 @@
-// The caches' owner: copy and assignment keep Caches' own rules (a copy starts empty, an
-// assignment invalidates the target's derived data under its lock).
+// The caches' owner: copy and assignment keep Caches' own rules (a copy or an assignment shares
+// the source's view tiles and drops the rest, each under the locks it needs).
 #include "CRTreeOccupancyGridMap_caches.hpp"
 
 #include "CRTreeOccupancyGridMap_grid2d.hpp"  // GridView complete for the shared_ptr's deleter

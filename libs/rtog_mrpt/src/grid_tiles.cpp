@@ -26,6 +26,7 @@ void GridTiles::setFrame(const TGridFrame2D& f) {
   changed_.clear();
   frame_ = f;
   ox_ = ox, oy_ = oy, tx0_ = tx0, ty0_ = ty0, ntx_ = tx1 - tx0 + 1, nty_ = ty1 - ty0 + 1;
+  ux0_ = ox - tx0 * kSide, uy0_ = oy - ty0 * kSide;
 }
 
 void GridTiles::setCell(std::int32_t kx, std::int32_t ky, std::int8_t v) {
@@ -99,32 +100,37 @@ double GridTiles::scanLogLikelihood(const FieldGrid& g, const mrpt::obs::CObserv
   if (!field_ || !(*field_ == f) || logs != logs_) useOptions(f, logs);
   const bool keep = g.likelihood->enableLikelihoodCache && !value_of_best_.empty();
   const int sx = static_cast<int>(frame_.size_x), sy = static_cast<int>(frame_.size_y);
+  // The arrays read for every point, held here (the tiles' array is refetched after a write,
+  // which may clone it).
+  const Tile* tiles = tiles_->data();
+  const double* value_of = value_of_best_.data();
   const auto row = [&](int y, int x0, int x1, auto&& visit) {
-    const std::int32_t ky = y + oy_;
     for (int x = x0; x <= x1;) {
-      const std::int32_t kx = x + ox_;
-      const Tile& t = (*tiles_)[tileOf(kx, ky)];
-      const int n = std::min(x1 - x + 1, kSide - (kx - tileCoord(kx) * kSide));
+      const Tile& t = tiles[tileAt(x, y)];
+      const int n = std::min(x1 - x + 1, kSide - ((x + ux0_) & kMask));
       if (t.cells) {
-        const std::int8_t* c = t.cells->v.data() + within(kx, ky);
+        const std::int8_t* c = t.cells->v.data() + inTile(x, y);
         for (int i = 0; i < n; ++i) visit(x + i, c[i]);
       }  // else unknown cells: none occupied
       x += n;
     }
   };
-  return fieldScanLogLikelihood(g, scan, pose, [&](int cx, int cy, bool lg) {
-    const std::int32_t kx = cx + ox_, ky = cy + oy_;
+  return fieldScanLogLikelihood(g, f, scan, pose, [&](int cx, int cy, bool lg) {
     if (!keep) {
       const double t = f.termOfBest(f.bestAt(cx, cy, sx, sy, row));
       return lg ? std::log(t) : t;
     }
-    const std::size_t t = tileOf(kx, ky);
-    const std::size_t i = within(kx, ky);
-    const Tile& seen = (*tiles_)[t];
-    if (seen.terms && seen.terms->best[i] != Terms::kNone) return value_of_best_[seen.terms->best[i]];
+    const std::size_t t = tileAt(cx, cy);
+    const std::size_t i = inTile(cx, cy);
+    if (const Terms* kept = tiles[t].terms.get()) {
+      const std::uint16_t b = kept->best[i];
+      if (b != Terms::kNone) return value_of[b];
+    }
     const unsigned best = f.bestAt(cx, cy, sx, sy, row);
-    tiles_.write()[t].terms.write().best[i] = static_cast<std::uint16_t>(best);  // this copy's own page
-    return value_of_best_[best];
+    Tile* own = tiles_.write().data();  // this copy's own array and page
+    tiles = own;
+    own[t].terms.write().best[i] = static_cast<std::uint16_t>(best);
+    return value_of[best];
   });
 }
 

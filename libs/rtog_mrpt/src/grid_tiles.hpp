@@ -33,8 +33,8 @@ class GridTiles {
 
   /// The cell at grid indices (cx, cy), which must lie in the grid.
   std::int8_t cell(int cx, int cy) const {
-    const Tile& t = (*tiles_)[tileOf(cx + ox_, cy + oy_)];
-    return t.cells ? t.cells->v[within(cx + ox_, cy + oy_)] : std::int8_t{0};
+    const Tile& t = (*tiles_)[tileAt(cx, cy)];
+    return t.cells ? t.cells->v[inTile(cx, cy)] : std::int8_t{0};
   }
   /// Sets the cell of lattice column (kx, ky), which must lie in the grid.
   void setCell(std::int32_t kx, std::int32_t ky, std::int8_t v);
@@ -76,6 +76,16 @@ class GridTiles {
     return static_cast<std::size_t>(tileCoord(ky) - ty0_) * static_cast<std::size_t>(ntx_) +
            static_cast<std::size_t>(tileCoord(kx) - tx0_);
   }
+  // Grid cell (cx, cy), cx, cy >= 0: its tile and its index in the tile, without a floor division
+  // (the grid's first tile starts ux0_, uy0_ cells before the grid).
+  std::size_t tileAt(int cx, int cy) const {
+    return static_cast<std::size_t>((cy + uy0_) >> kBits) * static_cast<std::size_t>(ntx_) +
+           static_cast<std::size_t>((cx + ux0_) >> kBits);
+  }
+  static constexpr int kMask = kSide - 1;
+  std::size_t inTile(int cx, int cy) const {
+    return static_cast<std::size_t>((((cy + uy0_) & kMask) << kBits) | ((cx + ux0_) & kMask));
+  }
   /// The kept term of each distance, for the options they were kept with.
   void useOptions(const FieldConstants& f, bool logs);
 
@@ -83,6 +93,7 @@ class GridTiles {
   std::int32_t ox_ = 0, oy_ = 0;    // lattice key of grid cell (0, 0)
   std::int32_t tx0_ = 0, ty0_ = 0;  // first tile
   std::int32_t ntx_ = 0, nty_ = 0;  // tiles across, up
+  std::int32_t ux0_ = 0, uy0_ = 0;  // cells of the first tile before the grid's first
   /// The tiles, row by row; the array itself is shared by copies until one changes a tile.
   detail::CowPtr<std::vector<Tile>> tiles_{nullptr};
   std::vector<std::uint32_t> changed_;  // tiles whose cells were set since dropStaleTerms()

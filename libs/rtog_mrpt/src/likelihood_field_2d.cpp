@@ -11,14 +11,6 @@
 namespace rtog {
 namespace {
 
-// COccupancyGridMap2D::x2idx / y2idx, without its float-to-int cast of a point beyond the int
-// range (undefined behaviour): such a point is outside the grid, -1, as x86 turns the cast
-// into INT_MIN, which the stock grid then counts outside too.
-int cellIndex(double v, double lo, double res) {
-  const double i = (v - lo) / res;
-  return i > -2147483648.0 && i < 2147483647.0 ? static_cast<int>(i) : -1;
-}
-
 using Grid = mrpt::maps::COccupancyGridMap2D;
 
 /// The field on a dense grid's cells: value(at, logs, term_of) gives the value of cell `at`
@@ -35,7 +27,7 @@ double onDenseGrid(const Grid& g, const mrpt::obs::CObservation2DRangeScan& scan
   };
   const FieldGrid fg{&g.insertionOptions, &g.likelihoodOptions, g.getResolution(), g.getXMin(), g.getYMin(),
                      g.getSizeX(), g.getSizeY()};
-  return fieldScanLogLikelihood(fg, scan, pose, [&](int cx, int cy, bool lg) {
+  return fieldScanLogLikelihood(fg, f, scan, pose, [&](int cx, int cy, bool lg) {
     return value(static_cast<std::size_t>(cx) + static_cast<std::size_t>(cy) * g.getSizeX(), lg,
                  [&] { return f.termOfBest(f.bestAt(cx, cy, sx, sy, row)); });
   });
@@ -55,45 +47,32 @@ FieldConstants::FieldConstants(const Grid::TLikelihoodOptions& o, double res) {
   threshold = Grid::p2l(0.5f);
 }
 
-double fieldScanLogLikelihood(const FieldGrid& g, const mrpt::obs::CObservation2DRangeScan& scan,
-                              const mrpt::poses::CPose3D& pose3d, const std::function<double(int, int, bool)>& value) {
+FieldScan prepareFieldScan(const FieldGrid& g, const FieldConstants& f, const mrpt::obs::CObservation2DRangeScan& scan,
+                           const mrpt::poses::CPose3D& pose3d) {
   // As COccupancyGridMap2D::internal_computeObservationLikelihood and its likelihood field.
+  FieldScan p{};
+  p.decided = std::numeric_limits<double>::quiet_NaN();
   const auto& io = *g.insertion;
-  if (!scan.isPlanarScan(io.horizontalTolerance)) return -10;
-  if (io.useMapAltitude && std::fabs(io.mapAltitude - scan.sensorPose.z()) > 0.01) return -10;
+  if (!scan.isPlanarScan(io.horizontalTolerance)) return p.decided = -10, p;
+  if (io.useMapAltitude && std::fabs(io.mapAltitude - scan.sensorPose.z()) > 0.01) return p.decided = -10, p;
   const mrpt::poses::CPose2D pose(pose3d);
   mrpt::maps::CPointsMap::TInsertionOptions opts;
   opts.minDistBetweenLaserPoints = g.resolution * 0.5f;
   opts.isPlanarMap = true;
   opts.horizontalTolerance = io.horizontalTolerance;
   const mrpt::maps::CPointsMap* pts = scan.buildAuxPointsMap<mrpt::maps::CPointsMap>(&opts);
-  const std::size_t n = pts ? pts->size() : 0;
-  if (n == 0) return -100;
+  p.n = pts ? pts->size() : 0;
+  if (p.n == 0) return p.decided = -100, p;
   const auto& lo = *g.likelihood;
-  const bool logs = !lo.LF_alternateAverageMethod;
-  const FieldConstants f(lo, g.resolution);
+  p.logs = !lo.LF_alternateAverageMethod;
   const double outside = f.zRandomTerm + f.zHit * std::exp(f.q * f.maxCorrDistSq);  // in doubles
-  const double outside_value = logs ? std::log(outside) : outside;
-  const std::size_t step = n < 10 ? 1 : static_cast<std::size_t>(std::max<std::uint32_t>(1u, lo.LF_decimation));
-  double s, c;
-  ::sincos(pose.phi(), &s, &c);
-  const auto& xs = pts->getPointsBufferRef_x();
-  const auto& ys = pts->getPointsBufferRef_y();
-  const unsigned last_x = g.size_x - 1, last_y = g.size_y - 1;
-  double sum = 0;
-  std::size_t m = 0;
-  for (std::size_t j = 0; j < n; j += step, ++m) {
-    const double lx = xs[j], ly = ys[j];
-    const int cx = cellIndex(pose.x() + lx * c - ly * s, g.x_min, g.resolution);
-    const int cy = cellIndex(pose.y() + lx * s + ly * c, g.y_min, g.resolution);
-    // The grid's last row and column count as outside, as in the stock grid.
-    if (static_cast<unsigned>(cx) >= last_x || static_cast<unsigned>(cy) >= last_y) {
-      sum += outside_value;
-      continue;
-    }
-    sum += value(cx, cy, logs);
-  }
-  return logs ? sum : std::log(sum / static_cast<double>(m));
+  p.outside_value = p.logs ? std::log(outside) : outside;
+  p.step = p.n < 10 ? 1 : static_cast<std::size_t>(std::max<std::uint32_t>(1u, lo.LF_decimation));
+  ::sincos(pose.phi(), &p.s, &p.c);
+  p.x = pose.x(), p.y = pose.y();
+  p.xs = pts->getPointsBufferRef_x().data();
+  p.ys = pts->getPointsBufferRef_y().data();
+  return p;
 }
 
 double& LikelihoodField2D::term(std::size_t at) {

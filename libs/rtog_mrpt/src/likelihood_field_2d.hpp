@@ -9,7 +9,6 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
-#include <functional>
 #include <memory>
 #include <vector>
 
@@ -70,11 +69,50 @@ struct FieldGrid {
   unsigned size_x, size_y;
 };
 
-/// The log-likelihood of `scan` from `pose` on grid `g` (lmLikelihoodField_Thrun), with
-/// value(cx, cy, logs) giving a cell's log term (its term if !logs) for cells inside the border.
-double fieldScanLogLikelihood(const FieldGrid& g, const mrpt::obs::CObservation2DRangeScan& scan,
-                              const mrpt::poses::CPose3D& pose,
-                              const std::function<double(int, int, bool)>& value);
+/// What the field's sum over a scan's points needs, prepared once per scan and pose.
+struct FieldScan {
+  double decided;  ///< the result when no point is scored (-10, -100), else NaN
+  const float *xs, *ys;
+  std::size_t n, step;
+  double x, y, s, c;  ///< the pose and the sine and cosine of its heading
+  bool logs;
+  double outside_value;
+};
+FieldScan prepareFieldScan(const FieldGrid& g, const FieldConstants& f, const mrpt::obs::CObservation2DRangeScan& scan,
+                           const mrpt::poses::CPose3D& pose);
+
+/// COccupancyGridMap2D::x2idx / y2idx, without its float-to-int cast of a point beyond the int
+/// range (undefined behaviour): such a point is outside the grid, -1, as x86 turns the cast into
+/// INT_MIN, which the stock grid then counts outside too.
+inline int fieldCellIndex(double v, double lo, double res) {
+  const double i = (v - lo) / res;
+  return i > -2147483648.0 && i < 2147483647.0 ? static_cast<int>(i) : -1;
+}
+
+/// The log-likelihood of `scan` from `pose` on grid `g` (lmLikelihoodField_Thrun; `f` its
+/// constants), with value(cx, cy, logs) giving a cell's log term (its term if !logs) for cells
+/// inside the border.
+template <class Value>
+double fieldScanLogLikelihood(const FieldGrid& g, const FieldConstants& f, const mrpt::obs::CObservation2DRangeScan& scan,
+                              const mrpt::poses::CPose3D& pose, Value&& value) {
+  const FieldScan p = prepareFieldScan(g, f, scan, pose);
+  if (!std::isnan(p.decided)) return p.decided;
+  const unsigned last_x = g.size_x - 1, last_y = g.size_y - 1;
+  double sum = 0;
+  std::size_t m = 0;
+  for (std::size_t j = 0; j < p.n; j += p.step, ++m) {
+    const double lx = p.xs[j], ly = p.ys[j];
+    const int cx = fieldCellIndex(p.x + lx * p.c - ly * p.s, g.x_min, g.resolution);
+    const int cy = fieldCellIndex(p.y + lx * p.s + ly * p.c, g.y_min, g.resolution);
+    // The grid's last row and column count as outside, as in the stock grid.
+    if (static_cast<unsigned>(cx) >= last_x || static_cast<unsigned>(cy) >= last_y) {
+      sum += p.outside_value;
+      continue;
+    }
+    sum += value(cx, cy, p.logs);
+  }
+  return p.logs ? sum : std::log(sum / static_cast<double>(m));
+}
 
 /// As LikelihoodField2D::scanLogLikelihood, with the terms kept in the grid's own cache
 /// (COccupancyGridMap2D's precomputed field `kept`, its flag `outdated`, its mark of a term not
