@@ -28,9 +28,11 @@ std::vector<Result> readAppRows(const std::string& file) {
     for (const auto& row : rows) {
       Result r;
       r.dataset = "MRPT apps: " + row.at("log").get<std::string>();
-      r.method = row.at("app").get<std::string>() + " | " + row.at("map").get<std::string>();
       r.extra["app_row"] = row.value("ok", false) ? 1 : 0;
       r.extra["particles"] = row.contains("particles") && row["particles"].is_number() ? row["particles"].get<double>() : -1;
+      // One row per app, map and particle count (a row replaces an earlier one of the same three).
+      r.method = row.at("app").get<std::string>() + " | " + row.at("map").get<std::string>();
+      if (r.extra["particles"] >= 0) r.method += " | " + std::to_string(static_cast<long>(r.extra["particles"])) + " particles";
       for (const char* key : {"wall_s", "peak_rss_mb", "wall_ratio", "rss_ratio", "path_mean_m", "path_max_m",
                               "final_path_mean_m", "final_path_max_m", "repeats"})
         if (row.contains(key) && row[key].is_number()) r.extra[key] = row[key].get<double>();
@@ -53,7 +55,8 @@ void writeAppRows(const std::vector<Result>& results, std::ostream& md) {
      << "can be compared. Wall time and peak RSS are `/usr/bin/time`'s, the median of the repeats; ratios are to\n"
      << "the stock grid of the same app, log and particle count; the path is the running estimate at every step\n"
      << "(`log_estimated_path.txt`) against the stock grid's. Measured by `apps/rtog-bench/app_rows.py` (its\n"
-     << "`--json` given to `rtog-bench --app-rows`).\n\n"
+     << "`--json` given to `rtog-bench --app-rows`). A log not among Debian's datasets is one `rtog-simlog` made\n"
+     << "(`doc/simlog.md`): `malaga_loop.rawlog`, 3,000 scans along a loop through the Malaga campus `.gridmap`.\n\n"
      << "| app | log | particles | map | wall [s] | peak RSS [MB] | path vs stock grid, mean / max [m] | runs |\n"
      << "|---|---|---|---|---|---|---|---|\n";
   const auto num = [](double v, int digits) {
@@ -64,9 +67,10 @@ void writeAppRows(const std::vector<Result>& results, std::ostream& md) {
   for (const auto& r : results) {
     if (!r.extra.count("app_row")) continue;
     const auto get = [&](const char* k) { return r.extra.count(k) ? r.extra.at(k) : -1.0; };
-    const std::size_t bar = r.method.find(" | ");
+    const std::size_t bar = r.method.find(" | "), bar2 = r.method.find(" | ", bar + 3);
     md << "| " << r.method.substr(0, bar) << " | " << r.dataset.substr(std::string("MRPT apps: ").size()) << " | "
-       << (get("particles") >= 0 ? num(get("particles"), 0) : "–") << " | `" << r.method.substr(bar + 3) << "` | ";
+       << (get("particles") >= 0 ? num(get("particles"), 0) : "–") << " | `"
+       << r.method.substr(bar + 3, bar2 == std::string::npos ? std::string::npos : bar2 - bar - 3) << "` | ";
     if (get("app_row") == 0) {
       md << "failed | – | – | – |\n";
       continue;

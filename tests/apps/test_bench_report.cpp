@@ -133,7 +133,7 @@ TEST(BenchReport, PlanningAndChunkedBuildRowsAreTheJsons) {
   ASSERT_NE(md.find("## Building in chunks"), std::string::npos);
   std::size_t rows = 0;
   for (const auto& r : results) {
-    if (!isTaskRow(r)) continue;
+    if (!isTaskRow(r) || r.extra.count("app_row")) continue;  // the apps' rows: AppRowsJoinTheReport...
     std::ostringstream want;
     want << std::fixed << std::setprecision(r.extra.count("plan") ? 2 : 3)
          << (r.extra.count("plan") ? r.extra.at("length_m") : r.extra.at("one_process_s"));
@@ -174,6 +174,9 @@ TEST(BenchReport, AppRowsJoinTheReportAndSurviveTheJson) {
              {"app": "rbpf-slam", "log": "SENA.rawlog", "particles": 25, "map": "rtreeOccupancyGrid", "repeats": 3,
               "ok": true, "wall_s": 3.15, "peak_rss_mb": 203.8, "wall_ratio": 0.716, "rss_ratio": 0.406,
               "path_mean_m": 0.0, "path_max_m": 0.0},
+             {"app": "rbpf-slam", "log": "SENA.rawlog", "particles": 100, "map": "rtreeOccupancyGrid", "repeats": 3,
+              "ok": true, "wall_s": 11.92, "peak_rss_mb": 328.0, "wall_ratio": 0.77, "rss_ratio": 0.2,
+              "path_mean_m": 0.0, "path_max_m": 0.0},
              {"app": "icp-slam", "log": "SENA.rawlog", "particles": null, "map": "rtreeGridMap2D", "repeats": 1,
               "ok": false}])";
   }
@@ -195,10 +198,13 @@ TEST(BenchReport, AppRowsJoinTheReportAndSurviveTheJson) {
   EXPECT_NE(report.find("| rbpf-slam | SENA.rawlog | 25 | `rtreeOccupancyGrid` | 3.15 (0.72×) | 204 (0.41×) | 0.000 / 0.000 | 3 |"),
             std::string::npos)
       << report.substr(report.find("## The MRPT apps"));
+  EXPECT_NE(report.find("| rbpf-slam | SENA.rawlog | 100 | `rtreeOccupancyGrid` | 11.92 (0.77×)"), std::string::npos)
+      << "a row of another particle count of the same app and map is kept";
   EXPECT_NE(report.find("| icp-slam | SENA.rawlog | – | `rtreeGridMap2D` | failed |"), std::string::npos);
   // Read back: the rows are results like the others.
   const auto rows = readAppRows(dir + "/rows.json");
-  ASSERT_EQ(rows.size(), 3u);
+  ASSERT_EQ(rows.size(), 4u);
+  EXPECT_EQ(rows[1].method, "rbpf-slam | rtreeOccupancyGrid | 25 particles");
   EXPECT_EQ(rows[1].dataset, "MRPT apps: SENA.rawlog");
   EXPECT_TRUE(isTaskRow(rows[1]));
   {
