@@ -23,6 +23,42 @@
 
 namespace rtog {
 
+namespace {
+/// An output stream buffer that counts its bytes and, given an archive, writes them to it in
+/// pieces of its buffer.
+class StreamSink : public std::streambuf {
+ public:
+  explicit StreamSink(mrpt::serialization::CArchive* out) : out_(out) { setp(buf_, buf_ + sizeof buf_); }
+  ~StreamSink() override = default;
+  std::uint64_t bytes() const { return bytes_ + static_cast<std::uint64_t>(pptr() - pbase()); }
+
+ protected:
+  int_type overflow(int_type c) override {
+    drain();
+    if (!traits_type::eq_int_type(c, traits_type::eof())) {
+      *pptr() = traits_type::to_char_type(c);
+      pbump(1);
+    }
+    return traits_type::not_eof(c);
+  }
+  int sync() override {
+    drain();
+    return 0;
+  }
+
+ private:
+  void drain() {
+    const auto n = static_cast<std::size_t>(pptr() - pbase());
+    if (out_ && n) out_->WriteBuffer(pbase(), n);
+    bytes_ += n;
+    setp(buf_, buf_ + sizeof buf_);
+  }
+  mrpt::serialization::CArchive* out_;
+  std::uint64_t bytes_ = 0;
+  char buf_[1 << 16];
+};
+}  // namespace
+
 // Version 0: genericMapParams, insertion and likelihood options, then the core map's own
 // binary format (doc/format.md) as a length-prefixed byte block. Version 1 adds
 // insertionOptions.planarCache after the rotating-scan elevations. Version 2 adds the update
@@ -56,11 +92,24 @@ void CRTreeOccupancyGridMap::serializeTo(mrpt::serialization::CArchive& out) con
   out << matchingOptions.matching2D_minZ << matchingOptions.matching2D_maxZ;
   out << io.rangeNoiseStd << io.rangeNoiseStdPerMeter << io.rangeNoiseCutoff;
   out << io.poseUncertainty;
-  std::ostringstream os(std::ios::binary);
+  // The map's bytes, preceded by their count, go straight into the archive: counted by a first
+  // write that stores nothing, then written (a copy in memory would hold up to three times the
+  // map while an app saves it, when it holds the most).
+  StreamSink count(nullptr);
+  {
+    std::ostream os(&count);
+    map_.write(os);
+  }
+  out.WriteAs<uint64_t>(count.bytes());
+  StreamSink sink(&out);
+  std::ostream os(&sink);
   map_.write(os);
-  const std::string bytes = os.str();
-  out.WriteAs<uint64_t>(bytes.size());
-  out.WriteBuffer(bytes.data(), bytes.size());
+  os.flush();
+  // The stream catches what the archive throws (a full disk) and fails: said here, not dropped.
+  if (!os) throw std::runtime_error("rtog::CRTreeOccupancyGridMap: the archive refused the map's bytes");
+  if (sink.bytes() != count.bytes())
+    throw std::logic_error("rtog::CRTreeOccupancyGridMap: the map wrote " + std::to_string(sink.bytes()) +
+                           " bytes after counting " + std::to_string(count.bytes()));
 }
 
 // Everything is read into locals, checked as an .ini's values are (the same validate()s), and
