@@ -86,26 +86,30 @@ TEST(MapCopies, AnEmptyMapIsScoredAsTheStockGridScoresItsEmptyGrid) {
 
 // Each copy takes scans at poses of its own, as particles do: its scores stay the stock grid's
 // that took the same scans, bit for bit, and the map it was copied from is not touched.
-TEST(MapCopies, CopiesTakingScansAtTheirOwnPosesScoreAsStockGridsThatTookThem) {
+void copiesScoreAsStockGrids(const std::vector<PosedFrame>& frames) {
+  ASSERT_GE(frames.size(), 30u);
+  // The first third into both, then each copy its own way to the end; scored every few scans.
+  const std::size_t first = std::min<std::size_t>(20, frames.size() / 3), last = frames.size() - 1;
+  const auto scanOf = [&](std::size_t i) { return frames[i].sf->getObservationByClass<CObservation2DRangeScan>(); };
   Pair a = stockPair();
-  for (std::size_t i = 0; i < 20; ++i) {
-    a.grid->insertObservation(*scanOf(i), senaFrames()[i].pose);
-    a.rtog->insertObservation(*scanOf(i), senaFrames()[i].pose);
+  for (std::size_t i = 0; i < first; ++i) {
+    a.grid->insertObservation(*scanOf(i), frames[i].pose);
+    a.rtog->insertObservation(*scanOf(i), frames[i].pose);
   }
-  const CPose3D probe = senaFrames()[20].pose;
-  ASSERT_EQ(scores(*a.rtog, *scanOf(20), probe, 2), scores(*a.grid, *scanOf(20), probe, 2));
-  const std::vector<double> before = scores(*a.rtog, *scanOf(20), probe, 3);
+  const CPose3D probe = frames[first].pose;
+  ASSERT_EQ(scores(*a.rtog, *scanOf(first), probe, 2), scores(*a.grid, *scanOf(first), probe, 2));
+  const std::vector<double> before = scores(*a.rtog, *scanOf(first), probe, 3);
   // Two copies of each, every one going on with poses nudged its own way.
   std::vector<Pair> copies;
   for (int c = 0; c < 2; ++c)
     copies.push_back({std::make_shared<COccupancyGridMap2D>(*a.grid), std::make_shared<CRTreeOccupancyGridMap>(*a.rtog)});
-  for (std::size_t i = 20; i < 60; ++i)
+  for (std::size_t i = first; i < last; ++i)
     for (int c = 0; c < 2; ++c) {
-      const CPose3D pose = senaFrames()[i].pose + CPose3D(0.02 * (c + 1), -0.01 * c, 0, 0.01 * c, 0, 0);
+      const CPose3D pose = frames[i].pose + CPose3D(0.02 * (c + 1), -0.01 * c, 0, 0.01 * c, 0, 0);
       copies[c].grid->insertObservation(*scanOf(i), pose);
       copies[c].rtog->insertObservation(*scanOf(i), pose);
-      if (i % 10 == 9) {
-        const CPose3D at = senaFrames()[i + 1].pose;
+      if (i % 5 == 4 || i + 1 == last) {
+        const CPose3D at = frames[i + 1].pose;
         ASSERT_EQ(scores(*copies[c].rtog, *scanOf(i + 1), at, 4), scores(*copies[c].grid, *scanOf(i + 1), at, 4))
             << "copy " << c << " after scan " << i;
         // A copy of a copy, as resampling makes them, scores as its source.
@@ -113,9 +117,16 @@ TEST(MapCopies, CopiesTakingScansAtTheirOwnPosesScoreAsStockGridsThatTookThem) {
         ASSERT_EQ(scores(again, *scanOf(i + 1), at, 5), scores(*copies[c].rtog, *scanOf(i + 1), at, 5));
       }
     }
-  EXPECT_EQ(scores(*a.rtog, *scanOf(20), probe, 3), before) << "scans into copies changed the original";
-  EXPECT_NE(scores(*copies[0].rtog, *scanOf(60), senaFrames()[60].pose, 6),
-            scores(*copies[1].rtog, *scanOf(60), senaFrames()[60].pose, 6));
+  EXPECT_EQ(scores(*a.rtog, *scanOf(first), probe, 3), before) << "scans into copies changed the original";
+  EXPECT_NE(scores(*copies[0].rtog, *scanOf(last), frames[last].pose, 6),
+            scores(*copies[1].rtog, *scanOf(last), frames[last].pose, 6));
+}
+
+TEST(MapCopies, CopiesTakingScansAtTheirOwnPosesScoreAsStockGridsThatTookThem) { copiesScoreAsStockGrids(senaFrames()); }
+
+// The same on a log of another robot and building (MRPT's localization demo), not used in tuning.
+TEST(MapCopies, CopiesScoreAsStockGridsOnTheLocalizationDemoLog) {
+  copiesScoreAsStockGrids(loadOdometryFrames(dataset("localization_demo.rawlog"), 120));
 }
 
 // An rtreeGridMap2D copy (its R-tree map's bricks shared, its grid and kept likelihood-field terms

@@ -12,6 +12,7 @@
 #include <streambuf>
 
 #include "temporaries.hpp"
+#include "util/sink_buf.hpp"
 
 namespace rtog::app {
 namespace {
@@ -24,60 +25,32 @@ std::runtime_error systemError(const std::string& what, int err) {
   return std::runtime_error("cannot write " + what + ": " + std::strerror(err));
 }
 
-/// A stream buffer on a file descriptor that throws, naming the file and the system's reason
-/// (ENOSPC, EFBIG, EIO, ...), at the first failed write: with badbit in the stream's exception
-/// mask the reason reaches the command through whatever writer was filling the stream.
+/// Writes a stream buffer's bytes to a file descriptor, and throws, naming the file and the
+/// system's reason (ENOSPC, EFBIG, EIO, ...), at the first failed write: with badbit in the
+/// stream's exception mask the reason reaches the command through whatever writer was filling the
+/// stream.
 ///
 /// A stream output (a FIFO, a device) is opened at the first write or flush, from `open_path`:
 /// opening a FIFO blocks until a reader comes, so every argument and input is checked first (a
 /// bad option then fails at once, not after a reader came or never).
-class FdBuf : public std::streambuf {
- public:
-  FdBuf(int& fd, std::string open_path, std::string what, std::string note)
-      : fd_(fd), open_path_(std::move(open_path)), what_(std::move(what)), note_(std::move(note)) {
-    setp(buf_, buf_ + sizeof(buf_));
-  }
-
- protected:
-  int_type overflow(int_type c) override {
-    drain();
-    if (!traits_type::eq_int_type(c, traits_type::eof())) {
-      *pptr() = traits_type::to_char_type(c);
-      pbump(1);
+struct FdWriter {
+  int& fd;
+  std::string open_path, what, note;
+  void operator()(const char* p, std::size_t n) {
+    if (fd < 0) {
+      fd = ::open(open_path.c_str(), O_WRONLY | O_NOCTTY | O_CLOEXEC);
+      if (fd < 0) throw std::runtime_error("cannot write " + what + ": " + std::strerror(errno) + note);
     }
-    return traits_type::not_eof(c);
-  }
-  int sync() override {
-    drain();
-    return 0;
-  }
-
- private:
-  void drain() {
-    if (fd_ < 0) {
-      fd_ = ::open(open_path_.c_str(), O_WRONLY | O_NOCTTY | O_CLOEXEC);
-      if (fd_ < 0) throw std::runtime_error("cannot write " + what_ + ": " + std::strerror(errno) + note_);
-    }
-    const char* p = pbase();
-    std::size_t n = static_cast<std::size_t>(pptr() - pbase());
     while (n > 0) {
-      const ssize_t w = ::write(fd_, p, n);
+      const ssize_t w = ::write(fd, p, n);
       if (w < 0 && errno == EINTR) continue;
-      if (w <= 0) {
-        const int err = w < 0 ? errno : EIO;
-        setp(buf_, buf_ + sizeof(buf_));
-        throw std::runtime_error("cannot write " + what_ + ": " + std::strerror(err) + note_);
-      }
+      if (w <= 0) throw std::runtime_error("cannot write " + what + ": " + std::strerror(w < 0 ? errno : EIO) + note);
       p += w;
       n -= static_cast<std::size_t>(w);
     }
-    setp(buf_, buf_ + sizeof(buf_));
   }
-
-  int& fd_;
-  std::string open_path_, what_, note_;
-  char buf_[1 << 16];
 };
+using FdBuf = detail::SinkBuf<FdWriter>;
 
 /// What a path names once its symlinks are followed (a dangling link: the file it would
 /// create). The kernel resolves the directories on the way by itself.
@@ -217,7 +190,7 @@ std::ostream& OutputSet::add(const std::string& option, const std::string& path)
     ::fchmod(o->fd, exists ? (st.st_mode & 07777) : (0666 & ~currentUmask()));
     note = exists ? " (the old file is left as it was)" : "";
   }
-  o->buf = std::make_unique<FdBuf>(o->fd, o->special ? path : std::string(), what, note);
+  o->buf = std::make_unique<FdBuf>(FdWriter{o->fd, o->special ? path : std::string(), what, note});
   o->os = std::make_unique<std::ostream>(o->buf.get());
   o->os->exceptions(std::ios::badbit);
   outputs_.push_back(std::move(o));

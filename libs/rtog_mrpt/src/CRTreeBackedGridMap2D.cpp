@@ -166,7 +166,7 @@ bool CRTreeBackedGridMap2D::insertGridScan(const mrpt::obs::CObservation2DRangeS
 void CRTreeBackedGridMap2D::forgetKeptFieldNear(const std::vector<std::uint8_t>& touched, std::size_t bx, int block) {
   // A cell's term reads the cells within K of it (COccupancyGridMap2D's likelihood field): the
   // terms within K of a changed block are dropped, as MRPT marks a term not computed.
-  const int k = static_cast<int>(std::ceil(likelihoodOptions.LF_maxCorrsDistance / m_resolution));
+  const int k = FieldConstants(likelihoodOptions, m_resolution).window;
   const int sx = static_cast<int>(m_size_x), sy = static_cast<int>(m_size_y);
   for (std::size_t b = 0; b < touched.size(); ++b) {
     if (!touched[b]) continue;

@@ -73,11 +73,8 @@ void CRTreeOccupancyGridMap::syncParams() {
 
 void CRTreeOccupancyGridMap::notifyMapChanged() {
   std::lock_guard<std::mutex> lk(caches_->mutex);
-  caches_->lf.clear();
-  caches_->points_dirty = true;
-  caches_->grid_view.reset();
+  caches_->dropCellData();
   caches_->tiles.reset();
-  caches_->band_points_dirty = true;
 }
 
 InsertStats CRTreeOccupancyGridMap::fuse(const CRTreeOccupancyGridMap& other, const mrpt::poses::CPose3D& pose) {

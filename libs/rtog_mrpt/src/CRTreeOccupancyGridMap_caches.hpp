@@ -59,13 +59,18 @@ struct CRTreeOccupancyGridMap::Caches {
     if (this == &o) return *this;
     std::scoped_lock lk(mutex, o.mutex);
     tiles = o.tiles ? std::make_unique<GridTiles>(*o.tiles) : nullptr;
-    lf.clear();
+    dropCellData();
     lf_params.reset();
+    local_valid = false;
+    return *this;
+  }
+  /// Drops what the map's cells were rendered into (the field's terms, point clouds, the dense
+  /// view); the tiles are the caller's to drop or to update. The caller holds `mutex`.
+  void dropCellData() {
+    lf.clear();
     points_dirty = true;
     band_points_dirty = true;
-    local_valid = false;
     grid_view.reset();
-    return *this;
   }
 };
 

@@ -291,10 +291,7 @@ bool CRTreeOccupancyGridMap::insertGridScan(const mrpt::obs::CObservation2DRange
 // they stand for the view.
 void CRTreeOccupancyGridMap::followGridScan(const GridScanUpdate& upd) {
   std::lock_guard<std::mutex> lk(caches_->mutex);
-  caches_->lf.clear();
-  caches_->points_dirty = true;
-  caches_->grid_view.reset();
-  caches_->band_points_dirty = true;
+  caches_->dropCellData();
   GridTiles* tiles = caches_->tiles.get();
   if (!tiles) return;
   if (!mrpt_grid::layerInBand(frame_, map_.resolution(), gridViewOptions.gridView_minZ, gridViewOptions.gridView_maxZ)) {

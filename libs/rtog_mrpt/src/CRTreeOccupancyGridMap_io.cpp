@@ -19,45 +19,11 @@
 #include "archive_read.hpp"
 #include "mrpt_grid.hpp"
 #include "stream_input.hpp"
+#include "util/sink_buf.hpp"
 #include "rtog/mrpt/register_classes.h"
 
 namespace rtog {
 
-namespace {
-/// An output stream buffer that counts its bytes and, given an archive, writes them to it in
-/// pieces of its buffer.
-class StreamSink : public std::streambuf {
- public:
-  explicit StreamSink(mrpt::serialization::CArchive* out) : out_(out) { setp(buf_, buf_ + sizeof buf_); }
-  ~StreamSink() override = default;
-  std::uint64_t bytes() const { return bytes_ + static_cast<std::uint64_t>(pptr() - pbase()); }
-
- protected:
-  int_type overflow(int_type c) override {
-    drain();
-    if (!traits_type::eq_int_type(c, traits_type::eof())) {
-      *pptr() = traits_type::to_char_type(c);
-      pbump(1);
-    }
-    return traits_type::not_eof(c);
-  }
-  int sync() override {
-    drain();
-    return 0;
-  }
-
- private:
-  void drain() {
-    const auto n = static_cast<std::size_t>(pptr() - pbase());
-    if (out_ && n) out_->WriteBuffer(pbase(), n);
-    bytes_ += n;
-    setp(buf_, buf_ + sizeof buf_);
-  }
-  mrpt::serialization::CArchive* out_;
-  std::uint64_t bytes_ = 0;
-  char buf_[1 << 16];
-};
-}  // namespace
 
 // Version 0: genericMapParams, insertion and likelihood options, then the core map's own
 // binary format (doc/format.md) as a length-prefixed byte block. Version 1 adds
@@ -95,13 +61,13 @@ void CRTreeOccupancyGridMap::serializeTo(mrpt::serialization::CArchive& out) con
   // The map's bytes, preceded by their count, go straight into the archive: counted by a first
   // write that stores nothing, then written (a copy in memory would hold up to three times the
   // map while an app saves it, when it holds the most).
-  StreamSink count(nullptr);
+  detail::SinkBuf count([](const char*, std::size_t) {});
   {
     std::ostream os(&count);
     map_.write(os);
   }
   out.WriteAs<uint64_t>(count.bytes());
-  StreamSink sink(&out);
+  detail::SinkBuf sink([&out](const char* p, std::size_t n) { out.WriteBuffer(p, n); });
   std::ostream os(&sink);
   map_.write(os);
   os.flush();

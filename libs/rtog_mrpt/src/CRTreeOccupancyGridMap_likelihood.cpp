@@ -25,13 +25,19 @@ namespace rtog {
 
 using detail::kImpossibleLogLik;
 
+namespace {
+/// COccupancyGridMap2D's default tolerance of a planar scan, which its 2D view (and the stock grid
+/// of a pasted section, which has no key for it) holds.
+const float kPlanarTolerance = mrpt::maps::COccupancyGridMap2D::TInsertionOptions().horizontalTolerance;
+}  // namespace
+
 bool CRTreeOccupancyGridMap::internal_canComputeObservationLikelihood(const mrpt::obs::CObservation& obs) const {
   using namespace mrpt::obs;
   // In the mrpt_grid preset as COccupancyGridMap2D: a planar scan can be scored on an empty map
   // (its grid of the creation extent, all unknown), and particle filters ask before they weigh.
   if (insertionOptions.mrptGrid() && likelihoodOptions.scanLikelihoodOnGridView)
     if (const auto* scan = dynamic_cast<const CObservation2DRangeScan*>(&obs))
-      return scan->isPlanarScan(mrpt::maps::COccupancyGridMap2D::TInsertionOptions().horizontalTolerance) &&
+      return scan->isPlanarScan(kPlanarTolerance) &&
              !(insertionOptions.useMapAltitude && std::fabs(insertionOptions.mapAltitude - scan->sensorPose.z()) > 0.01);
   if (isEmpty()) return false;
   return dynamic_cast<const CObservation2DRangeScan*>(&obs) || dynamic_cast<const CObservationPointCloud*>(&obs) ||
@@ -146,7 +152,6 @@ std::optional<double> CRTreeOccupancyGridMap::gridViewLikelihood(const mrpt::obs
           std::isfinite(p->pitch()) && std::isfinite(p->roll())))
       return std::nullopt;
   likelihoodOptions.validate();
-  static const float kPlanarTolerance = mrpt::maps::COccupancyGridMap2D::TInsertionOptions().horizontalTolerance;
   if (!scan->isPlanarScan(kPlanarTolerance)) return std::nullopt;
   // MRPT's lmConsensus reads the cells of end points without a bounds check: for it the view
   // is grown to hold them (beyond the stock grid, where that grid's result is undefined). The
@@ -248,8 +253,8 @@ std::optional<double> CRTreeOccupancyGridMap::tilesLikelihood(const mrpt::obs::C
   // (the planar and altitude tests read them), its likelihood options ours.
   static const mrpt::maps::COccupancyGridMap2D::TInsertionOptions kGridInsertion;
   const auto likelihood = [&](GridTiles& t) {
-    const bool changed = toGridLikelihoodOptions(likelihoodOptions, caches_->tiles_likelihood);
-    (void)changed;  // the tiles compare what their kept terms were computed with
+    // (Whether the field's options changed: the tiles compare what their terms were kept with.)
+    toGridLikelihoodOptions(likelihoodOptions, caches_->tiles_likelihood);
     const FieldGrid g{&kGridInsertion, &caches_->tiles_likelihood, frame_.resolution, frame_.x_min, frame_.y_min,
                       frame_.size_x, frame_.size_y};
     return t.scanLogLikelihood(g, scan, pose);
@@ -271,14 +276,8 @@ std::optional<double> CRTreeOccupancyGridMap::tilesLikelihood(const mrpt::obs::C
     if (g.getSizeX() != frame_.size_x || g.getSizeY() != frame_.size_y || g.getXMin() != frame_.x_min ||
         g.getYMin() != frame_.y_min)
       return std::nullopt;  // the view left the frame: not the grid the steps are in
-    const auto& raw = g.getRawMap();
-    const std::int32_t ox = mrpt_grid::keyOffsetX(frame_), oy = mrpt_grid::keyOffsetY(frame_);
-    for (std::uint32_t cy = 0; cy < frame_.size_y; ++cy)
-      for (std::uint32_t cx = 0; cx < frame_.size_x; ++cx)
-        if (const auto c = raw[std::size_t{cy} * frame_.size_x + cx])
-          tiles->setCell(ox + static_cast<std::int32_t>(cx), oy + static_cast<std::int32_t>(cy), c);
+    tiles->loadDense(g.getRawMap().data());
   }
-  tiles->dropStaleTerms(0);  // none kept yet: only forgets the cells it set
   std::lock_guard<std::mutex> lk(caches_->mutex);
   if (!caches_->tiles) caches_->tiles = std::move(tiles);
   return likelihood(*caches_->tiles);

@@ -41,40 +41,30 @@ void GridTiles::setCell(std::int32_t kx, std::int32_t ky, std::int8_t v) {
 
 void GridTiles::dropStaleTerms(int window) {
   if (changed_.empty()) return;
-  if (window >= kSide) {
-    // A window wider than a tile: every kept term may have changed.
-    for (Tile& t : tiles_.write()) t.terms.drop();
-  } else {
-    // A cell's term reads the cells within `window` of it: those of its own tile and the eight
-    // around it.
-    std::sort(changed_.begin(), changed_.end());
-    changed_.erase(std::unique(changed_.begin(), changed_.end()), changed_.end());
-    for (const std::uint32_t t : changed_) {
-      const std::int32_t tx = static_cast<std::int32_t>(t % static_cast<std::uint32_t>(ntx_));
-      const std::int32_t ty = static_cast<std::int32_t>(t / static_cast<std::uint32_t>(ntx_));
-      for (std::int32_t y = std::max(0, ty - 1); y <= std::min(nty_ - 1, ty + 1); ++y)
-        for (std::int32_t x = std::max(0, tx - 1); x <= std::min(ntx_ - 1, tx + 1); ++x)
-          tiles_.write()[static_cast<std::size_t>(y) * static_cast<std::size_t>(ntx_) + static_cast<std::size_t>(x)].terms.drop();
-    }
+  // A cell's term reads the cells within `window` of it: the terms of the tiles within that many
+  // cells of a changed tile are dropped.
+  const std::int32_t reach = (std::max(window, 0) + kSide - 1) / kSide;
+  std::sort(changed_.begin(), changed_.end());
+  changed_.erase(std::unique(changed_.begin(), changed_.end()), changed_.end());
+  std::vector<Tile>& tiles = tiles_.write();
+  for (const std::uint32_t t : changed_) {
+    const std::int32_t tx = static_cast<std::int32_t>(t % static_cast<std::uint32_t>(ntx_));
+    const std::int32_t ty = static_cast<std::int32_t>(t / static_cast<std::uint32_t>(ntx_));
+    for (std::int32_t y = std::max(0, ty - reach); y <= std::min(nty_ - 1, ty + reach); ++y)
+      for (std::int32_t x = std::max(0, tx - reach); x <= std::min(ntx_ - 1, tx + reach); ++x)
+        tiles[static_cast<std::size_t>(y) * static_cast<std::size_t>(ntx_) + static_cast<std::size_t>(x)].terms.drop();
   }
   changed_.clear();
 }
 
-void GridTiles::copyTo(std::int8_t* dense) const {
-  const std::size_t sx = frame_.size_x;
-  for (std::uint32_t cy = 0; cy < frame_.size_y; ++cy)
-    for (std::uint32_t cx = 0; cx < frame_.size_x;) {
-      const std::int32_t kx = static_cast<std::int32_t>(cx) + ox_, ky = static_cast<std::int32_t>(cy) + oy_;
-      const Tile& t = (*tiles_)[tileOf(kx, ky)];
-      // The rest of this tile's row at once.
-      const std::uint32_t n = std::min<std::uint32_t>(frame_.size_x - cx, static_cast<std::uint32_t>(kSide - (kx - tileCoord(kx) * kSide)));
-      std::int8_t* out = dense + cy * sx + cx;
-      if (t.cells)
-        std::copy_n(t.cells->v.data() + within(kx, ky), n, out);
-      else
-        std::fill_n(out, n, std::int8_t{0});
-      cx += n;
-    }
+void GridTiles::loadDense(const std::int8_t* dense) {
+  const std::int32_t sx = static_cast<std::int32_t>(frame_.size_x), sy = static_cast<std::int32_t>(frame_.size_y);
+  std::vector<Tile>& tiles = tiles_.write();
+  for (std::int32_t cy = 0; cy < sy; ++cy)
+    for (std::int32_t cx = 0; cx < sx; ++cx)
+      if (const std::int8_t c = dense[static_cast<std::size_t>(cy) * static_cast<std::size_t>(sx) + static_cast<std::size_t>(cx)])
+        tiles[tileAt(cx, cy)].cells.write().v[inTile(cx, cy)] = c;
+  for (Tile& t : tiles) t.terms.drop();
 }
 
 void GridTiles::useOptions(const FieldConstants& f, bool logs) {
@@ -132,25 +122,6 @@ double GridTiles::scanLogLikelihood(const FieldGrid& g, const mrpt::obs::CObserv
     own[t].terms.write().best[i] = static_cast<std::uint16_t>(best);
     return value_of[best];
   });
-}
-
-std::size_t GridTiles::memoryBytes() const {
-  double bytes = sizeof(*this) + double(tiles_->capacity() * sizeof(Tile)) / double(tiles_.owners()) +
-                 changed_.capacity() * sizeof(std::uint32_t) + value_of_best_.capacity() * sizeof(double);
-  for (const Tile& t : *tiles_) {
-    if (t.cells) bytes += double(sizeof(Cells)) / double(t.cells.owners());
-    if (t.terms) bytes += double(sizeof(Terms)) / double(t.terms.owners());
-  }
-  return static_cast<std::size_t>(bytes);
-}
-
-std::size_t GridTiles::tileCount() const {
-  return static_cast<std::size_t>(std::count_if(tiles_->begin(), tiles_->end(), [](const Tile& t) { return bool(t.cells); }));
-}
-
-std::size_t GridTiles::sharedTiles() const {
-  if (tiles_.shared()) return tileCount();
-  return static_cast<std::size_t>(std::count_if(tiles_->begin(), tiles_->end(), [](const Tile& t) { return t.cells && t.cells.shared(); }));
 }
 
 }  // namespace rtog

@@ -40,19 +40,15 @@ class GridTiles {
   void setCell(std::int32_t kx, std::int32_t ky, std::int8_t v);
   /// Drops the kept terms that the cells set since the last call may have changed.
   void dropStaleTerms(int window);
-  /// Writes the cells into a dense row-major array of the grid's size.
-  void copyTo(std::int8_t* dense) const;
+  /// Sets every cell from a dense row-major array of the grid's size (a view of the map), and
+  /// drops every kept term.
+  void loadDense(const std::int8_t* dense);
 
   /// lmLikelihoodField_Thrun of a planar scan on these cells, as the stock grid computes it on
   /// the same cells (fieldScanLogLikelihood). Terms are kept if the options' enableLikelihoodCache.
   double scanLogLikelihood(const FieldGrid& g, const mrpt::obs::CObservation2DRangeScan& scan,
                            const mrpt::poses::CPose3D& pose);
 
-  /// Bytes held, each shared tile divided among its owners.
-  std::size_t memoryBytes() const;
-  /// Tiles with cells, and how many of them other copies share.
-  std::size_t tileCount() const;
-  std::size_t sharedTiles() const;
 
  private:
   struct Cells {

@@ -47,9 +47,6 @@ class CowPtr {
   void drop() { p_.reset(); }
   /// True if another copy holds the object.
   bool shared() const { return p_.use_count() > 1; }
-  /// Owners of the object, this one included (for memory accounting: a shared object's bytes
-  /// are counted once over its owners).
-  long owners() const { return p_.use_count(); }
 
  private:
   std::shared_ptr<T> p_;
