@@ -150,7 +150,7 @@ endforeach()
 # named CRTreeOccupancyGridMap[_<verb>].{cpp,hpp} with a verb of this list. Sensor specifics
 # (sonar cones, grid-scan insertion, pose-PDF sigma points, ...) are helpers in files of their
 # own, called from the verb files; a name such as CRTreeOccupancyGridMap_sonar.cpp fails here.
-set(mrpt_map_verbs insert likelihood io matching simulate viz options prior import grid2d caches)
+set(mrpt_map_verbs insert likelihood io matching simulate viz options prior import grid2d grid3d caches)
 file(GLOB_RECURSE mrpt_class_files RELATIVE ${MRPT_DIR} ${MRPT_DIR}/src/CRTreeOccupancyGridMap*)
 foreach(f IN LISTS mrpt_class_files)
   get_filename_component(name ${f} NAME)

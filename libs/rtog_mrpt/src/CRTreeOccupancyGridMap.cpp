@@ -93,6 +93,10 @@ void CRTreeOccupancyGridMap::internal_clear() {
   } else {
     map_.clear();
     setGridFrame(-10, 10, -10, 10);  // as COccupancyGridMap2D::clear()
+    // As COccupancyGridMap3D::clear(): its default extent at the grid's resolution.
+    if (frame3d_.defined)
+      setGridFrame3D(mrpt::math::TPoint3D(-5, -5, -5), mrpt::math::TPoint3D(5, 5, 5),
+                     static_cast<float>(frame3d_.resolution));
   }
   lastInsertStats = InsertStats{};
   totalInsertStats = InsertStats{};

@@ -238,11 +238,15 @@ bool CRTreeOccupancyGridMap::sensorPoints(const mrpt::obs::CObservation& obs, co
 
 bool CRTreeOccupancyGridMap::internal_insertObservation(const mrpt::obs::CObservation& obs,
                                                         const std::optional<const CPose3D>& robotPose) {
-  if (insertionOptions.mrptGrid())
-    if (const auto* scan = dynamic_cast<const mrpt::obs::CObservation2DRangeScan*>(&obs))
-      return insertGridScan(*scan, robotPose ? *robotPose : CPose3D());
   if (const auto* range = dynamic_cast<const mrpt::obs::CObservationRange*>(&obs))
     return insertSonar(*range, robotPose ? *robotPose : CPose3D());
+  if (insertionOptions.mrptGrid()) {
+    // A 3D section: every observation (sonar above) as COccupancyGridMap3D. Otherwise 2D scans as
+    // COccupancyGridMap2D, and 3D observations (which that grid does not take) below.
+    if (frame3d_.defined) return insertGrid3D(obs, robotPose ? *robotPose : CPose3D());
+    if (const auto* scan = dynamic_cast<const mrpt::obs::CObservation2DRangeScan*>(&obs))
+      return insertGridScan(*scan, robotPose ? *robotPose : CPose3D());
+  }
   detail::SensorPoints sp;
   if (!sensorPoints(obs, robotPose ? *robotPose : CPose3D(), true, sp)) return false;
   syncParams();

@@ -18,6 +18,7 @@
 #include "rtog/mrpt/CRTreeOccupancyGridMap.h"
 #include "archive_read.hpp"
 #include "mrpt_grid.hpp"
+#include "mrpt_grid3d.hpp"
 #include "stream_input.hpp"
 #include "util/sink_buf.hpp"
 #include "rtog/mrpt/register_classes.h"
@@ -34,8 +35,9 @@ namespace rtog {
 // likelihood field before) and adds the options of its methods, the 2D view's band and
 // matchingOptions after the likelihood options. Version 3 adds the range-noise options
 // (rangeNoiseStd, rangeNoiseStdPerMeter, rangeNoiseCutoff) after matchingOptions. Version 4 adds
-// insertionOptions.poseUncertainty after them.
-uint8_t CRTreeOccupancyGridMap::serializeGetVersion() const { return 4; }
+// insertionOptions.poseUncertainty after them. Version 5 adds the 3D grid's geometry
+// (TGridFrame3D: defined, then its extent and sizes if so) after that.
+uint8_t CRTreeOccupancyGridMap::serializeGetVersion() const { return 5; }
 
 void CRTreeOccupancyGridMap::serializeTo(mrpt::serialization::CArchive& out) const {
   out << genericMapParams;
@@ -58,6 +60,10 @@ void CRTreeOccupancyGridMap::serializeTo(mrpt::serialization::CArchive& out) con
   out << matchingOptions.matching2D_minZ << matchingOptions.matching2D_maxZ;
   out << io.rangeNoiseStd << io.rangeNoiseStdPerMeter << io.rangeNoiseCutoff;
   out << io.poseUncertainty;
+  out << frame3d_.defined;
+  if (frame3d_.defined)
+    out << frame3d_.x_min << frame3d_.y_min << frame3d_.z_min << frame3d_.resolution << frame3d_.size_x
+        << frame3d_.size_y << frame3d_.size_z;
   // The map's bytes, preceded by their count, go straight into the archive: counted by a first
   // write that stores nothing, then written (a copy in memory would hold up to three times the
   // map while an app saves it, when it holds the most).
@@ -83,7 +89,7 @@ void CRTreeOccupancyGridMap::serializeTo(mrpt::serialization::CArchive& out) con
 // anything is allocated (archive_read.hpp).
 void CRTreeOccupancyGridMap::serializeFrom(mrpt::serialization::CArchive& in, uint8_t version) {
   constexpr const char* kWho = "rtog::CRTreeOccupancyGridMap";
-  if (version > 4) MRPT_THROW_UNKNOWN_SERIALIZATION_VERSION(version);
+  if (version > 5) MRPT_THROW_UNKNOWN_SERIALIZATION_VERSION(version);
   mrpt::maps::TMapGenericParams generic;
   archive::readGenericParams(in, generic);
   TInsertionOptions io;
@@ -132,6 +138,13 @@ void CRTreeOccupancyGridMap::serializeFrom(mrpt::serialization::CArchive& in, ui
   if (version >= 2) in >> mo.matching2D_minZ >> mo.matching2D_maxZ;
   if (version >= 3) in >> io.rangeNoiseStd >> io.rangeNoiseStdPerMeter >> io.rangeNoiseCutoff;
   if (version >= 4) in >> archive::Flag{io.poseUncertainty, "poseUncertainty"};
+  TGridFrame3D frame3d;
+  if (version >= 5) {
+    in >> archive::Flag{frame3d.defined, "frame3d.defined"};
+    if (frame3d.defined)
+      in >> frame3d.x_min >> frame3d.y_min >> frame3d.z_min >> frame3d.resolution >> frame3d.size_x >>
+          frame3d.size_y >> frame3d.size_z;
+  }
   try {
     io.validate();
     lo.validate();
@@ -145,6 +158,7 @@ void CRTreeOccupancyGridMap::serializeFrom(mrpt::serialization::CArchive& in, ui
   OccupancyMap map;
   archive::parseBlock(in, n, kWho, "map block", [&](std::istream& is) { map = OccupancyMap::read(is); });
   if (version >= 2) mrpt_grid::checkFrame(frame, map.resolution());
+  if (frame3d.defined) mrpt_grid3d::checkFrame(frame3d, map.resolution());
 
   genericMapParams = generic;
   insertionOptions = io;
@@ -153,6 +167,7 @@ void CRTreeOccupancyGridMap::serializeFrom(mrpt::serialization::CArchive& in, ui
   matchingOptions = mo;
   map_ = std::move(map);
   frame_ = frame;
+  frame3d_ = frame3d;
   prior_.reset();  // a loaded map clears to empty, as the stock grid does
   lastInsertStats = totalInsertStats = InsertStats{};
   invalidRangesSkipped = 0;

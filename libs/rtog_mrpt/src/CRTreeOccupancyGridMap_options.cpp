@@ -10,6 +10,7 @@
 
 #include "CRTreeOccupancyGridMap_grid2d.hpp"
 #include "mrpt_grid.hpp"
+#include "mrpt_grid3d.hpp"
 #include "options_check.hpp"
 #include "rtog/mrpt/CRTreeOccupancyGridMap.h"
 
@@ -328,18 +329,35 @@ void CRTreeOccupancyGridMap::TMapDefinition::loadFromConfigFile_map_specific(
   loadError.clear();
   try {
     const std::string sec = sectionNamePrefix + "_creationOpts";
+    // A section pasted from a COccupancyGridMap3D config: that grid's keys with its defaults.
+    grid3D = source.keyExists(sec, "min_z") || source.keyExists(sec, "max_z");
+    if (grid3D) {
+      resolution = 0.25;
+      min_x = min_y = -5.0f, max_x = max_y = 5.0f;
+      likelihoodOpts.LF_maxRange = 20.0f;
+      likelihoodOpts.LF_decimation = 1;
+    }
     resolution = readDouble(source, sec, "resolution", resolution);
     if (!(std::isfinite(resolution) && resolution >= 1e-4 && resolution <= 1e3))
       badOption(sec, "resolution", "must lie in [1e-4, 1e3] m, got " + std::to_string(resolution));
     readGridExtent(source, sec, min_x, max_x, min_y, max_y);
+    if (grid3D) {
+      min_z = readFloat(source, sec, "min_z", min_z);
+      max_z = readFloat(source, sec, "max_z", max_z);
+      if (!(std::isfinite(min_z) && std::isfinite(max_z) && min_z < max_z))
+        badOption(sec, "min_z/max_z", "the 3D grid extent needs finite min_z < max_z");
+      // The grid's own geometry (float resolution), checked now: a bad one is the section's error.
+      mrpt_grid3d::makeFrame(min_x, max_x, min_y, max_y, min_z, max_z, static_cast<float>(resolution), resolution);
+    }
     readGenericMapParams(source, sec, "rtog::CRTreeOccupancyGridMap", genericMapParams);
     reportUnknownKeys(source, sec,
-                      {"resolution", "min_x", "max_x", "min_y", "max_y", "gridView_minZ", "gridView_maxZ",
+                      {"resolution", "min_x", "max_x", "min_y", "max_y", "min_z", "max_z", "gridView_minZ", "gridView_maxZ",
                        "disableSaveAs3DObject", "enableSaveAs3DObject", "enableObservationLikelihood",
                        "enableObservationInsertion", "priorMap", "priorConfidence", "priorResolution", "priorOriginX",
                        "priorOriginY"});
     insertionOpts.loadFromConfigFile(source, sectionNamePrefix + "_insertOpts");
     likelihoodOpts.loadFromConfigFile(source, sectionNamePrefix + "_likelihoodOpts");
+    if (grid3D) mrpt_grid3d::readSectionKeys(source, sectionNamePrefix, insertionOpts, likelihoodOpts);
     gridViewOpts.loadFromConfigFile(source, sec);
     priorOpts.loadFromConfigFile(source, sec);
     matchingOpts.loadFromConfigFile(source, sectionNamePrefix + "_matchingOpts");
@@ -363,6 +381,9 @@ mrpt::maps::CMetricMap* CRTreeOccupancyGridMap::internal_CreateFromMapDefinition
   if (!d.loadError.empty()) throw std::invalid_argument(d.loadError);
   auto m = std::make_unique<CRTreeOccupancyGridMap>(d.resolution, d.insertionOpts);
   m->setGridFrame(d.min_x, d.max_x, d.min_y, d.max_y);
+  if (d.grid3D)
+    m->setGridFrame3D(mrpt::math::TPoint3D(d.min_x, d.min_y, d.min_z), mrpt::math::TPoint3D(d.max_x, d.max_y, d.max_z),
+                      static_cast<float>(d.resolution));
   m->likelihoodOptions = d.likelihoodOpts;
   m->gridViewOptions = d.gridViewOpts;
   m->matchingOptions = d.matchingOpts;

@@ -18,6 +18,7 @@
 #include <mrpt/maps/CMetricMap.h>
 #include <mrpt/maps/COccupancyGridMap2D.h>
 #include <mrpt/maps/CSimplePointsMap.h>
+#include <mrpt/opengl/COctoMapVoxels.h>
 #include <mrpt/poses/CPose3D.h>
 #include <mrpt/poses/CPose3DPDFGaussian.h>
 #include <mrpt/poses/CPosePDFGaussian.h>
@@ -26,6 +27,7 @@
 #include "rtog/mrpt/insertion_options.h"
 #include "rtog/mrpt/map_types.h"
 #include "rtog/mrpt/prior_map_options.h"
+#include "rtog/mrpt/view_options.h"
 
 namespace mrpt::obs {
 class CObservation2DRangeScan;
@@ -99,37 +101,10 @@ class CRTreeOccupancyGridMap : public mrpt::maps::CMetricMap {
     bool scanLikelihoodOnGridView{true};
   };
 
-  /// The 2D view (gridView()): a COccupancyGridMap2D of the cells within a height band.
-  struct TGridViewOptions : public mrpt::config::CLoadableOptions {
-    void loadFromConfigFile(const mrpt::config::CConfigFileBase& source, const std::string& section) override;
-    void saveToConfigFile(mrpt::config::CConfigFileBase& target, const std::string& section) const override;
-    void validate() const;  ///< throws std::invalid_argument unless gridView_minZ <= gridView_maxZ
-    /// A 2D cell takes the highest log-odds among the observed cells of its column whose height
-    /// interval meets [gridView_minZ, gridView_maxZ] [m]; unknown if none. (Default: -1000 / 1000)
-    float gridView_minZ{-1000.0f};
-    float gridView_maxZ{1000.0f};
-  };
-
-  /// Options for ICP against the map ([<prefix>_matchingOpts]).
-  struct TMatchingOptions : public mrpt::config::CLoadableOptions {
-    void loadFromConfigFile(const mrpt::config::CConfigFileBase& source, const std::string& section) override;
-    void saveToConfigFile(mrpt::config::CConfigFileBase& target, const std::string& section) const override;
-    void validate() const;
-
-    /// Height band [m]: determineMatching2D and squareDistanceToClosestCorrespondence pair 2D
-    /// points only with occupied cells whose centre z lies in [matching2D_minZ, matching2D_maxZ]
-    /// (a 3D map's floor and ceiling are not walls of a 2D scan). (Default: -1000)
-    float matching2D_minZ{-1000.0f};
-    float matching2D_maxZ{1000.0f};  ///< (Default: 1000)
-  };
-
-  /// How getVisualizationInto draws the map.
-  struct TRenderingOptions {
-    bool showOccupied{true};    ///< Draw occupied cuboids. (Default: true)
-    bool showFree{false};       ///< Draw free cuboids, translucent. (Default: false)
-    bool colorByHeight{true};   ///< Colour by height (true) or by occupancy (false). (Default: true)
-    std::size_t maxBoxes{2000000};  ///< Cap on drawn cuboids. (Default: 2e6)
-  };
+  /// The 2D view's band, ICP's band and how getVisualizationInto draws (rtog/mrpt/view_options.h).
+  using TGridViewOptions = RTreeGridViewOptions;
+  using TMatchingOptions = RTreeMatchingOptions;
+  using TRenderingOptions = RTreeRenderingOptions;
 
   explicit CRTreeOccupancyGridMap(double resolution = 0.10);
   CRTreeOccupancyGridMap(double resolution, const TInsertionOptions& io);
@@ -175,6 +150,20 @@ class CRTreeOccupancyGridMap : public mrpt::maps::CMetricMap {
   /// grow the grid); setGridFrame() sets it as the grid's setSize() would, on an empty map.
   const TGridFrame2D& gridFrame() const { return frame_; }
   void setGridFrame(float x_min, float x_max, float y_min, float y_max);
+
+  /// mrpt_grid, a 3D section: the COccupancyGridMap3D whose cells observations step (undefined
+  /// without one, doc/mrpt_map.md). setGridFrame3D() sets it as that grid's constructor would
+  /// (corners, resolution), on an empty map; throws std::invalid_argument for a bad extent.
+  const TGridFrame3D& gridFrame3D() const { return frame3d_; }
+  void setGridFrame3D(const mrpt::math::TPoint3D& corner_min, const mrpt::math::TPoint3D& corner_max,
+                      float resolution);
+  /// COccupancyGridMap3D's API on that grid (a defined frame; std::logic_error otherwise): the
+  /// probability that cell (cx, cy, cz) is free (0.5 unknown or outside), as getCellFreeness;
+  /// one ray's steps, as insertRay (the end occupied; `endIsOccupied` is ignored there too); the
+  /// cells as voxels, as getAsOctoMapVoxels (occupied above 0.501, free below 0.499).
+  float getCellFreeness(unsigned cx, unsigned cy, unsigned cz) const;
+  void insertRay(const mrpt::math::TPoint3D& sensor, const mrpt::math::TPoint3D& end, bool endIsOccupied = true);
+  void getAsOctoMapVoxels(mrpt::opengl::COctoMapVoxels& gl_obj) const;
 
   /// What inserting a 2D scan in the mrpt_grid preset did, for a 2D view to follow it.
   struct GridScanUpdate {
@@ -286,8 +275,12 @@ class CRTreeOccupancyGridMap : public mrpt::maps::CMetricMap {
   /// Cell edge length [m], as in COccupancyGridMap2D. (Default: 0.10)
   double resolution{0.10};
   /// mrpt_grid: the initial extent of the grid the 2D scans follow, as COccupancyGridMap2D's.
-  /// (Default: -10, 10, -10, 10)
+  /// (Default: -10, 10, -10, 10; in a 3D section COccupancyGridMap3D's -5, 5, -5, 5)
   float min_x{-10.0f}, max_x{10.0f}, min_y{-10.0f}, max_y{10.0f};
+  /// A 3D section (the _creationOpts has min_z or max_z): the COccupancyGridMap3D's z extent; its
+  /// other keys and defaults are then that grid's (doc/mrpt_map.md). (Default: -5, 5)
+  float min_z{-5.0f}, max_z{5.0f};
+  bool grid3D{false};
   rtog::CRTreeOccupancyGridMap::TInsertionOptions insertionOpts;
   rtog::CRTreeOccupancyGridMap::TLikelihoodOptions likelihoodOpts;
   rtog::CRTreeOccupancyGridMap::TGridViewOptions gridViewOpts;  ///< read from _creationOpts
@@ -367,6 +360,7 @@ class CRTreeOccupancyGridMap : public mrpt::maps::CMetricMap {
 
   OccupancyMap map_;
   TGridFrame2D frame_;
+  TGridFrame3D frame3d_;
   /// What clear() returns to (MRPT's apps clear a map before they fill it): the cells and frame
   /// loadPrior() made, shared by copies; none otherwise. Not serialized.
   struct Prior;
@@ -375,6 +369,9 @@ class CRTreeOccupancyGridMap : public mrpt::maps::CMetricMap {
 
   /// cos/sin of the scan's beam angles, from the cache when the geometry is the last one's.
   std::shared_ptr<const ScanAngles> scanAngles(const mrpt::obs::CObservation2DRangeScan& scan) const;
+  /// A 3D observation (or a 2D scan in a 3D section) with COccupancyGridMap3D's rule; false
+  /// for a type that has no points.
+  bool insertGrid3D(const mrpt::obs::CObservation& obs, const mrpt::poses::CPose3D& robotPose);
   /// After a grid scan: the 2D view's copy-on-write tiles, if kept, take its steps; the other
   /// caches are dropped as by notifyMapChanged().
   void followGridScan(const GridScanUpdate& upd);

@@ -44,4 +44,20 @@ struct TGridFrame2D {
   }
 };
 
+/// The geometry of the COccupancyGridMap3D that a 3D section describes (its _creationOpts has
+/// min_z or max_z): the extent and cell edge as CDynamicGrid3D::setSize() makes them, in double
+/// from the section's floats. 3D observations in the mrpt_grid preset step the cells of this grid
+/// (mrpt_grid3d). Without a 3D section (`defined` false) 3D observations follow the clamp-and-add
+/// rule (doc/mrpt_map.md): COccupancyGridMap2D, whose section it is, takes none.
+struct TGridFrame3D {
+  bool defined{false};
+  double x_min{0}, y_min{0}, z_min{0};
+  double resolution{0};
+  std::uint32_t size_x{0}, size_y{0}, size_z{0};
+  bool operator==(const TGridFrame3D& o) const {
+    return defined == o.defined && x_min == o.x_min && y_min == o.y_min && z_min == o.z_min &&
+           resolution == o.resolution && size_x == o.size_x && size_y == o.size_y && size_z == o.size_z;
+  }
+};
+
 }  // namespace rtog

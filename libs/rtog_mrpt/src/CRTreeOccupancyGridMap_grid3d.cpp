@@ -1,0 +1,160 @@
+// rtog::CRTreeOccupancyGridMap: the mrpt_grid preset in 3D, COccupancyGridMap3D's rule and API
+// (mrpt_grid3d.hpp).
+#include <mrpt/maps/COccupancyGridMap3D.h>
+#include <mrpt/system/string_utils.h>
+#include <mrpt/maps/CSimplePointsMap.h>
+#include <mrpt/opengl/COctoMapVoxels.h>
+
+#include "rtog/mrpt/CRTreeOccupancyGridMap.h"
+#include "mrpt_grid.hpp"
+#include "mrpt_grid3d.hpp"
+#include "options_check.hpp"
+#include "sensor_points.hpp"
+
+namespace rtog {
+
+namespace mrpt_grid3d {
+void readSectionKeys(const mrpt::config::CConfigFileBase& source, const std::string& prefix,
+                     CRTreeOccupancyGridMap::TInsertionOptions& io, CRTreeOccupancyGridMap::TLikelihoodOptions& lo) {
+  // COccupancyGridMap3D numbers its two methods 0 and 1 (names read as in every section).
+  const std::string lsec = prefix + "_likelihoodOpts";
+  const std::string m = mrpt::system::trim(source.read_string(lsec, "likelihoodMethod", ""));
+  if (!m.empty() && m.find_first_not_of("0123456789") == std::string::npos) {
+    if (m != "0" && m != "1")
+      throw std::invalid_argument("rtog::CRTreeOccupancyGridMap: invalid option [" + lsec +
+                                  "] likelihoodMethod: a 3D section numbers COccupancyGridMap3D's methods, 0 "
+                                  "(lmLikelihoodField_Thrun) or 1 (lmRayTracing), got " + m);
+    lo.likelihoodMethod = m == "0" ? CRTreeOccupancyGridMap::lmLikelihoodField_Thrun : CRTreeOccupancyGridMap::lmRayTracing;
+  }
+  // MRPT 2.5.8's COccupancyGridMap3D does not read decimation_3d_range: its depth images keep 8.
+  const std::string isec = prefix + "_insertOpts";
+  if (source.keyExists(isec, "decimation_3d_range"))
+    reportInertKey(isec, "decimation_3d_range",
+                   "in a 3D section depth images are decimated by 8, as COccupancyGridMap3D (MRPT 2.5.8) does not "
+                   "read this key");
+  io.decimation_3d_range = 8;
+}
+}  // namespace mrpt_grid3d
+
+using mrpt::poses::CPose3D;
+
+void CRTreeOccupancyGridMap::setGridFrame3D(const mrpt::math::TPoint3D& lo, const mrpt::math::TPoint3D& hi,
+                                            float resolution) {
+  if (!isEmpty()) throw std::logic_error("rtog::CRTreeOccupancyGridMap::setGridFrame3D: the map holds cells");
+  frame3d_ = mrpt_grid3d::makeFrame(static_cast<float>(lo.x), static_cast<float>(hi.x), static_cast<float>(lo.y),
+                                    static_cast<float>(hi.y), static_cast<float>(lo.z), static_cast<float>(hi.z),
+                                    resolution, map_.resolution());
+}
+
+bool CRTreeOccupancyGridMap::insertGrid3D(const mrpt::obs::CObservation& obs, const CPose3D& robotPose) {
+  syncParams();
+  const TGridFrame3D& f = frame3d_;
+  const StepRule rule = mrpt_grid3d::stepRule(insertionOptions);
+  InsertStats stats;
+  std::size_t invalid = 0;
+  mrpt::maps::CSimplePointsMap pts;
+  mrpt::math::TPoint3D sensor;
+  if (mrpt_grid3d::gridPoints(obs, robotPose, insertionOptions.decimation_3d_range, pts, sensor)) {
+    // The grid's own points, every `decimation`-th a ray (insertPointCloud).
+    const auto& xs = pts.getPointsBufferRef_x();
+    const auto& ys = pts.getPointsBufferRef_y();
+    const auto& zs = pts.getPointsBufferRef_z();
+    stats = mrpt_grid3d::insertPointCloud(map_, f, sensor, xs.data(), ys.data(), zs.data(), xs.size(),
+                                          insertionOptions.decimation, rule);
+  } else {
+    // Point clouds, Velodyne and rotating scans: their points (decimated already) by the same rule.
+    detail::SensorPoints sp;
+    if (!sensorPoints(obs, robotPose, true, sp)) return false;
+    std::vector<Eigen::Vector3f> p(sp.size());
+    std::size_t dropped = 0;
+    p.resize(sp.read(0, sp.size(), p.data(), nullptr, dropped));
+    invalid = sp.invalid + dropped;
+    std::vector<float> xs(p.size()), ys(p.size()), zs(p.size());
+    for (std::size_t i = 0; i < p.size(); ++i) xs[i] = p[i].x(), ys[i] = p[i].y(), zs[i] = p[i].z();
+    stats = mrpt_grid3d::insertPointCloud(map_, f, mrpt::math::TPoint3D(sp.origin.x(), sp.origin.y(), sp.origin.z()),
+                                          xs.data(), ys.data(), zs.data(), xs.size(), 1, rule);
+  }
+  lastInsertStats = stats;
+  totalInsertStats += stats;
+  invalidRangesSkipped += invalid;
+  notifyMapChanged();
+  return true;
+}
+
+namespace {
+const TGridFrame3D& definedFrame(const TGridFrame3D& f, const char* what) {
+  if (!f.defined)
+    throw std::logic_error(std::string("rtog::CRTreeOccupancyGridMap::") + what +
+                           ": the map has no 3D grid (a 3D section, or setGridFrame3D())");
+  return f;
+}
+}  // namespace
+
+float CRTreeOccupancyGridMap::getCellFreeness(unsigned cx, unsigned cy, unsigned cz) const {
+  const TGridFrame3D& f = definedFrame(frame3d_, "getCellFreeness");
+  if (cx >= f.size_x || cy >= f.size_y || cz >= f.size_z) return 0.5f;
+  const Key o = mrpt_grid3d::keyOffset(f);
+  const auto v = map_.logOdds(Key{o.x + static_cast<std::int32_t>(cx), o.y + static_cast<std::int32_t>(cy),
+                                  o.z + static_cast<std::int32_t>(cz)});
+  const int cell = v ? mrpt_grid::cellOfValue(*v) : 0;
+  return mrpt::maps::COccupancyGridMap3D::l2p(static_cast<mrpt::maps::COccupancyGridMap3D::voxelType>(cell));
+}
+
+void CRTreeOccupancyGridMap::insertRay(const mrpt::math::TPoint3D& sensor, const mrpt::math::TPoint3D& end, bool) {
+  const TGridFrame3D& f = definedFrame(frame3d_, "insertRay");
+  syncParams();
+  // `end` in double, as the grid takes it (the points of an observation are floats).
+  std::vector<mrpt_grid3d::LayerStep> steps;
+  if (mrpt_grid3d::traceRay(f, mrpt_grid3d::keyOffset(f), sensor, end, steps)) {
+    const StepRule rule = mrpt_grid3d::stepRule(insertionOptions);
+    for (const auto& s : steps) map_.applyStepRuns(s.z, &s.run, 1, rule);
+  }
+  notifyMapChanged();
+}
+
+void CRTreeOccupancyGridMap::getAsOctoMapVoxels(mrpt::opengl::COctoMapVoxels& gl) const {
+  // As COccupancyGridMap3D::getAsOctoMapVoxels with its default rendering options (occupied and
+  // free voxels, visible, no grid lines), over the cells this map knows (unknown ones are 0.5:
+  // neither set); coloured as the grid colours them in the FIXED, COLOR_FROM_HEIGHT and
+  // COLOR_FROM_OCCUPANCY modes, in the general colour otherwise.
+  using mrpt::opengl::COctoMapVoxels;
+  const TGridFrame3D& f = definedFrame(frame3d_, "getAsOctoMapVoxels");
+  const Key o = mrpt_grid3d::keyOffset(f);
+  gl.clear();
+  gl.resizeVoxelSets(2);
+  const mrpt::math::TPoint3D bbmin(f.x_min, f.y_min, f.z_min);
+  const mrpt::math::TPoint3D bbmax(f.x_min + f.size_x * f.resolution, f.y_min + f.size_y * f.resolution,
+                                   f.z_min + f.size_z * f.resolution);
+  const mrpt::img::TColorf general = gl.getColor();
+  const float inv_dz = 1.0f / static_cast<float>(bbmax.z - bbmin.z + 0.01f);
+  const double L = 0.5 * f.resolution;
+  map_.forEachLeaf([&](const Box& b, float v) {
+    const float occ = 1.0f - mrpt::maps::COccupancyGridMap3D::l2p(
+                                 static_cast<mrpt::maps::COccupancyGridMap3D::voxelType>(mrpt_grid::cellOfValue(v)));
+    const bool occupied = occ > 0.501f, free = occ < 0.499f;
+    if (!occupied && !free) return;
+    for (std::int32_t kz = b.min.z; kz <= b.max.z; ++kz)
+      for (std::int32_t ky = b.min.y; ky <= b.max.y; ++ky)
+        for (std::int32_t kx = b.min.x; kx <= b.max.x; ++kx) {
+          const std::int64_t cx = kx - o.x, cy = ky - o.y, cz = kz - o.z;
+          if (cx < 0 || cy < 0 || cz < 0 || cx >= f.size_x || cy >= f.size_y || cz >= f.size_z) continue;
+          const double x = f.x_min + cx * f.resolution + L, y = f.y_min + cy * f.resolution + L,
+                       z = f.z_min + cz * f.resolution + L;
+          mrpt::img::TColor c = general.asTColor();
+          if (gl.getVisualizationMode() == COctoMapVoxels::COLOR_FROM_OCCUPANCY) {
+            const float k = 240 * (1 - occ) + 15;
+            c = mrpt::img::TColor(static_cast<uint8_t>(k * general.R), static_cast<uint8_t>(k * general.G),
+                                  static_cast<uint8_t>(k * general.B), static_cast<uint8_t>(255 * general.A));
+          } else if (gl.getVisualizationMode() == COctoMapVoxels::COLOR_FROM_HEIGHT) {
+            const float k = 255 * inv_dz * static_cast<float>(z - bbmin.z);
+            c = mrpt::img::TColor(static_cast<uint8_t>(k * general.R), static_cast<uint8_t>(k * general.G),
+                                  static_cast<uint8_t>(k * general.B), static_cast<uint8_t>(255 * general.A));
+          }
+          gl.push_back_Voxel(occupied ? mrpt::opengl::VOXEL_SET_OCCUPIED : mrpt::opengl::VOXEL_SET_FREESPACE,
+                             COctoMapVoxels::TVoxel(mrpt::math::TPoint3D(x, y, z), 2 * L, c));
+        }
+  });
+  gl.setBoundingBox(bbmin, bbmax);
+}
+
+}  // namespace rtog

@@ -1,0 +1,73 @@
+// The mrpt_grid preset in 3D: COccupancyGridMap3D's update (MRPT 2.5: COccupancyGridMap3D_insert.cpp),
+// reproduced so that an R-tree map holds exactly the voxels that grid holds. The grid turns each
+// observation into a point cloud and inserts it ray by ray: every `decimation`-th point is a ray
+// from the sensor's cell, a free step in each cell of its fixed-point raster (the sensor's cell
+// first, the end's cell not), then an occupied step in the end's cell. Cells are the grid's, of
+// its fixed extent (CDynamicGrid3D): a ray stops where it leaves the grid, and one whose sensor
+// lies outside is dropped. The steps are the 2D grid's (mrpt_grid.hpp), and a cell takes one step
+// per ray that crosses it, in ray order.
+// tests/mrpt/test_mrpt_grid3d_fidelity.cpp holds the result against the grid itself.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <mrpt/config/CConfigFileBase.h>
+#include <mrpt/maps/CPointsMap.h>
+#include <mrpt/math/TPoint3D.h>
+#include <mrpt/obs/CObservation.h>
+#include <mrpt/poses/CPose3D.h>
+
+#include "rtog/core/occupancy_map.hpp"
+#include "rtog/mrpt/CRTreeOccupancyGridMap.h"
+
+namespace rtog::mrpt_grid3d {
+
+/// COccupancyGridMap3D(corner_min, corner_max, resolution)'s geometry, as CDynamicGrid3D::setSize
+/// makes it (doubles from the section's floats). Throws std::invalid_argument for an extent that
+/// is not finite and ordered or not inside the lattice's key range.
+TGridFrame3D makeFrame(float x_min, float x_max, float y_min, float y_max, float z_min, float z_max, float resolution,
+                       double latticeResolution);
+/// Throws std::runtime_error unless `f` is a geometry makeFrame() could have made for a map of
+/// `latticeResolution` (a loaded map's): finite, positive sizes within the key range.
+void checkFrame(const TGridFrame3D& f, double latticeResolution);
+/// Lattice key of the grid's cell 0 along each axis (round(min / resolution)).
+Key keyOffset(const TGridFrame3D& f);
+
+/// The points the grid makes of `obs` taken at `robotPose` and its sensor's position, in the map
+/// frame: a 2D range scan as CSimplePointsMap::loadFromRangeScan (valid ranges only), a depth
+/// image as CObservation3DRangeScan::unprojectInto with decimation_3d_range then moved by the
+/// sensor pose, as COccupancyGridMap3D does. False for other observation types.
+bool gridPoints(const mrpt::obs::CObservation& obs, const mrpt::poses::CPose3D& robotPose, unsigned decimation3d,
+                mrpt::maps::CPointsMap& pts, mrpt::math::TPoint3D& sensor);
+
+/// The steps of one ray (COccupancyGridMap3D::insertRay) in grid cells, appended to `out` as
+/// (cell z, one-cell StepRun in lattice keys); false if the sensor's cell lies outside the grid
+/// (no steps, as the grid skips it).
+struct LayerStep {
+  std::int32_t z;
+  OccupancyMap::StepRun run;
+};
+bool traceRay(const TGridFrame3D& f, const Key& offset, const mrpt::math::TPoint3D& sensor,
+              const mrpt::math::TPoint3D& end, std::vector<LayerStep>& out);
+
+/// COccupancyGridMap3D's steps: the 2D grid's (mrpt_grid::stepsOf), but a cell saturates free
+/// within the free step of 127 (the 2D grid takes the larger of the free and no-echo steps; the
+/// 3D grid has no no-echo beams).
+StepRule stepRule(const CRTreeOccupancyGridMap::TInsertionOptions& io);
+
+/// Inserts every `decimation`-th point of `xs, ys, zs` (n points, map frame) as a ray from
+/// `sensor`, COccupancyGridMap3D::insertPointCloud's rule, into `map` with the preset's steps.
+/// Rays whose sensor lies outside the grid count as skipped_out_of_range.
+InsertStats insertPointCloud(OccupancyMap& map, const TGridFrame3D& f, const mrpt::math::TPoint3D& sensor,
+                             const float* xs, const float* ys, const float* zs, std::size_t n, std::size_t decimation,
+                             const StepRule& rule);
+
+/// The keys of a 3D section that COccupancyGridMap3D reads otherwise than COccupancyGridMap2D:
+/// likelihoodMethod by its numbers (0: the likelihood field, 1: ray tracing), decimation_3d_range
+/// not at all (8; told once if given). Throws std::invalid_argument for another number.
+void readSectionKeys(const mrpt::config::CConfigFileBase& source, const std::string& prefix,
+                     CRTreeOccupancyGridMap::TInsertionOptions& io, CRTreeOccupancyGridMap::TLikelihoodOptions& lo);
+
+}  // namespace rtog::mrpt_grid3d

@@ -1,0 +1,262 @@
+// The mrpt_grid preset against MRPT's own COccupancyGridMap3D: a 3D section (min_z/max_z in its
+// _creationOpts) pasted under rtreeOccupancyGrid must give that grid's voxels exactly, for the
+// observations the grid takes (2D and 3D range scans), and for the points of those it does not
+// take (point clouds, Velodyne, rotating scans) inserted into the grid with insertPointCloud.
+// Real data: MRPT's tests_rgbd.rawlog, SENA's 2D scans, the TUM frames, the VLP-16 scan.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <iostream>
+
+#include <mrpt/config/CConfigFileMemory.h>
+#include <mrpt/maps/CMultiMetricMap.h>
+#include <mrpt/maps/COccupancyGridMap3D.h>
+#include <mrpt/maps/CSimplePointsMap.h>
+#include <mrpt/obs/CObservation3DRangeScan.h>
+#include <mrpt/obs/CObservationPointCloud.h>
+#include <mrpt/obs/CRawlog.h>
+#include <mrpt/opengl/COctoMapVoxels.h>
+#include <mrpt/serialization/CArchive.h>
+#include <mrpt/io/CMemoryStream.h>
+
+#include "rtog/image/tum_dataset.hpp"
+#include "rtog/mrpt/CRTreeOccupancyGridMap.h"
+#include "test_helpers.hpp"
+
+using mrpt::maps::COccupancyGridMap3D;
+using rtog::CRTreeOccupancyGridMap;
+using namespace rtog_test;
+
+namespace {
+
+struct Pair {
+  std::shared_ptr<COccupancyGridMap3D> stock;
+  CRTreeOccupancyGridMap::Ptr ours;
+};
+
+/// Both maps from the same section text: ours through MRPT's map loader (as the apps make it),
+/// the stock grid from its own TMapDefinition, as its map factory makes it.
+Pair makePair(const std::string& creation, const std::string& insert, const std::string& likelihood = "") {
+  const std::string body = "_creationOpts]\n" + creation + "\n[%_insertOpts]\n" + insert + "\n[%_likelihoodOpts]\n" +
+                           likelihood + "\n";
+  const auto section = [&](const std::string& name) {
+    std::string s = "[" + name + body;
+    for (std::size_t p; (p = s.find('%')) != std::string::npos;) s.replace(p, 1, name);
+    return s;
+  };
+  const std::string ini = "[M]\nrtreeOccupancyGrid_count=1\n" + section("M_rtreeOccupancyGrid_00") + section("G");
+  mrpt::config::CConfigFileMemory cfg(ini);
+  mrpt::maps::TSetOfMetricMapInitializers inits;
+  inits.loadFromConfigFile(cfg, "M");
+  mrpt::maps::CMultiMetricMap mm;
+  mm.setListOfMaps(inits);
+  Pair p;
+  p.ours = std::dynamic_pointer_cast<CRTreeOccupancyGridMap>(mm.maps.at(0));
+  COccupancyGridMap3D::TMapDefinition d;
+  d.loadFromConfigFile(cfg, "G");
+  p.stock = std::make_shared<COccupancyGridMap3D>(mrpt::math::TPoint3D(d.min_x, d.min_y, d.min_z),
+                                                  mrpt::math::TPoint3D(d.max_x, d.max_y, d.max_z), d.resolution);
+  p.stock->insertionOptions = d.insertionOpts;
+  p.stock->likelihoodOptions = d.likelihoodOpts;
+  return p;
+}
+
+/// Voxels that differ (printed), comparing every cell of the stock grid, and no cell of ours
+/// outside it.
+std::size_t differingCells(const Pair& p, const std::string& what) {
+  const auto& g = p.stock->m_grid;
+  const rtog::TGridFrame3D& f = p.ours->gridFrame3D();
+  EXPECT_TRUE(f.defined);
+  EXPECT_EQ(f.size_x, g.getSizeX());
+  EXPECT_EQ(f.size_y, g.getSizeY());
+  EXPECT_EQ(f.size_z, g.getSizeZ());
+  EXPECT_EQ(f.x_min, g.getXMin());
+  EXPECT_EQ(f.z_min, g.getZMin());
+  if (f.size_x != g.getSizeX() || f.size_y != g.getSizeY() || f.size_z != g.getSizeZ()) return ~std::size_t{0};
+  std::vector<std::int8_t> mine(g.getSizeX() * g.getSizeY() * g.getSizeZ(), 0);
+  const rtog::Key o{static_cast<std::int32_t>(std::lround(f.x_min / f.resolution)),
+                    static_cast<std::int32_t>(std::lround(f.y_min / f.resolution)),
+                    static_cast<std::int32_t>(std::lround(f.z_min / f.resolution))};
+  std::size_t outside = 0, known = 0;
+  p.ours->map().forEachLeaf([&](const rtog::Box& b, float v) {
+    for (std::int32_t z = b.min.z; z <= b.max.z; ++z)
+      for (std::int32_t y = b.min.y; y <= b.max.y; ++y)
+        for (std::int32_t x = b.min.x; x <= b.max.x; ++x) {
+          const long cx = x - o.x, cy = y - o.y, cz = z - o.z;
+          if (cx < 0 || cy < 0 || cz < 0 || cx >= long(f.size_x) || cy >= long(f.size_y) || cz >= long(f.size_z)) {
+            ++outside;
+            continue;
+          }
+          mine[(cz * f.size_y + cy) * f.size_x + cx] = static_cast<std::int8_t>(std::lround(-v * 16.0f));
+        }
+  });
+  std::size_t differ = 0;
+  for (unsigned cz = 0; cz < f.size_z; ++cz)
+    for (unsigned cy = 0; cy < f.size_y; ++cy)
+      for (unsigned cx = 0; cx < f.size_x; ++cx) {
+        const std::int8_t s = *g.cellByIndex(cx, cy, cz);
+        known += s != 0;
+        differ += s != mine[(std::size_t{cz} * f.size_y + cy) * f.size_x + cx];
+      }
+  std::cout << what << ": " << f.size_x * std::size_t{f.size_y} * f.size_z << " cells, " << known
+            << " not 0.5 in the stock grid, " << differ << " differ, " << outside << " of ours outside\n";
+  EXPECT_EQ(outside, 0u);
+  EXPECT_GT(known, 1000u) << "a comparison of empty grids proves nothing";
+  return differ;
+}
+
+std::vector<mrpt::obs::CObservation::Ptr> observationsOf(const std::string& file) {
+  mrpt::obs::CRawlog rl;
+  if (!rl.loadFromRawLogFile(file)) throw std::runtime_error("cannot load " + file);
+  std::vector<mrpt::obs::CObservation::Ptr> out;
+  for (std::size_t i = 0; i < rl.size(); ++i)
+    if (rl.getType(i) == mrpt::obs::CRawlog::etObservation) out.push_back(rl.getAsObservation(i));
+  return out;
+}
+
+/// The stock grid takes `obs`'s points as ours reads them (its own insertPointCloud), ours the
+/// observation.
+void insertBoth(Pair& p, const mrpt::obs::CObservation& obs, const mrpt::poses::CPose3D& pose) {
+  rtog::ObservationBeams b;
+  ASSERT_TRUE(p.ours->extractBeams(obs, pose, b, true));
+  mrpt::maps::CSimplePointsMap pts;
+  for (const auto& q : b.points) pts.insertPointFast(q.x(), q.y(), q.z());
+  // The points are decimated already (by `decimation`, as the grid's insertPointCloud would).
+  const auto dec = p.stock->insertionOptions.decimation;
+  p.stock->insertionOptions.decimation = 1;
+  p.stock->insertPointCloud(mrpt::math::TPoint3D(b.origin.x(), b.origin.y(), b.origin.z()), pts);
+  p.stock->insertionOptions.decimation = dec;
+  ASSERT_TRUE(p.ours->insertObservation(obs, pose));
+}
+
+}  // namespace
+
+TEST(MrptGrid3DFidelity, DepthImagesOfTestsRgbdAsTheStockGrid) {
+  // The section: 0.10 m, the certainties of a user's config, decimation_3d_range given
+  // (which the 3D grid does not read: both decimate by 8).
+  Pair p = makePair("resolution=0.10\nmin_x=-2\nmax_x=6\nmin_y=-4\nmax_y=4\nmin_z=-2\nmax_z=3",
+                    "maxOccupancyUpdateCertainty=0.60\nmaxFreenessUpdateCertainty=0.55\ndecimation_3d_range=4");
+  const auto obs = observationsOf(dataset("tests_rgbd.rawlog"));
+  std::size_t frames = 0;
+  for (const auto& o : obs) {
+    if (!IS_CLASS(*o, mrpt::obs::CObservation3DRangeScan)) continue;
+    const mrpt::poses::CPose3D pose(0.05 * double(frames), 0, 0, 0.02 * double(frames), 0, 0);
+    p.stock->insertObservation(*o, pose);
+    ASSERT_TRUE(p.ours->insertObservation(*o, pose));
+    ++frames;
+  }
+  ASSERT_GT(frames, 0u);
+  EXPECT_EQ(differingCells(p, "tests_rgbd.rawlog, " + std::to_string(frames) + " depth frames"), 0u);
+}
+
+TEST(MrptGrid3DFidelity, SenaScansInA3DSectionAsTheStockGrid) {
+  // The 3D grid's defaults (0.25 m, +-5 m) but x and y widened to hold the loop.
+  Pair p = makePair("min_x=-20\nmax_x=40\nmin_y=-25\nmax_y=25\nmin_z=-1\nmax_z=2", "");
+  EXPECT_DOUBLE_EQ(p.ours->resolution(), 0.25);  // the 3D grid's default resolution
+  for (const auto& f : loadOdometryFrames(dataset(kSena), 60)) {
+    p.stock->insertObservation(*f.sf->getObservationByIndex(0), f.pose);
+    f.sf->insertObservationsInto(*p.ours, f.pose);
+  }
+  EXPECT_EQ(differingCells(p, "SENA, 60 frames of 2D scans in a 3D section"), 0u);
+}
+
+TEST(MrptGrid3DFidelity, TumFramesVelodyneAndRotatingScansFollowTheSameRaster) {
+  Pair tum = makePair("resolution=0.05\nmin_x=-3\nmax_x=4\nmin_y=-3\nmax_y=4\nmin_z=-1\nmax_z=3", "decimation=3");
+  const auto seq = rtog::image::readTumSequence(RTOG_TEST_TUM_DIR);
+  for (const auto& frame : seq.frames) {
+    const auto scan = rtog::image::loadDepthScan(frame, seq.intrinsics, 4);
+    auto pc = mrpt::obs::CObservationPointCloud::Create();
+    auto cloud = mrpt::maps::CSimplePointsMap::Create();
+    for (const auto& q : scan.points)
+      cloud->insertPointFast(q.x() - float(scan.origin.x()), q.y() - float(scan.origin.y()),
+                             q.z() - float(scan.origin.z()));
+    pc->pointcloud = cloud;
+    pc->sensorPose = mrpt::poses::CPose3D(scan.origin.x(), scan.origin.y(), scan.origin.z(), 0, 0, 0);
+    insertBoth(tum, *pc, mrpt::poses::CPose3D());
+  }
+  EXPECT_EQ(differingCells(tum, "TUM, 10 frames as point clouds"), 0u);
+
+  Pair velo = makePair("resolution=0.2\nmin_x=-30\nmax_x=30\nmin_y=-30\nmax_y=30\nmin_z=-3\nmax_z=5", "");
+  for (const auto& o : observationsOf(dataset("test_velodyne_VLP16.rawlog"))) insertBoth(velo, *o, {});
+  EXPECT_EQ(differingCells(velo, "VLP-16"), 0u);
+
+  Pair rot = makePair("resolution=0.2\nmin_x=-30\nmax_x=30\nmin_y=-30\nmax_y=30\nmin_z=-3\nmax_z=5", "decimation=2");
+  for (const auto& o : observationsOf(dataset("rot_scan_velodyne.rawlog"))) insertBoth(rot, *o, {});
+  EXPECT_EQ(differingCells(rot, "rot_scan_velodyne"), 0u);
+}
+
+TEST(MrptGrid3DFidelity, A3DSectionReadsTheGridsKeysAndDefaults) {
+  // Only min_z given: the 3D grid's resolution and x/y extent, its likelihood defaults, and
+  // likelihoodMethod by its numbers (0 is the likelihood field there, not lmMeanInformation).
+  Pair p = makePair("min_z=-1", "", "likelihoodMethod=0");
+  EXPECT_DOUBLE_EQ(p.ours->resolution(), 0.25);
+  const rtog::TGridFrame3D& f = p.ours->gridFrame3D();
+  EXPECT_EQ(f.x_min, p.stock->m_grid.getXMin());
+  EXPECT_EQ(f.size_x, 40u);
+  EXPECT_EQ(f.size_z, 24u);  // -1 .. 5
+  EXPECT_EQ(p.ours->likelihoodOptions.likelihoodMethod, CRTreeOccupancyGridMap::lmLikelihoodField_Thrun);
+  EXPECT_EQ(p.ours->likelihoodOptions.LF_maxRange, p.stock->likelihoodOptions.LF_maxRange);
+  EXPECT_EQ(p.ours->likelihoodOptions.LF_decimation, p.stock->likelihoodOptions.LF_decimation);
+  EXPECT_EQ(makePair("max_z=2", "", "likelihoodMethod=1").ours->likelihoodOptions.likelihoodMethod,
+            CRTreeOccupancyGridMap::lmRayTracing);
+  // Numbers only the 2D grid has, and extents the grid cannot hold, are the section's errors.
+  const auto error = [](const std::string& creation, const std::string& likelihood) -> std::string {
+    try {
+      multiMapFromIni("[MappingApplication]\nrtreeOccupancyGrid_count=1\n"
+                      "[MappingApplication_rtreeOccupancyGrid_00_creationOpts]\n" + creation +
+                      "\n[MappingApplication_rtreeOccupancyGrid_00_likelihoodOpts]\n" + likelihood + "\n");
+    } catch (const mrpt::ExceptionWithCallBackBase& e) {
+      return e.originalWhat;
+    } catch (const std::exception& e) {
+      return e.what();
+    }
+    return "";
+  };
+  EXPECT_NE(error("max_z=2", "likelihoodMethod=4").find("0 (lmLikelihoodField_Thrun) or 1 (lmRayTracing), got 4"),
+            std::string::npos);
+  EXPECT_NE(error("min_z=3\nmax_z=2", "").find("min_z/max_z"), std::string::npos);
+  EXPECT_NE(error("min_z=-1\nmax_x=nan", "").find("min_x/max_x"), std::string::npos);
+  EXPECT_NE(error("min_z=-1\nresolution=0.0001\nmax_x=1000", "").find("beyond the key range"), std::string::npos);
+  EXPECT_EQ(error("min_z=-1", "likelihoodMethod=lmConsensus"), "");  // names as in every section
+  // A 2D section has no 3D grid, and the 3D grid's API says so.
+  const auto flat = mapFromSections("resolution=0.1", "");
+  EXPECT_FALSE(flat->gridFrame3D().defined);
+  EXPECT_THROW(flat->getCellFreeness(0, 0, 0), std::logic_error);
+}
+
+TEST(MrptGrid3DFidelity, TheGridsApiClearAndArchiveOnA3DSection) {
+  Pair p = makePair("resolution=0.2\nmin_x=-30\nmax_x=30\nmin_y=-30\nmax_y=30\nmin_z=-3\nmax_z=5", "");
+  for (const auto& o : observationsOf(dataset("test_velodyne_VLP16.rawlog"))) insertBoth(p, *o, {});
+  // insertRay: one more ray, as the grid takes it.
+  const mrpt::math::TPoint3D s(0.5, 0.25, 1.0), e(12.3, -7.7, -1.9);
+  p.stock->insertRay(s, e);
+  p.ours->insertRay(s, e);
+  EXPECT_EQ(differingCells(p, "VLP-16 and one insertRay"), 0u);
+  const auto& g = p.stock->m_grid;
+  std::size_t checked = 0;
+  for (unsigned cz = 0; cz < g.getSizeZ(); cz += 3)
+    for (unsigned cy = 0; cy < g.getSizeY(); cy += 7)
+      for (unsigned cx = 0; cx < g.getSizeX(); cx += 7, ++checked)
+        ASSERT_EQ(p.ours->getCellFreeness(cx, cy, cz), p.stock->getCellFreeness(cx, cy, cz)) << cx << "," << cy << "," << cz;
+  EXPECT_EQ(p.ours->getCellFreeness(9999, 0, 0), 0.5f);
+  // The voxels the grid draws: as many occupied and free ones.
+  mrpt::opengl::COctoMapVoxels a, b;
+  p.stock->getAsOctoMapVoxels(a);
+  p.ours->getAsOctoMapVoxels(b);
+  for (const auto set : {mrpt::opengl::VOXEL_SET_OCCUPIED, mrpt::opengl::VOXEL_SET_FREESPACE})
+    EXPECT_EQ(a.getVoxelCount(set), b.getVoxelCount(set));
+  EXPECT_GT(a.getVoxelCount(mrpt::opengl::VOXEL_SET_OCCUPIED), 1000u);
+  // The archive keeps the 3D grid: the loaded map steps the same cells.
+  mrpt::io::CMemoryStream buf;
+  auto ar = mrpt::serialization::archiveFrom(buf);
+  ar << *p.ours;
+  buf.Seek(0);
+  auto back = std::dynamic_pointer_cast<CRTreeOccupancyGridMap>(ar.ReadObject());
+  ASSERT_TRUE(back);
+  EXPECT_TRUE(back->gridFrame3D() == p.ours->gridFrame3D());
+  // clear(), as the grid's: its default extent (-5 .. 5) at its resolution.
+  p.ours->clear();
+  p.stock->clear();
+  EXPECT_EQ(p.ours->gridFrame3D().size_x, p.stock->m_grid.getSizeX());
+  EXPECT_EQ(p.ours->gridFrame3D().x_min, p.stock->m_grid.getXMin());
+}
