@@ -7,6 +7,7 @@
 #include <sstream>
 #include <stdexcept>
 #include <thread>
+#include <utility>
 
 #include <mrpt/maps/COccupancyGridMap3D.h>
 #include <mrpt/maps/COctoMap.h>
@@ -16,6 +17,7 @@
 #include <Eigen/Geometry>
 
 #include "rtog/core/occupancy_map.hpp"
+#include "rtog/mrpt/CRTreeOccupancyGridMap.h"
 
 namespace rtog::bench {
 namespace {
@@ -197,6 +199,17 @@ class MrptOctoMapMethod : public Method {
   std::unique_ptr<mrpt::maps::COctoMap> map_;
 };
 
+/// The box a COccupancyGridMap3D of the data needs: every origin and point, a cell of margin.
+std::pair<Eigen::Vector3d, Eigen::Vector3d> gridBox(const Dataset& d, double res) {
+  Eigen::Vector3d lo = d.scans.front().origin, hi = lo;
+  for (const Scan& s : d.scans) {
+    lo = lo.cwiseMin(s.origin), hi = hi.cwiseMax(s.origin);
+    for (const auto& q : s.points) lo = lo.cwiseMin(q.cast<double>()), hi = hi.cwiseMax(q.cast<double>());
+  }
+  lo.array() -= res, hi.array() += res;
+  return {lo, hi};
+}
+
 class DenseGridMethod : public Method {
  public:
   explicit DenseGridMethod(double res) : res_(res) {}
@@ -204,12 +217,7 @@ class DenseGridMethod : public Method {
   bool heavy() const override { return true; }
   double build(const Dataset& d) override {
     map_.reset();  // not two grids at once
-    Eigen::Vector3d lo = d.scans.front().origin, hi = lo;
-    for (const Scan& s : d.scans) {
-      lo = lo.cwiseMin(s.origin), hi = hi.cwiseMax(s.origin);
-      for (const auto& q : s.points) lo = lo.cwiseMin(q.cast<double>()), hi = hi.cwiseMax(q.cast<double>());
-    }
-    lo.array() -= res_, hi.array() += res_;
+    const auto [lo, hi] = gridBox(d, res_);
     map_ = std::make_unique<mrpt::maps::COccupancyGridMap3D>(mrpt::math::TPoint3D(lo.x(), lo.y(), lo.z()),
                                                              mrpt::math::TPoint3D(hi.x(), hi.y(), hi.z()), float(res_));
     map_->insertionOptions.maxDistanceInsertion = 1e6f;
@@ -239,6 +247,40 @@ class DenseGridMethod : public Method {
   double res_;
   std::size_t cells_ = 0;
   std::unique_ptr<mrpt::maps::COccupancyGridMap3D> map_;
+};
+
+/// The MRPT map type with a 3D section of the dense grid's box: COccupancyGridMap3D's cells
+/// (mrpt_grid preset, doc/mrpt_map.md), stored as cuboids; the same clouds by insertPointCloud.
+class RtogGrid3DMethod : public Method {
+ public:
+  explicit RtogGrid3DMethod(double res) : res_(res) {}
+  std::string name() const override { return "rtog mrpt_grid 3D section (COccupancyGridMap3D's cells)"; }
+  double build(const Dataset& d) override {
+    const auto [lo, hi] = gridBox(d, res_);
+    map_ = std::make_unique<CRTreeOccupancyGridMap>(res_);
+    map_->insertionOptions.decimation = 1;
+    map_->setGridFrame3D(mrpt::math::TPoint3D(lo.x(), lo.y(), lo.z()), mrpt::math::TPoint3D(hi.x(), hi.y(), hi.z()),
+                         float(res_));
+    std::vector<mrpt::maps::CSimplePointsMap> clouds;
+    for (const Scan& s : d.scans) clouds.push_back(toPointsMap(s));
+    const auto t0 = Clock::now();
+    for (std::size_t i = 0; i < d.scans.size(); ++i) {
+      const auto& o = d.scans[i].origin;
+      map_->insertPointCloud(mrpt::math::TPoint3D(o.x(), o.y(), o.z()), clouds[i]);
+    }
+    map_->map().flush();
+    return seconds(t0, Clock::now());
+  }
+  std::size_t structureBytes() const override { return map_->map().memoryBytes(); }
+  std::size_t leaves() const override { return map_->map().leafCount(); }
+  double queryNs(const std::vector<Eigen::Vector3d>& pts) const override {
+    return timeQueries(pts, [&](const Eigen::Vector3d& p) { return std::size_t(map_->map().stateAt(p)); });
+  }
+  const OccupancyMap* rtogMap() const override { return &map_->map(); }
+
+ private:
+  double res_;
+  std::unique_ptr<CRTreeOccupancyGridMap> map_;
 };
 
 /// Not a map of its own but a yardstick of the machine: two independent one-thread builds at
@@ -304,6 +346,7 @@ std::vector<std::unique_ptr<Method>> methodsFor(const Dataset& d, double res, co
       m.push_back(std::make_unique<OctomapMethod>(res, lazy, discretize, o.max_range));
   m.push_back(std::make_unique<MrptOctoMapMethod>(res));
   m.push_back(std::make_unique<DenseGridMethod>(res));
+  m.push_back(std::make_unique<RtogGrid3DMethod>(res));
   m.push_back(std::make_unique<RtogPairMethod>(res, MergePolicy::Equal, beam));
   (void)d;
   m.erase(std::remove_if(m.begin(), m.end(), [&](const auto& method) { return !selected(o, method->name()); }),

@@ -48,34 +48,26 @@ void CRTreeOccupancyGridMap::setGridFrame3D(const mrpt::math::TPoint3D& lo, cons
 
 bool CRTreeOccupancyGridMap::insertGrid3D(const mrpt::obs::CObservation& obs, const CPose3D& robotPose) {
   syncParams();
-  const TGridFrame3D& f = frame3d_;
-  const StepRule rule = mrpt_grid3d::stepRule(insertionOptions);
-  InsertStats stats;
+  const mrpt_grid3d::Steps3D steps = mrpt_grid3d::stepsOf(insertionOptions);
   std::size_t invalid = 0;
   mrpt::maps::CSimplePointsMap pts;
   mrpt::math::TPoint3D sensor;
   if (mrpt_grid3d::gridPoints(obs, robotPose, insertionOptions.decimation_3d_range, pts, sensor)) {
-    // The grid's own points, every `decimation`-th a ray (insertPointCloud).
-    const auto& xs = pts.getPointsBufferRef_x();
-    const auto& ys = pts.getPointsBufferRef_y();
-    const auto& zs = pts.getPointsBufferRef_z();
-    stats = mrpt_grid3d::insertPointCloud(map_, f, sensor, xs.data(), ys.data(), zs.data(), xs.size(),
-                                          insertionOptions.decimation, rule);
-  } else {
-    // Point clouds, Velodyne and rotating scans: their points (decimated already) by the same rule.
-    detail::SensorPoints sp;
-    if (!sensorPoints(obs, robotPose, true, sp)) return false;
-    std::vector<Eigen::Vector3f> p(sp.size());
-    std::size_t dropped = 0;
-    p.resize(sp.read(0, sp.size(), p.data(), nullptr, dropped));
-    invalid = sp.invalid + dropped;
-    std::vector<float> xs(p.size()), ys(p.size()), zs(p.size());
-    for (std::size_t i = 0; i < p.size(); ++i) xs[i] = p[i].x(), ys[i] = p[i].y(), zs[i] = p[i].z();
-    stats = mrpt_grid3d::insertPointCloud(map_, f, mrpt::math::TPoint3D(sp.origin.x(), sp.origin.y(), sp.origin.z()),
-                                          xs.data(), ys.data(), zs.data(), xs.size(), 1, rule);
+    // The grid's own points, every `decimation`-th a ray (its insertPointCloud).
+    insertPointCloud(sensor, pts);
+    return true;
   }
-  lastInsertStats = stats;
-  totalInsertStats += stats;
+  // Point clouds, Velodyne and rotating scans: their points (decimated already) by the same rule.
+  detail::SensorPoints sp;
+  if (!sensorPoints(obs, robotPose, true, sp)) return false;
+  std::vector<Eigen::Vector3f> p(sp.size());
+  std::size_t dropped = 0;
+  p.resize(sp.read(0, sp.size(), p.data(), nullptr, dropped));
+  invalid = sp.invalid + dropped;
+  lastInsertStats = mrpt_grid3d::insertRays(
+      map_, frame3d_, mrpt::math::TPoint3D(sp.origin.x(), sp.origin.y(), sp.origin.z()), p.size(),
+      [&](std::size_t i) { return mrpt::math::TPoint3D(p[i].x(), p[i].y(), p[i].z()); }, steps);
+  totalInsertStats += lastInsertStats;
   invalidRangesSkipped += invalid;
   notifyMapChanged();
   return true;
@@ -104,11 +96,24 @@ void CRTreeOccupancyGridMap::insertRay(const mrpt::math::TPoint3D& sensor, const
   const TGridFrame3D& f = definedFrame(frame3d_, "insertRay");
   syncParams();
   // `end` in double, as the grid takes it (the points of an observation are floats).
-  std::vector<mrpt_grid3d::LayerStep> steps;
-  if (mrpt_grid3d::traceRay(f, mrpt_grid3d::keyOffset(f), sensor, end, steps)) {
-    const StepRule rule = mrpt_grid3d::stepRule(insertionOptions);
-    for (const auto& s : steps) map_.applyStepRuns(s.z, &s.run, 1, rule);
-  }
+  lastInsertStats = mrpt_grid3d::insertRays(map_, f, sensor, 1, [&](std::size_t) { return end; },
+                                            mrpt_grid3d::stepsOf(insertionOptions));
+  totalInsertStats += lastInsertStats;
+  notifyMapChanged();
+}
+
+void CRTreeOccupancyGridMap::insertPointCloud(const mrpt::math::TPoint3D& sensor, const mrpt::maps::CPointsMap& pts,
+                                              float) {
+  const TGridFrame3D& f = definedFrame(frame3d_, "insertPointCloud");
+  syncParams();
+  const auto& xs = pts.getPointsBufferRef_x();
+  const auto& ys = pts.getPointsBufferRef_y();
+  const auto& zs = pts.getPointsBufferRef_z();
+  const std::size_t dec = std::max<std::size_t>(insertionOptions.decimation, 1), n = (xs.size() + dec - 1) / dec;
+  lastInsertStats = mrpt_grid3d::insertRays(
+      map_, f, sensor, n, [&](std::size_t i) { return mrpt::math::TPoint3D(xs[i * dec], ys[i * dec], zs[i * dec]); },
+      mrpt_grid3d::stepsOf(insertionOptions));
+  totalInsertStats += lastInsertStats;
   notifyMapChanged();
 }
 

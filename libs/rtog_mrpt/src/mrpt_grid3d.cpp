@@ -5,10 +5,14 @@
 #include "mrpt_grid.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdlib>
 #include <stdexcept>
 #include <string>
+#include <vector>
+
+#include "util/flat_hash_map.hpp"
 
 #include <mrpt/core/round.h>
 #include <mrpt/maps/CSimplePointsMap.h>
@@ -26,12 +30,6 @@ bool outside(const TGridFrame3D& f, int cx, int cy, int cz) {
          cz >= static_cast<int>(f.size_z);
 }
 }  // namespace
-
-StepRule stepRule(const CRTreeOccupancyGridMap::TInsertionOptions& io) {
-  mrpt_grid::Steps s = mrpt_grid::stepsOf(io);
-  s.noecho = s.free;
-  return mrpt_grid::stepRule(s);
-}
 
 TGridFrame3D makeFrame(float x_min, float x_max, float y_min, float y_max, float z_min, float z_max, float resolution,
                        double latticeResolution) {
@@ -113,9 +111,106 @@ bool gridPoints(const mrpt::obs::CObservation& obs, const mrpt::poses::CPose3D& 
   return false;
 }
 
-bool traceRay(const TGridFrame3D& f, const Key& offset, const mrpt::math::TPoint3D& sensor,
-              const mrpt::math::TPoint3D& end, std::vector<LayerStep>& out) {
-  // COccupancyGridMap3D::insertRay, step for step.
+namespace {
+
+/// One scan's cells while its rays step them, as the grid's int8 cells: blocks of 8^3 grid cells
+/// made on first touch from the map's leaves there, so that a ray's steps cost an array update
+/// (a block lookup each 8 cells or so) and a cell's steps stay in ray order; then written back.
+class ScanCells {
+ public:
+  ScanCells(const OccupancyMap& map, const Key& offset) : map_(map), offset_(offset) {}
+
+  std::int8_t& at(int cx, int cy, int cz) {
+    const std::uint64_t key = std::uint64_t(unsigned(cx) >> kBits) | std::uint64_t(unsigned(cy) >> kBits) << 21 |
+                              std::uint64_t(unsigned(cz) >> kBits) << 42;
+    if (key != last_key_) {
+      const auto next = static_cast<std::uint32_t>(blocks_.size());
+      const std::uint32_t b = index_.findOrInsert(key, next);
+      if (b == next) make(cx >> kBits, cy >> kBits, cz >> kBits);
+      last_ = &blocks_[b];
+      last_key_ = key;
+    }
+    const int i = ((cz & kMask) << (2 * kBits)) | ((cy & kMask) << kBits) | (cx & kMask);
+    last_->seen[i >> 6] |= std::uint64_t{1} << (i & 63);
+    return last_->v[i];
+  }
+
+  /// The cells stepped, in lattice keys with their values: greedy boxes of equal cells within a
+  /// block (x runs grown along y, then z), so that a brick first made by this scan does not hold
+  /// a leaf per cell (assignCells takes a new brick's boxes as its leaves).
+  void emit(std::vector<Box>& boxes, std::vector<float>& values) const {
+    for (const Block& b : blocks_) {
+      std::array<std::uint64_t, kCells / 64> open = b.seen;  // stepped, not yet in a box
+      const auto isOpen = [&](int i) { return ((open[static_cast<std::size_t>(i) >> 6] >> (i & 63)) & 1u) != 0; };
+      const auto at = [](int x, int y, int z) { return (z << (2 * kBits)) | (y << kBits) | x; };
+      for (int i = 0; i < kCells; ++i) {
+        if (!isOpen(i)) continue;
+        const int x0 = i & kMask, y0 = (i >> kBits) & kMask, z0 = i >> (2 * kBits);
+        const std::int8_t v = b.v[static_cast<std::size_t>(i)];
+        const auto same = [&](int x, int y, int z) { return isOpen(at(x, y, z)) && b.v[static_cast<std::size_t>(at(x, y, z))] == v; };
+        int x1 = x0, y1 = y0, z1 = z0;
+        while (x1 + 1 < kSide && same(x1 + 1, y0, z0)) ++x1;
+        const auto rowSame = [&](int y, int z) {
+          for (int x = x0; x <= x1; ++x)
+            if (!same(x, y, z)) return false;
+          return true;
+        };
+        while (y1 + 1 < kSide && rowSame(y1 + 1, z0)) ++y1;
+        const auto sliceSame = [&](int z) {
+          for (int y = y0; y <= y1; ++y)
+            if (!rowSame(y, z)) return false;
+          return true;
+        };
+        while (z1 + 1 < kSide && sliceSame(z1 + 1)) ++z1;
+        for (int z = z0; z <= z1; ++z)
+          for (int y = y0; y <= y1; ++y)
+            for (int x = x0; x <= x1; ++x) {
+              const int c = at(x, y, z);
+              open[static_cast<std::size_t>(c) >> 6] &= ~(std::uint64_t{1} << (c & 63));
+            }
+        boxes.push_back(Box{Key{b.x0 + x0, b.y0 + y0, b.z0 + z0}, Key{b.x0 + x1, b.y0 + y1, b.z0 + z1}});
+        values.push_back(mrpt_grid::valueOfCell(v));
+      }
+    }
+  }
+
+ private:
+  static constexpr int kBits = 3, kSide = 1 << kBits, kMask = kSide - 1, kCells = kSide * kSide * kSide;
+  struct Block {
+    std::int32_t x0, y0, z0;  // lattice key of its first cell
+    std::array<std::int8_t, kCells> v;
+    std::array<std::uint64_t, kCells / 64> seen;
+  };
+  void make(int bx, int by, int bz) {
+    Block& b = blocks_.emplace_back();
+    b.x0 = offset_.x + bx * kSide, b.y0 = offset_.y + by * kSide, b.z0 = offset_.z + bz * kSide;
+    b.v.fill(0);  // unknown: the grid's 0.5
+    b.seen.fill(0);
+    last_key_ = ~std::uint64_t{0};  // emplace_back may have moved the blocks
+    const Box region{Key{b.x0, b.y0, b.z0}, Key{b.x0 + kMask, b.y0 + kMask, b.z0 + kMask}};
+    map_.forEachLeafIn(region, [&](const Box& leaf, float value) {
+      const auto c = static_cast<std::int8_t>(mrpt_grid::cellOfValue(value));
+      for (std::int32_t z = std::max(leaf.min.z, region.min.z); z <= std::min(leaf.max.z, region.max.z); ++z)
+        for (std::int32_t y = std::max(leaf.min.y, region.min.y); y <= std::min(leaf.max.y, region.max.y); ++y)
+          for (std::int32_t x = std::max(leaf.min.x, region.min.x); x <= std::min(leaf.max.x, region.max.x); ++x)
+            b.v[static_cast<std::size_t>(((z - b.z0) << (2 * kBits)) | ((y - b.y0) << kBits) | (x - b.x0))] = c;
+    });
+  }
+
+  const OccupancyMap& map_;
+  Key offset_;
+  std::vector<Block> blocks_;
+  detail::FlatHashMap64 index_;
+  std::uint64_t last_key_ = ~std::uint64_t{0};
+  Block* last_ = nullptr;
+};
+
+enum class Ray { Traced, SensorOutside, Zero };
+
+/// COccupancyGridMap3D::insertRay, step for step: visit(cx, cy, cz, occupied) for each step.
+template <class Visit>
+Ray traceRay(const TGridFrame3D& f, const mrpt::math::TPoint3D& sensor, const mrpt::math::TPoint3D& end,
+             Visit&& visit) {
   // An index beyond what the fixed point holds (the grid's int arithmetic would overflow) is
   // left out: no cell of the grid lies there.
   constexpr double kFar = double(1 << 21);
@@ -129,62 +224,66 @@ bool traceRay(const TGridFrame3D& f, const Key& offset, const mrpt::math::TPoint
     return static_cast<int>(d);
   };
   int cx = idx(sensor.x, f.x_min), cy = idx(sensor.y, f.y_min), cz = idx(sensor.z, f.z_min);
-  if (far || outside(f, cx, cy, cz)) return false;
+  if (far || outside(f, cx, cy, cz)) return Ray::SensorOutside;
   const int tx = idx(end.x, f.x_min), ty = idx(end.y, f.y_min), tz = idx(end.z, f.z_min);
-  if (far) return false;
+  if (far) return Ray::SensorOutside;
   const int ax = tx - cx, ay = ty - cy, az = tz - cz;
   const int n = std::max({std::abs(ax), std::abs(ay), std::abs(az)});
-  if (n == 0) return true;  // the grid returns before the occupied step too
+  if (n == 0) return Ray::Zero;  // the grid returns before the occupied step too
   const float inv = 1.0f / static_cast<float>(n);
   const auto inc = [inv](int a) { return (a < 0 ? -1 : +1) * mrpt::round((std::abs(a) << kFrBits) * inv); };
   const int fx = inc(ax), fy = inc(ay), fz = inc(az);
   // 64 bits: the grid's ints where they do not overflow, and defined where they would.
   std::int64_t px = std::int64_t{cx} << kFrBits, py = std::int64_t{cy} << kFrBits, pz = std::int64_t{cz} << kFrBits;
-  const auto step = [&](int x, int y, int z, StepKind kind) {
-    OccupancyMap::StepRun r{};
-    r.x = x + offset.x, r.y = y + offset.y;
-    r.count = 1;
-    r.kind = kind;
-    out.push_back(LayerStep{z + offset.z, r});
-  };
   for (int k = 0; k < n; ++k) {
-    step(cx, cy, cz, StepKind::Free);
+    visit(cx, cy, cz, false);
     px += fx, py += fy, pz += fz;
     cx = static_cast<int>(px >> kFrBits), cy = static_cast<int>(py >> kFrBits), cz = static_cast<int>(pz >> kFrBits);
     if (outside(f, cx, cy, cz)) break;
   }
-  if (!outside(f, tx, ty, tz)) step(tx, ty, tz, StepKind::Occupied);  // cellByIndex: nothing outside
-  return true;
+  if (!outside(f, tx, ty, tz)) visit(tx, ty, tz, true);  // cellByIndex: nothing outside
+  return Ray::Traced;
 }
 
-InsertStats insertPointCloud(OccupancyMap& map, const TGridFrame3D& f, const mrpt::math::TPoint3D& sensor,
-                             const float* xs, const float* ys, const float* zs, std::size_t n, std::size_t decimation,
-                             const StepRule& rule) {
+}  // namespace
+
+Steps3D stepsOf(const CRTreeOccupancyGridMap::TInsertionOptions& io) {
+  const mrpt_grid::Steps s = mrpt_grid::stepsOf(io);
+  return Steps3D{s.free, s.occupied};
+}
+
+InsertStats insertRays(OccupancyMap& map, const TGridFrame3D& f, const mrpt::math::TPoint3D& sensor, std::size_t n,
+                       const std::function<mrpt::math::TPoint3D(std::size_t)>& endOf, const Steps3D& steps) {
   InsertStats stats;
-  const Key offset = keyOffset(f);
-  std::vector<LayerStep> steps;
-  for (std::size_t i = 0; i < n; i += std::max<std::size_t>(decimation, 1)) {
-    const std::size_t before = steps.size();
-    if (!std::isfinite(xs[i]) || !std::isfinite(ys[i]) || !std::isfinite(zs[i])) {
+  ScanCells cells(map, keyOffset(f));
+  // updateCell_fast_free / _occupied, in the grid's int8 arithmetic.
+  const int free_limit = 127 - steps.free, occupied_limit = -127 + steps.occupied;
+  const auto step = [&](int cx, int cy, int cz, bool occupied) {
+    std::int8_t& c = cells.at(cx, cy, cz);
+    if (occupied)
+      c = c > occupied_limit ? static_cast<std::int8_t>(c - steps.occupied) : std::int8_t{-127};
+    else
+      c = c < free_limit ? static_cast<std::int8_t>(c + steps.free) : std::int8_t{127};
+  };
+  for (std::size_t i = 0; i < n; ++i) {
+    const mrpt::math::TPoint3D e = endOf(i);
+    if (!std::isfinite(e.x) || !std::isfinite(e.y) || !std::isfinite(e.z)) {
       ++stats.skipped_non_finite;  // the grid would cast a NaN to an index: undefined, not followed
       continue;
     }
-    if (!traceRay(f, offset, sensor, mrpt::math::TPoint3D(xs[i], ys[i], zs[i]), steps)) {
-      ++stats.skipped_out_of_range;
-      continue;
+    switch (traceRay(f, sensor, e, step)) {
+      case Ray::Traced: ++stats.rays_hit; break;
+      case Ray::SensorOutside: ++stats.skipped_out_of_range; break;
+      case Ray::Zero: ++stats.skipped_zero_length; break;
     }
-    const bool hit = steps.size() > before && steps.back().run.kind == StepKind::Occupied;
-    ++(hit ? stats.rays_hit : steps.size() > before ? stats.rays_truncated : stats.skipped_zero_length);
   }
-  // Layer by layer, each in ray order: a cell's steps keep their order (cells are independent).
-  std::stable_sort(steps.begin(), steps.end(), [](const LayerStep& a, const LayerStep& b) { return a.z < b.z; });
-  std::vector<OccupancyMap::StepRun> runs;
-  for (std::size_t i = 0; i < steps.size();) {
-    std::size_t j = i;
-    runs.clear();
-    while (j < steps.size() && steps[j].z == steps[i].z) runs.push_back(steps[j++].run);
-    stats += map.applyStepRuns(steps[i].z, runs.data(), runs.size(), rule);
-    i = j;
+  std::vector<Box> boxes;
+  std::vector<float> values;
+  cells.emit(boxes, values);
+  if (!boxes.empty()) {
+    const InsertStats assigned = map.assignCells(boxes.data(), values.data(), boxes.size());
+    stats.cells_free = assigned.cells_free, stats.cells_occupied = assigned.cells_occupied;
+    stats.leaves_created = assigned.leaves_created, stats.leaves_merged = assigned.leaves_merged;
   }
   return stats;
 }

@@ -10,6 +10,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -42,27 +43,21 @@ Key keyOffset(const TGridFrame3D& f);
 bool gridPoints(const mrpt::obs::CObservation& obs, const mrpt::poses::CPose3D& robotPose, unsigned decimation3d,
                 mrpt::maps::CPointsMap& pts, mrpt::math::TPoint3D& sensor);
 
-/// The steps of one ray (COccupancyGridMap3D::insertRay) in grid cells, appended to `out` as
-/// (cell z, one-cell StepRun in lattice keys); false if the sensor's cell lies outside the grid
-/// (no steps, as the grid skips it).
-struct LayerStep {
-  std::int32_t z;
-  OccupancyMap::StepRun run;
+/// COccupancyGridMap3D's int8 steps: free max(1, p2l(maxFreenessUpdateCertainty, or
+/// maxOccupancyUpdateCertainty if 0)), occupied 3 max(1, p2l(maxOccupancyUpdateCertainty)); a
+/// cell within a step of +-127 takes the bound (the 2D grid's steps; no no-return beams).
+struct Steps3D {
+  int free = 1, occupied = 3;
 };
-bool traceRay(const TGridFrame3D& f, const Key& offset, const mrpt::math::TPoint3D& sensor,
-              const mrpt::math::TPoint3D& end, std::vector<LayerStep>& out);
+Steps3D stepsOf(const CRTreeOccupancyGridMap::TInsertionOptions& io);
 
-/// COccupancyGridMap3D's steps: the 2D grid's (mrpt_grid::stepsOf), but a cell saturates free
-/// within the free step of 127 (the 2D grid takes the larger of the free and no-echo steps; the
-/// 3D grid has no no-echo beams).
-StepRule stepRule(const CRTreeOccupancyGridMap::TInsertionOptions& io);
-
-/// Inserts every `decimation`-th point of `xs, ys, zs` (n points, map frame) as a ray from
-/// `sensor`, COccupancyGridMap3D::insertPointCloud's rule, into `map` with the preset's steps.
-/// Rays whose sensor lies outside the grid count as skipped_out_of_range.
-InsertStats insertPointCloud(OccupancyMap& map, const TGridFrame3D& f, const mrpt::math::TPoint3D& sensor,
-                             const float* xs, const float* ys, const float* zs, std::size_t n, std::size_t decimation,
-                             const StepRule& rule);
+/// n rays from `sensor` to endOf(0 .. n), in order, each as COccupancyGridMap3D::insertRay steps
+/// the grid's cells (cells outside its extent are not stepped; a ray whose sensor lies outside
+/// counts in skipped_out_of_range, a non-finite end in skipped_non_finite, one ending in the
+/// sensor's cell in skipped_zero_length, the others in rays_hit); the cells it stepped then take
+/// their values in `map` (OccupancyMap::assignCells).
+InsertStats insertRays(OccupancyMap& map, const TGridFrame3D& f, const mrpt::math::TPoint3D& sensor, std::size_t n,
+                       const std::function<mrpt::math::TPoint3D(std::size_t)>& endOf, const Steps3D& steps);
 
 /// The keys of a 3D section that COccupancyGridMap3D reads otherwise than COccupancyGridMap2D:
 /// likelihoodMethod by its numbers (0: the likelihood field, 1: ray tracing), decimation_3d_range

@@ -159,10 +159,13 @@ class CRTreeOccupancyGridMap : public mrpt::maps::CMetricMap {
                       float resolution);
   /// COccupancyGridMap3D's API on that grid (a defined frame; std::logic_error otherwise): the
   /// probability that cell (cx, cy, cz) is free (0.5 unknown or outside), as getCellFreeness;
-  /// one ray's steps, as insertRay (the end occupied; `endIsOccupied` is ignored there too); the
-  /// cells as voxels, as getAsOctoMapVoxels (occupied above 0.501, free below 0.499).
+  /// one ray's steps, as insertRay (the end occupied; `endIsOccupied` is ignored there too);
+  /// every `decimation`-th point of `pts` (map frame) a ray, as insertPointCloud (which ignores
+  /// `maxValidRange` too); the cells as voxels, as getAsOctoMapVoxels.
   float getCellFreeness(unsigned cx, unsigned cy, unsigned cz) const;
   void insertRay(const mrpt::math::TPoint3D& sensor, const mrpt::math::TPoint3D& end, bool endIsOccupied = true);
+  void insertPointCloud(const mrpt::math::TPoint3D& sensor, const mrpt::maps::CPointsMap& pts,
+                        float maxValidRange = std::numeric_limits<float>::max());
   void getAsOctoMapVoxels(mrpt::opengl::COctoMapVoxels& gl_obj) const;
 
   /// What inserting a 2D scan in the mrpt_grid preset did, for a 2D view to follow it.
