@@ -199,6 +199,20 @@ class MrptOctoMapMethod : public Method {
   std::unique_ptr<mrpt::maps::COctoMap> map_;
 };
 
+/// Seconds inserting each scan's cloud into `map` (COccupancyGridMap3D's insertPointCloud, or
+/// the MRPT map type's), the clouds made before.
+template <class Grid>
+double timeCloudInsertion(Grid& map, const Dataset& d) {
+  std::vector<mrpt::maps::CSimplePointsMap> clouds;
+  for (const Scan& s : d.scans) clouds.push_back(toPointsMap(s));
+  const auto t0 = Clock::now();
+  for (std::size_t i = 0; i < d.scans.size(); ++i) {
+    const auto& o = d.scans[i].origin;
+    map.insertPointCloud(mrpt::math::TPoint3D(o.x(), o.y(), o.z()), clouds[i]);
+  }
+  return seconds(t0, Clock::now());
+}
+
 /// The box a COccupancyGridMap3D of the data needs: every origin and point, a cell of margin.
 std::pair<Eigen::Vector3d, Eigen::Vector3d> gridBox(const Dataset& d, double res) {
   Eigen::Vector3d lo = d.scans.front().origin, hi = lo;
@@ -224,14 +238,7 @@ class DenseGridMethod : public Method {
     map_->insertionOptions.decimation = 1;
     cells_ = 1;
     for (int a = 0; a < 3; ++a) cells_ *= static_cast<std::size_t>(std::ceil((hi[a] - lo[a]) / res_));
-    std::vector<mrpt::maps::CSimplePointsMap> clouds;
-    for (const Scan& s : d.scans) clouds.push_back(toPointsMap(s));
-    const auto t0 = Clock::now();
-    for (std::size_t i = 0; i < d.scans.size(); ++i) {
-      const auto& o = d.scans[i].origin;
-      map_->insertPointCloud(mrpt::math::TPoint3D(o.x(), o.y(), o.z()), clouds[i]);
-    }
-    return seconds(t0, Clock::now());
+    return timeCloudInsertion(*map_, d);
   }
   std::size_t structureBytes() const override {
     return cells_ * sizeof(mrpt::maps::COccupancyGridMap3D::voxelType);
@@ -261,15 +268,7 @@ class RtogGrid3DMethod : public Method {
     map_->insertionOptions.decimation = 1;
     map_->setGridFrame3D(mrpt::math::TPoint3D(lo.x(), lo.y(), lo.z()), mrpt::math::TPoint3D(hi.x(), hi.y(), hi.z()),
                          float(res_));
-    std::vector<mrpt::maps::CSimplePointsMap> clouds;
-    for (const Scan& s : d.scans) clouds.push_back(toPointsMap(s));
-    const auto t0 = Clock::now();
-    for (std::size_t i = 0; i < d.scans.size(); ++i) {
-      const auto& o = d.scans[i].origin;
-      map_->insertPointCloud(mrpt::math::TPoint3D(o.x(), o.y(), o.z()), clouds[i]);
-    }
-    map_->map().flush();
-    return seconds(t0, Clock::now());
+    return timeCloudInsertion(*map_, d);
   }
   std::size_t structureBytes() const override { return map_->map().memoryBytes(); }
   std::size_t leaves() const override { return map_->map().leafCount(); }

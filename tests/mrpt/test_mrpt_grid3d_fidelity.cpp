@@ -44,14 +44,11 @@ Pair makePair(const std::string& creation, const std::string& insert, const std:
     for (std::size_t p; (p = s.find('%')) != std::string::npos;) s.replace(p, 1, name);
     return s;
   };
-  const std::string ini = "[M]\nrtreeOccupancyGrid_count=1\n" + section("M_rtreeOccupancyGrid_00") + section("G");
-  mrpt::config::CConfigFileMemory cfg(ini);
-  mrpt::maps::TSetOfMetricMapInitializers inits;
-  inits.loadFromConfigFile(cfg, "M");
-  mrpt::maps::CMultiMetricMap mm;
-  mm.setListOfMaps(inits);
+  const std::string ini = "[MappingApplication]\nrtreeOccupancyGrid_count=1\n" +
+                          section("MappingApplication_rtreeOccupancyGrid_00") + section("G");
   Pair p;
-  p.ours = std::dynamic_pointer_cast<CRTreeOccupancyGridMap>(mm.maps.at(0));
+  p.ours = std::dynamic_pointer_cast<CRTreeOccupancyGridMap>(multiMapFromIni(ini).maps.at(0));
+  mrpt::config::CConfigFileMemory cfg(ini);
   COccupancyGridMap3D::TMapDefinition d;
   d.loadFromConfigFile(cfg, "G");
   p.stock = std::make_shared<COccupancyGridMap3D>(mrpt::math::TPoint3D(d.min_x, d.min_y, d.min_z),
