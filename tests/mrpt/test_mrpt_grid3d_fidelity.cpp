@@ -6,9 +6,12 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 #include <iostream>
+#include <limits>
 
 #include <mrpt/config/CConfigFileMemory.h>
+#include <mrpt/math/CMatrixFixed.h>
 #include <mrpt/maps/CMultiMetricMap.h>
 #include <mrpt/maps/COccupancyGridMap3D.h>
 #include <mrpt/maps/CSimplePointsMap.h>
@@ -18,6 +21,8 @@
 #include <mrpt/opengl/COctoMapVoxels.h>
 #include <mrpt/serialization/CArchive.h>
 #include <mrpt/io/CMemoryStream.h>
+
+#include <opencv2/imgcodecs.hpp>
 
 #include "rtog/image/tum_dataset.hpp"
 #include "rtog/mrpt/CRTreeOccupancyGridMap.h"
@@ -146,6 +151,38 @@ TEST(MrptGrid3DFidelity, DepthImagesOfTestsRgbdAsTheStockGrid) {
   EXPECT_EQ(differingCells(p, "tests_rgbd.rawlog, " + std::to_string(frames) + " depth frames"), 0u);
 }
 
+TEST(MrptGrid3DFidelity, TumFramesAsDepthImagesAsTheStockGrid) {
+  // The TUM frames as the CObservation3DRangeScan a Kinect driver writes: depth in 1/5000 m,
+  // fr2's intrinsics, the sensor pose the optical frame turned to MRPT's (x forward, z up).
+  Pair p = makePair("resolution=0.05\nmin_x=-3\nmax_x=4\nmin_y=-3\nmax_y=4\nmin_z=-1\nmax_z=3", "");
+  const auto seq = rtog::image::readTumSequence(RTOG_TEST_TUM_DIR);
+  Eigen::Matrix4d opt_from_mrpt = Eigen::Matrix4d::Zero();
+  opt_from_mrpt(0, 1) = -1, opt_from_mrpt(1, 2) = -1, opt_from_mrpt(2, 0) = 1, opt_from_mrpt(3, 3) = 1;
+  for (const auto& frame : seq.frames) {
+    const cv::Mat depth = cv::imread(frame.depth_path, cv::IMREAD_UNCHANGED);
+    ASSERT_EQ(depth.type(), CV_16UC1);
+    auto o = mrpt::obs::CObservation3DRangeScan::Create();
+    o->hasRangeImage = true;
+    o->range_is_depth = true;
+    o->rangeUnits = float(1.0 / seq.intrinsics.depth_scale);
+    o->rangeImage_setSize(depth.rows, depth.cols);
+    for (int r = 0; r < depth.rows; ++r)
+      for (int c = 0; c < depth.cols; ++c) o->rangeImage(r, c) = depth.at<std::uint16_t>(r, c);
+    o->cameraParams.ncols = std::uint32_t(depth.cols), o->cameraParams.nrows = std::uint32_t(depth.rows);
+    o->cameraParams.setIntrinsicParamsFromValues(seq.intrinsics.fx, seq.intrinsics.fy, seq.intrinsics.cx,
+                                                 seq.intrinsics.cy);
+    o->maxRange = 10.0f;
+    const Eigen::Matrix4d m = frame.camera_to_world.matrix() * opt_from_mrpt;
+    mrpt::math::CMatrixDouble44 hm;
+    for (int i = 0; i < 4; ++i)
+      for (int j = 0; j < 4; ++j) hm(i, j) = m(i, j);
+    o->sensorPose = mrpt::poses::CPose3D(hm);
+    p.stock->insertObservation(*o, mrpt::poses::CPose3D());
+    ASSERT_TRUE(p.ours->insertObservation(*o, mrpt::poses::CPose3D()));
+  }
+  EXPECT_EQ(differingCells(p, "TUM, 10 frames as depth images"), 0u);
+}
+
 TEST(MrptGrid3DFidelity, SenaScansInA3DSectionAsTheStockGrid) {
   // The 3D grid's defaults (0.25 m, +-5 m) but x and y widened to hold the loop.
   Pair p = makePair("min_x=-20\nmax_x=40\nmin_y=-25\nmax_y=25\nmin_z=-1\nmax_z=2", "");
@@ -256,4 +293,52 @@ TEST(MrptGrid3DFidelity, TheGridsApiClearAndArchiveOnA3DSection) {
   p.stock->clear();
   EXPECT_EQ(p.ours->gridFrame3D().size_x, p.stock->m_grid.getSizeX());
   EXPECT_EQ(p.ours->gridFrame3D().x_min, p.stock->m_grid.getXMin());
+}
+
+TEST(MrptGrid3DFidelity, BadPointsAreCountedSkipsAndABadStoredGeometryIsRefused) {
+  Pair p = makePair("resolution=0.5\nmin_x=-30\nmax_x=30\nmin_y=-30\nmax_y=30\nmin_z=-3\nmax_z=5", "");
+  const double nan = std::numeric_limits<double>::quiet_NaN(), inf = std::numeric_limits<double>::infinity();
+  const mrpt::math::TPoint3D s(0.2, 0.1, 0.3);
+  p.ours->insertRay(mrpt::math::TPoint3D(nan, 0, 0), mrpt::math::TPoint3D(1, 1, 1));
+  EXPECT_EQ(p.ours->lastInsertStats.skipped_out_of_range, 1u);  // as the grid: no sensor cell, no ray
+  p.ours->insertRay(s, mrpt::math::TPoint3D(1, nan, 1));
+  EXPECT_EQ(p.ours->lastInsertStats.skipped_non_finite, 1u);
+  p.ours->insertRay(s, mrpt::math::TPoint3D(1e30, 0, 0));  // beyond any index: the grid's ints overflow
+  EXPECT_EQ(p.ours->lastInsertStats.skipped_out_of_range, 1u);
+  p.ours->insertRay(s, mrpt::math::TPoint3D(0.3, 0.2, 0.4));  // the sensor's own cell
+  EXPECT_EQ(p.ours->lastInsertStats.skipped_zero_length, 1u);
+  EXPECT_TRUE(p.ours->isEmpty());
+  mrpt::maps::CSimplePointsMap pts;
+  pts.insertPointFast(float(inf), 0, 0);
+  pts.insertPointFast(5, 5, 1);
+  pts.insertPointFast(0, float(nan), 0);
+  p.ours->insertPointCloud(s, pts);
+  // (MRPT's own grid casts them to indices, undefined behaviour: not given to it.)
+  EXPECT_EQ(p.ours->lastInsertStats.skipped_non_finite, 2u);
+  EXPECT_EQ(p.ours->lastInsertStats.rays_hit, 1u);
+  EXPECT_FALSE(p.ours->isEmpty());
+
+  // A stored 3D geometry that no section makes (no cells along x) is a corrupt stream.
+  mrpt::io::CMemoryStream buf;
+  auto ar = mrpt::serialization::archiveFrom(buf);
+  ar << *p.ours;
+  std::string bytes(static_cast<const char*>(buf.getRawBufferData()), buf.getTotalBytesCount());
+  const double x_min = -30.0;
+  const std::string pattern(reinterpret_cast<const char*>(&x_min), sizeof x_min);
+  const std::size_t at = bytes.find(pattern);
+  ASSERT_NE(at, std::string::npos);
+  const std::size_t size_x_at = at + 4 * sizeof(double);  // x_min, y_min, z_min, resolution, size_x
+  std::uint32_t size_x = 0;
+  std::memcpy(&size_x, bytes.data() + size_x_at, sizeof size_x);
+  ASSERT_EQ(size_x, 120u);
+  std::memset(bytes.data() + size_x_at, 0, sizeof size_x);
+  mrpt::io::CMemoryStream in;
+  in.assignMemoryNotOwn(bytes.data(), bytes.size());
+  auto rd = mrpt::serialization::archiveFrom(in);
+  try {
+    rd.ReadObject();
+    ADD_FAILURE() << "a corrupt 3D geometry was read";
+  } catch (const std::exception& e) {
+    EXPECT_NE(std::string(e.what()).find("3D grid geometry"), std::string::npos) << e.what();
+  }
 }
