@@ -274,12 +274,13 @@ TEST(MrptGrid3DFidelity, TheGridsApiClearAndArchiveOnA3DSection) {
         ASSERT_EQ(p.ours->getCellFreeness(cx, cy, cz), p.stock->getCellFreeness(cx, cy, cz)) << cx << "," << cy << "," << cz;
   EXPECT_EQ(p.ours->getCellFreeness(9999, 0, 0), 0.5f);
   // The voxels the grid draws: as many occupied and free ones.
-  mrpt::opengl::COctoMapVoxels a, b;
-  p.stock->getAsOctoMapVoxels(a);
-  p.ours->getAsOctoMapVoxels(b);
+  // (Made by Create(): MRPT's class wants an alignment the stack does not give it.)
+  const auto a = mrpt::opengl::COctoMapVoxels::Create(), b = mrpt::opengl::COctoMapVoxels::Create();
+  p.stock->getAsOctoMapVoxels(*a);
+  p.ours->getAsOctoMapVoxels(*b);
   for (const auto set : {mrpt::opengl::VOXEL_SET_OCCUPIED, mrpt::opengl::VOXEL_SET_FREESPACE})
-    EXPECT_EQ(a.getVoxelCount(set), b.getVoxelCount(set));
-  EXPECT_GT(a.getVoxelCount(mrpt::opengl::VOXEL_SET_OCCUPIED), 1000u);
+    EXPECT_EQ(a->getVoxelCount(set), b->getVoxelCount(set));
+  EXPECT_GT(a->getVoxelCount(mrpt::opengl::VOXEL_SET_OCCUPIED), 1000u);
   // The archive keeps the 3D grid: the loaded map steps the same cells.
   mrpt::io::CMemoryStream buf;
   auto ar = mrpt::serialization::archiveFrom(buf);
