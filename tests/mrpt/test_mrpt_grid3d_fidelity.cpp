@@ -319,6 +319,15 @@ TEST(MrptGrid3DFidelity, BadPointsAreCountedSkipsAndABadStoredGeometryIsRefused)
   EXPECT_EQ(p.ours->lastInsertStats.rays_hit, 1u);
   EXPECT_FALSE(p.ours->isEmpty());
 
+  // A depth observation holding only its points (no range image), which the grid would drop
+  // without a word: its points are rays by the same rule.
+  auto only_points = mrpt::obs::CObservation3DRangeScan::Create();
+  only_points->hasPoints3D = true;
+  only_points->points3D_x = {4.0f, 0.0f}, only_points->points3D_y = {0.0f, 0.0f}, only_points->points3D_z = {0.0f, 0.0f};
+  ASSERT_TRUE(p.ours->insertObservation(*only_points, mrpt::poses::CPose3D(0.2, 0.1, 0.3, 0, 0, 0)));
+  EXPECT_EQ(p.ours->lastInsertStats.rays_hit, 1u);  // (0, 0, 0) is a point a depth camera did not get
+  EXPECT_EQ(p.ours->invalidRangesSkipped, 1u);
+
   // A stored 3D geometry that no section makes (no cells along x) is a corrupt stream.
   mrpt::io::CMemoryStream buf;
   auto ar = mrpt::serialization::archiveFrom(buf);

@@ -2,8 +2,6 @@
 // the grid's arithmetic has no fused multiply-add.
 #include "mrpt_grid3d.hpp"
 
-#include "mrpt_grid.hpp"
-
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -12,13 +10,14 @@
 #include <string>
 #include <vector>
 
-#include "util/flat_hash_map.hpp"
-
 #include <mrpt/core/round.h>
 #include <mrpt/maps/CSimplePointsMap.h>
 #include <mrpt/obs/CObservation2DRangeScan.h>
 #include <mrpt/obs/CObservation3DRangeScan.h>
 #include <mrpt/obs/T3DPointsProjectionParams.h>
+
+#include "mrpt_grid.hpp"
+#include "util/flat_hash_map.hpp"
 
 namespace rtog::mrpt_grid3d {
 
@@ -40,6 +39,11 @@ TGridFrame3D makeFrame(float x_min, float x_max, float y_min, float y_max, float
         std::isfinite(y_max) && y_min < y_max && std::isfinite(z_min) && std::isfinite(z_max) && z_min < z_max))
     bad("needs finite min < max along x, y and z");
   if (!(std::isfinite(resolution) && resolution > 0.0f)) bad("needs a positive resolution");
+  // More cells along an axis than the lattice has keys: refused before any count is rounded.
+  constexpr double kMostCells = double(1 << kKeyBits);
+  if (!((double{x_max} - x_min) / resolution < kMostCells && (double{y_max} - y_min) / resolution < kMostCells &&
+        (double{z_max} - z_min) / resolution < kMostCells))
+    bad("reaches beyond the key range of the lattice (2^21 cells per axis)");
   // CDynamicGrid3D::setSize, in its double arithmetic (mrpt::round: ties to even).
   TGridFrame3D f;
   f.defined = true;
@@ -97,8 +101,10 @@ bool gridPoints(const mrpt::obs::CObservation& obs, const mrpt::poses::CPose3D& 
     return true;
   }
   if (const auto* o = dynamic_cast<const mrpt::obs::CObservation3DRangeScan*>(&obs)) {
-    // internal_insertObservationScan3D's: unprojected in the sensor frame, then moved.
+    // internal_insertObservationScan3D's: unprojected in the sensor frame, then moved. One that
+    // holds only its points the grid would drop without a word: left to the caller's points.
     o->load();
+    if (!o->hasRangeImage) return false;
     mrpt::obs::T3DPointsProjectionParams pp;
     pp.takeIntoAccountSensorPoseOnRobot = false;
     pp.decimation = static_cast<std::uint8_t>(decimation3d);

@@ -39,7 +39,8 @@ Key keyOffset(const TGridFrame3D& f);
 /// The points the grid makes of `obs` taken at `robotPose` and its sensor's position, in the map
 /// frame: a 2D range scan as CSimplePointsMap::loadFromRangeScan (valid ranges only), a depth
 /// image as CObservation3DRangeScan::unprojectInto with decimation_3d_range then moved by the
-/// sensor pose, as COccupancyGridMap3D does. False for other observation types.
+/// sensor pose, as COccupancyGridMap3D does. False for other observation types and for a depth
+/// observation without a range image (the grid inserts nothing of it; the map takes its points).
 bool gridPoints(const mrpt::obs::CObservation& obs, const mrpt::poses::CPose3D& robotPose, unsigned decimation3d,
                 mrpt::maps::CPointsMap& pts, mrpt::math::TPoint3D& sensor);
 
