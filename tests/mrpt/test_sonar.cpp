@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <cstdio>
 #include <cstdlib>
 #include <limits>
@@ -260,7 +261,6 @@ TEST(Sonar, OptionsAndBadReadings) {
     }
   };
   refused("sonarConeWeighting=gaussian\n", "uniform or elfes");
-  refused("sonarConeWeighting=elfes\n", "octomap");
 
   // Elfes weighting (octomap preset): the axis's cells take the whole step, the rim's less.
   auto elfes = mapFromIni("sensorModelPreset=octomap\nsonarConeWeighting=elfes\n");
@@ -298,6 +298,53 @@ TEST(Sonar, OptionsAndBadReadings) {
   EXPECT_THROW(uniform->insertObservation(bad, CPose3D()), std::invalid_argument);
   EXPECT_EQ(uniform->map().cellCount(), cells);
   EXPECT_EQ(uniform->map().checkInvariants(), "");
+}
+
+// Issue #40: Elfes weighting in the mrpt_grid preset. A cone cell takes its kind's int8 step
+// scaled by its weight, rounded to whole units: the axis the grid's whole step, the rim less, a
+// cell whose step rounds to 0 nothing; a cone of zero aperture is the one beam, the grid's cells.
+TEST(Sonar, ElfesWeightingInTheMrptGridPresetRoundsTheGridsSteps) {
+  const auto reading = [](float aperture, float x, float y, float range) {
+    CObservationRange o;
+    o.sensorConeApperture = aperture;
+    o.maxSensorDistance = 4.0f;
+    o.sensedData.resize(1);
+    o.sensedData[0].sensorPose = mrpt::math::TPose3D(x, y, 0.3, 0, 0, 0);
+    o.sensedData[0].sensedDistance = range;
+    return o;
+  };
+  const auto cellAt = [](const rtog::CRTreeOccupancyGridMap& m, double x, double y) -> std::optional<int> {
+    const auto v = m.map().logOdds(m.map().lattice().key(Eigen::Vector3d(x, y, 0.3)));
+    if (!v) return std::nullopt;
+    return static_cast<int>(std::lround(-*v * 16.0f));
+  };
+  auto elfes = mapFromIni("sonarConeWeighting=elfes\n");
+  auto uniform = mapFromIni("");
+  for (int k = 0; k < 3; ++k) {  // three readings: the steps add up, saturating as the grid's
+    ASSERT_TRUE(elfes->insertObservation(reading(kAperture, 0.01f, 0.01f, 2.0f), CPose3D()));
+    ASSERT_TRUE(uniform->insertObservation(reading(kAperture, 0.01f, 0.01f, 2.0f), CPose3D()));
+  }
+  EXPECT_EQ(cellAt(*elfes, 1.0, 0.01), cellAt(*uniform, 1.0, 0.01));  // on the axis: whole steps
+  EXPECT_EQ(cellAt(*elfes, 2.0, 0.01), cellAt(*uniform, 2.0, 0.01));  // the arc on the axis
+  const double rim = 1.0 * std::tan(0.4 * kAperture);
+  ASSERT_TRUE(cellAt(*elfes, 1.0, rim) && cellAt(*uniform, 1.0, rim));
+  EXPECT_GT(*cellAt(*elfes, 1.0, rim), 0);                           // free, and weaker
+  EXPECT_LT(*cellAt(*elfes, 1.0, rim), *cellAt(*uniform, 1.0, rim));
+  EXPECT_LT(elfes->map().cellCount(), uniform->map().cellCount());  // the rim's 0 steps: untouched
+  EXPECT_EQ(elfes->map().checkInvariants(), "");
+
+  // Zero aperture: the one beam, whatever the weighting.
+  auto beam_elfes = mapFromIni("sonarConeWeighting=elfes\n");
+  auto beam_uniform = mapFromIni("");
+  for (const float y : {0.01f, 0.4f, -0.7f}) {
+    ASSERT_TRUE(beam_elfes->insertObservation(reading(0.0f, 0.01f, y, 2.5f), CPose3D()));
+    ASSERT_TRUE(beam_uniform->insertObservation(reading(0.0f, 0.01f, y, 2.5f), CPose3D()));
+  }
+  std::vector<std::pair<rtog::Box, float>> a, b;
+  beam_elfes->map().forEachLeaf([&](const rtog::Box& x, float v) { a.emplace_back(x, v); });
+  beam_uniform->map().forEachLeaf([&](const rtog::Box& x, float v) { b.emplace_back(x, v); });
+  ASSERT_FALSE(a.empty());
+  EXPECT_TRUE(a == b);
 }
 
 // Issue #37: every reading of a CObservationRange has its own sensor pose, but only the first

@@ -196,9 +196,6 @@ void CRTreeOccupancyGridMap::TInsertionOptions::validate() const {
               "on needs sensorModelPreset = octomap (COccupancyGridMap2D's int8 steps have no graded update)");
   if (sonarConeWeighting != "uniform" && sonarConeWeighting != "elfes")
     badOption(sec, "sonarConeWeighting", "must be uniform or elfes, got '" + sonarConeWeighting + "'");
-  if (mrptGrid() && sonarConeWeighting != "uniform")
-    badOption(sec, "sonarConeWeighting",
-              "elfes needs sensorModelPreset = octomap (COccupancyGridMap2D's int8 steps are whole steps)");
   if (mrptGrid() && wideningBeamsWithDistance)
     badOption(sec, "wideningBeamsWithDistance",
               "COccupancyGridMap2D's widening beams are not reproduced by the mrpt_grid preset: set it to false");

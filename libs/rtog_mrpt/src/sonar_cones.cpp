@@ -1,6 +1,7 @@
 #include "sonar_cones.hpp"
 
 #include <algorithm>
+#include <utility>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -84,7 +85,7 @@ InsertStats insertOnGrid(OccupancyMap& map, TGridFrame2D& frame, const std::vect
       ++stats.skipped_too_long;
       continue;
     }
-    coneCells(map.lattice(), r, ConeWeighting::Uniform, cells[i], nullptr);
+    coneCells(map.lattice(), r, coneWeightingFromString(io.sonarConeWeighting), cells[i], nullptr);
     ++(r.hit ? stats.rays_hit : stats.rays_truncated);
     for (const ConeCell& c : cells[i]) {
       x0 = std::min(x0, static_cast<float>(c.x * res)), x1 = std::max(x1, static_cast<float>((c.x + 1) * res));
@@ -95,19 +96,49 @@ InsertStats insertOnGrid(OccupancyMap& map, TGridFrame2D& frame, const std::vect
     float g[4];
     mrpt_grid::growRect(grown, x0, x1, y0, y1, g);
     mrpt_grid::resize(grown, g[0], g[1], g[2], g[3]);
+    // Reading after reading, each of its cells once with its kind's step scaled by the cell's
+    // weight and rounded to whole int8 units (half away from zero; a step of 0 leaves the cell as
+    // it was). The cells of one kind and step go together: a whole step under the grid's own rule
+    // (uniform: every cell), a smaller one saturating within itself of the bound, as the grid
+    // saturates within its step.
+    const mrpt_grid::Steps full = mrpt_grid::stepsOf(io);
+    const StepRule grid_rule = mrpt_grid::stepRule(full);
+    const auto wholeStep = [&](StepKind k) {
+      return k == StepKind::Occupied ? full.occupied : k == StepKind::FreeNoEcho ? full.noecho : full.free;
+    };
+    const auto stepOf = [&](const ConeCell& c) {
+      return static_cast<int>(std::lround(double{c.weight} * wholeStep(c.kind)));
+    };
     std::vector<OccupancyMap::StepRun> runs;
-    for (const auto& rc : cells)
+    for (const auto& rc : cells) {
+      std::vector<std::pair<StepKind, int>> groups;
       for (const ConeCell& c : rc) {
-        OccupancyMap::StepRun s{};
-        s.x = c.x, s.y = c.y;
-        s.kind = c.kind;
-        s.count = c.kind == StepKind::Occupied ? 0 : 1;
-        s.end = c.kind == StepKind::Occupied;
-        s.end_x = c.x, s.end_y = c.y;
-        runs.push_back(s);
+        const std::pair<StepKind, int> g{c.kind, stepOf(c)};
+        if (g.second > 0 && std::find(groups.begin(), groups.end(), g) == groups.end()) groups.push_back(g);
       }
-    const StepRule rule = mrpt_grid::stepRule(mrpt_grid::stepsOf(io));
-    stats += map.applyStepRuns(grown.layer, runs.data(), runs.size(), rule);
+      std::sort(groups.begin(), groups.end());
+      for (const auto& [kind, k] : groups) {
+        runs.clear();
+        for (const ConeCell& c : rc) {
+          if (c.kind != kind || stepOf(c) != k) continue;
+          OccupancyMap::StepRun s{};
+          s.x = c.x, s.y = c.y;
+          s.kind = c.kind;
+          s.count = c.kind == StepKind::Occupied ? 0 : 1;
+          s.end = c.kind == StepKind::Occupied;
+          s.end_x = c.x, s.end_y = c.y;
+          runs.push_back(s);
+        }
+        StepRule rule = grid_rule;
+        if (k != wholeStep(kind)) {
+          const auto i = static_cast<std::size_t>(kind);
+          const int sign = kind == StepKind::Occupied ? -1 : 1;
+          rule.delta[i] = mrpt_grid::valueOfCell(sign * k);
+          rule.limit[i] = mrpt_grid::valueOfCell(sign * (127 - k));
+        }
+        stats += map.applyStepRuns(grown.layer, runs.data(), runs.size(), rule);
+      }
+    }
     frame = grown;
   }
   return stats;
