@@ -188,7 +188,7 @@ TEST(MrptGrid3DFidelity, SenaScansInA3DSectionAsTheStockGrid) {
   Pair p = makePair("min_x=-20\nmax_x=40\nmin_y=-25\nmax_y=25\nmin_z=-1\nmax_z=2", "");
   EXPECT_DOUBLE_EQ(p.ours->resolution(), 0.25);  // the 3D grid's default resolution
   for (const auto& f : loadOdometryFrames(dataset(kSena), 60)) {
-    p.stock->insertObservation(*f.sf->getObservationByIndex(0), f.pose);
+    f.sf->insertObservationsInto(*p.stock, f.pose);
     f.sf->insertObservationsInto(*p.ours, f.pose);
   }
   EXPECT_EQ(differingCells(p, "SENA, 60 frames of 2D scans in a 3D section"), 0u);

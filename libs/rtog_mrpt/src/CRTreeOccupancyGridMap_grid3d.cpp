@@ -1,40 +1,15 @@
 // rtog::CRTreeOccupancyGridMap: the mrpt_grid preset in 3D, COccupancyGridMap3D's rule and API
 // (mrpt_grid3d.hpp).
 #include <mrpt/maps/COccupancyGridMap3D.h>
-#include <mrpt/system/string_utils.h>
 #include <mrpt/maps/CSimplePointsMap.h>
 #include <mrpt/opengl/COctoMapVoxels.h>
 
 #include "rtog/mrpt/CRTreeOccupancyGridMap.h"
 #include "mrpt_grid.hpp"
 #include "mrpt_grid3d.hpp"
-#include "options_check.hpp"
 #include "sensor_points.hpp"
 
 namespace rtog {
-
-namespace mrpt_grid3d {
-void readSectionKeys(const mrpt::config::CConfigFileBase& source, const std::string& prefix,
-                     CRTreeOccupancyGridMap::TInsertionOptions& io, CRTreeOccupancyGridMap::TLikelihoodOptions& lo) {
-  // COccupancyGridMap3D numbers its two methods 0 and 1 (names read as in every section).
-  const std::string lsec = prefix + "_likelihoodOpts";
-  const std::string m = mrpt::system::trim(source.read_string(lsec, "likelihoodMethod", ""));
-  if (!m.empty() && m.find_first_not_of("0123456789") == std::string::npos) {
-    if (m != "0" && m != "1")
-      throw std::invalid_argument("rtog::CRTreeOccupancyGridMap: invalid option [" + lsec +
-                                  "] likelihoodMethod: a 3D section numbers COccupancyGridMap3D's methods, 0 "
-                                  "(lmLikelihoodField_Thrun) or 1 (lmRayTracing), got " + m);
-    lo.likelihoodMethod = m == "0" ? CRTreeOccupancyGridMap::lmLikelihoodField_Thrun : CRTreeOccupancyGridMap::lmRayTracing;
-  }
-  // MRPT 2.5.8's COccupancyGridMap3D does not read decimation_3d_range: its depth images keep 8.
-  const std::string isec = prefix + "_insertOpts";
-  if (source.keyExists(isec, "decimation_3d_range"))
-    reportInertKey(isec, "decimation_3d_range",
-                   "in a 3D section depth images are decimated by 8, as COccupancyGridMap3D (MRPT 2.5.8) does not "
-                   "read this key");
-  io.decimation_3d_range = 8;
-}
-}  // namespace mrpt_grid3d
 
 using mrpt::poses::CPose3D;
 
@@ -47,9 +22,6 @@ void CRTreeOccupancyGridMap::setGridFrame3D(const mrpt::math::TPoint3D& lo, cons
 }
 
 bool CRTreeOccupancyGridMap::insertGrid3D(const mrpt::obs::CObservation& obs, const CPose3D& robotPose) {
-  syncParams();
-  const mrpt_grid3d::Steps3D steps = mrpt_grid3d::stepsOf(insertionOptions);
-  std::size_t invalid = 0;
   mrpt::maps::CSimplePointsMap pts;
   mrpt::math::TPoint3D sensor;
   if (mrpt_grid3d::gridPoints(obs, robotPose, insertionOptions.decimation_3d_range, pts, sensor)) {
@@ -63,13 +35,9 @@ bool CRTreeOccupancyGridMap::insertGrid3D(const mrpt::obs::CObservation& obs, co
   std::vector<Eigen::Vector3f> p(sp.size());
   std::size_t dropped = 0;
   p.resize(sp.read(0, sp.size(), p.data(), nullptr, dropped));
-  invalid = sp.invalid + dropped;
-  lastInsertStats = mrpt_grid3d::insertRays(
-      map_, frame3d_, mrpt::math::TPoint3D(sp.origin.x(), sp.origin.y(), sp.origin.z()), p.size(),
-      [&](std::size_t i) { return mrpt::math::TPoint3D(p[i].x(), p[i].y(), p[i].z()); }, steps);
-  totalInsertStats += lastInsertStats;
-  invalidRangesSkipped += invalid;
-  notifyMapChanged();
+  stepRays("insertObservation", mrpt::math::TPoint3D(sp.origin.x(), sp.origin.y(), sp.origin.z()), p.size(),
+           [&](std::size_t i) { return mrpt::math::TPoint3D(p[i].x(), p[i].y(), p[i].z()); });
+  invalidRangesSkipped += sp.invalid + dropped;
   return true;
 }
 
@@ -92,29 +60,28 @@ float CRTreeOccupancyGridMap::getCellFreeness(unsigned cx, unsigned cy, unsigned
   return mrpt::maps::COccupancyGridMap3D::l2p(static_cast<mrpt::maps::COccupancyGridMap3D::voxelType>(cell));
 }
 
-void CRTreeOccupancyGridMap::insertRay(const mrpt::math::TPoint3D& sensor, const mrpt::math::TPoint3D& end, bool) {
-  const TGridFrame3D& f = definedFrame(frame3d_, "insertRay");
+void CRTreeOccupancyGridMap::stepRays(const char* what, const mrpt::math::TPoint3D& sensor, std::size_t n,
+                                      const std::function<mrpt::math::TPoint3D(std::size_t)>& endOf) {
+  const TGridFrame3D& f = definedFrame(frame3d_, what);
   syncParams();
-  // `end` in double, as the grid takes it (the points of an observation are floats).
-  lastInsertStats = mrpt_grid3d::insertRays(map_, f, sensor, 1, [&](std::size_t) { return end; },
-                                            mrpt_grid3d::stepsOf(insertionOptions));
+  lastInsertStats = mrpt_grid3d::insertRays(map_, f, sensor, n, endOf, mrpt_grid3d::stepsOf(insertionOptions));
   totalInsertStats += lastInsertStats;
   notifyMapChanged();
 }
 
+void CRTreeOccupancyGridMap::insertRay(const mrpt::math::TPoint3D& sensor, const mrpt::math::TPoint3D& end, bool) {
+  // `end` in double, as the grid takes it (the points of an observation are floats).
+  stepRays("insertRay", sensor, 1, [&](std::size_t) { return end; });
+}
+
 void CRTreeOccupancyGridMap::insertPointCloud(const mrpt::math::TPoint3D& sensor, const mrpt::maps::CPointsMap& pts,
                                               float) {
-  const TGridFrame3D& f = definedFrame(frame3d_, "insertPointCloud");
-  syncParams();
   const auto& xs = pts.getPointsBufferRef_x();
   const auto& ys = pts.getPointsBufferRef_y();
   const auto& zs = pts.getPointsBufferRef_z();
   const std::size_t dec = std::max<std::size_t>(insertionOptions.decimation, 1), n = (xs.size() + dec - 1) / dec;
-  lastInsertStats = mrpt_grid3d::insertRays(
-      map_, f, sensor, n, [&](std::size_t i) { return mrpt::math::TPoint3D(xs[i * dec], ys[i * dec], zs[i * dec]); },
-      mrpt_grid3d::stepsOf(insertionOptions));
-  totalInsertStats += lastInsertStats;
-  notifyMapChanged();
+  stepRays("insertPointCloud", sensor, n,
+           [&](std::size_t i) { return mrpt::math::TPoint3D(xs[i * dec], ys[i * dec], zs[i * dec]); });
 }
 
 void CRTreeOccupancyGridMap::getAsOctoMapVoxels(mrpt::opengl::COctoMapVoxels& gl) const {
@@ -145,16 +112,15 @@ void CRTreeOccupancyGridMap::getAsOctoMapVoxels(mrpt::opengl::COctoMapVoxels& gl
           if (cx < 0 || cy < 0 || cz < 0 || cx >= f.size_x || cy >= f.size_y || cz >= f.size_z) continue;
           const double x = f.x_min + cx * f.resolution + L, y = f.y_min + cy * f.resolution + L,
                        z = f.z_min + cz * f.resolution + L;
+          const auto scaled = [&](float k) {
+            return mrpt::img::TColor(static_cast<uint8_t>(k * general.R), static_cast<uint8_t>(k * general.G),
+                                     static_cast<uint8_t>(k * general.B), static_cast<uint8_t>(255 * general.A));
+          };
           mrpt::img::TColor c = general.asTColor();
-          if (gl.getVisualizationMode() == COctoMapVoxels::COLOR_FROM_OCCUPANCY) {
-            const float k = 240 * (1 - occ) + 15;
-            c = mrpt::img::TColor(static_cast<uint8_t>(k * general.R), static_cast<uint8_t>(k * general.G),
-                                  static_cast<uint8_t>(k * general.B), static_cast<uint8_t>(255 * general.A));
-          } else if (gl.getVisualizationMode() == COctoMapVoxels::COLOR_FROM_HEIGHT) {
-            const float k = 255 * inv_dz * static_cast<float>(z - bbmin.z);
-            c = mrpt::img::TColor(static_cast<uint8_t>(k * general.R), static_cast<uint8_t>(k * general.G),
-                                  static_cast<uint8_t>(k * general.B), static_cast<uint8_t>(255 * general.A));
-          }
+          if (gl.getVisualizationMode() == COctoMapVoxels::COLOR_FROM_OCCUPANCY)
+            c = scaled(240 * (1 - occ) + 15);
+          else if (gl.getVisualizationMode() == COctoMapVoxels::COLOR_FROM_HEIGHT)
+            c = scaled(255 * inv_dz * static_cast<float>(z - bbmin.z));
           gl.push_back_Voxel(occupied ? mrpt::opengl::VOXEL_SET_OCCUPIED : mrpt::opengl::VOXEL_SET_FREESPACE,
                              COctoMapVoxels::TVoxel(mrpt::math::TPoint3D(x, y, z), 2 * L, c));
         }

@@ -15,8 +15,10 @@
 #include <mrpt/obs/CObservation2DRangeScan.h>
 #include <mrpt/obs/CObservation3DRangeScan.h>
 #include <mrpt/obs/T3DPointsProjectionParams.h>
+#include <mrpt/system/string_utils.h>
 
 #include "mrpt_grid.hpp"
+#include "options_check.hpp"
 #include "util/flat_hash_map.hpp"
 
 namespace rtog::mrpt_grid3d {
@@ -292,6 +294,27 @@ InsertStats insertRays(OccupancyMap& map, const TGridFrame3D& f, const mrpt::mat
     stats.leaves_created = assigned.leaves_created, stats.leaves_merged = assigned.leaves_merged;
   }
   return stats;
+}
+
+void readSectionKeys(const mrpt::config::CConfigFileBase& source, const std::string& prefix,
+                     CRTreeOccupancyGridMap::TInsertionOptions& io, CRTreeOccupancyGridMap::TLikelihoodOptions& lo) {
+  // COccupancyGridMap3D numbers its two methods 0 and 1 (names read as in every section).
+  const std::string lsec = prefix + "_likelihoodOpts";
+  const std::string m = mrpt::system::trim(source.read_string(lsec, "likelihoodMethod", ""));
+  if (!m.empty() && m.find_first_not_of("0123456789") == std::string::npos) {
+    if (m != "0" && m != "1")
+      throw std::invalid_argument("rtog::CRTreeOccupancyGridMap: invalid option [" + lsec +
+                                  "] likelihoodMethod: a 3D section numbers COccupancyGridMap3D's methods, 0 "
+                                  "(lmLikelihoodField_Thrun) or 1 (lmRayTracing), got " + m);
+    lo.likelihoodMethod = m == "0" ? CRTreeOccupancyGridMap::lmLikelihoodField_Thrun : CRTreeOccupancyGridMap::lmRayTracing;
+  }
+  // MRPT 2.5.8's COccupancyGridMap3D does not read decimation_3d_range: its depth images keep 8.
+  const std::string isec = prefix + "_insertOpts";
+  if (source.keyExists(isec, "decimation_3d_range"))
+    reportInertKey(isec, "decimation_3d_range",
+                   "in a 3D section depth images are decimated by 8, as COccupancyGridMap3D (MRPT 2.5.8) does not "
+                   "read this key");
+  io.decimation_3d_range = 8;
 }
 
 }  // namespace rtog::mrpt_grid3d

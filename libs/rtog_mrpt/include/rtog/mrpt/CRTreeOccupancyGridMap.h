@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <iosfwd>
 #include <limits>
 #include <memory>
@@ -375,6 +376,9 @@ class CRTreeOccupancyGridMap : public mrpt::maps::CMetricMap {
   /// A 3D observation (or a 2D scan in a 3D section) with COccupancyGridMap3D's rule; false
   /// for a type that has no points.
   bool insertGrid3D(const mrpt::obs::CObservation& obs, const mrpt::poses::CPose3D& robotPose);
+  /// n rays from `sensor` to endOf(i) into the 3D grid (std::logic_error naming `what` without one).
+  void stepRays(const char* what, const mrpt::math::TPoint3D& sensor, std::size_t n,
+                const std::function<mrpt::math::TPoint3D(std::size_t)>& endOf);
   /// After a grid scan: the 2D view's copy-on-write tiles, if kept, take its steps; the other
   /// caches are dropped as by notifyMapChanged().
   void followGridScan(const GridScanUpdate& upd);
