@@ -132,6 +132,20 @@ void runScenario(const Config& cfg, const ScenarioInput& in, const sim::TruthGri
     }
   }
   for (const RtogVariant& v : more) logged(buildRtog(scans, cfg.resolution, in.max_range, truth, v, cov));
+  // The same models in the MRPT map type's default preset, mrpt_grid: MRPT's grid steps and
+  // sensor model, the graded models rounded onto its int8 cells (doc/mrpt_map.md).
+  std::vector<RtogVariant> grid{{"rtog_mrpt_grid", SensorModel::BeamBased, 0.0, false, {}}};
+  if (in.sigma > 0) grid.push_back({"rtog_mrpt_grid_range_noise", SensorModel::RangeNoise, in.sigma, false, {}});
+  if (sc.pose_noise)
+    for (std::size_t k = 0, n = grid.size(); k < n; ++k) {
+      RtogVariant b = grid[k];
+      b.name += "_pose_blur";
+      b.pose_blur = true;
+      grid.push_back(b);
+    }
+  for (const RtogVariant& v : grid)
+    logged(buildRtogMrptGrid(scans, in.poses, sc.planar ? &cfg.scanner : nullptr, cfg.resolution, in.max_range, truth, v,
+                             cov));
   score(sc.name, maps, region_maps, truth, sc, rep.results);
   rep.scenarios.push_back(sc);
 }

@@ -60,6 +60,11 @@ MapView buildRtog(const std::vector<sim::Scan>& scans, double res, double max_ra
   }
   MapView out(v.name, region.size());
   out.insert_seconds = secondsSince(t0);
+  readRtog(map, region, out);
+  return out;
+}
+
+void readRtog(const OccupancyMap& map, const sim::TruthGrid& region, MapView& out) {
   const Box& R = region.region();
   const LogOddsModel& model = map.logOddsModel();
   map.forEachLeaf([&](const Box& b, float value) {
@@ -75,7 +80,6 @@ MapView buildRtog(const std::vector<sim::Scan>& scans, double res, double max_ra
       out.state[i] = st;
     });
   });
-  return out;
 }
 
 // ---- OctoMap ----------------------------------------------------------------------------
@@ -126,9 +130,6 @@ MapView buildOctomap(const std::vector<sim::Scan>& scans, double res, double max
 // ---- MRPT --------------------------------------------------------------------------------
 
 namespace {
-// Same sensor model as the others, as far as MRPT's options go: P(occ | hit) = 0.7 and
-// P(free | miss) = 0.6. (MRPT's 3D grid triples the occupied log-odds increment internally.)
-constexpr float kMrptOcc = 0.7f, kMrptFree = 0.6f;
 
 void readMrpt(MapView& v, const sim::TruthGrid& region, double res, const std::function<float(double, double, double)>& freeness) {
   for (std::size_t i = 0; i < region.size(); ++i) {
@@ -141,6 +142,21 @@ void readMrpt(MapView& v, const sim::TruthGrid& region, double res, const std::f
 }
 
 }  // namespace
+
+mrpt::obs::CObservation2DRangeScan scanObservation(const sim::Scan& scan, const sim::ScannerParams& sp) {
+  const int n = sp.beams();
+  mrpt::obs::CObservation2DRangeScan obs;
+  obs.aperture = static_cast<float>(sp.fov_deg * kPi / 180.0);
+  obs.rightToLeft = true;
+  obs.maxRange = static_cast<float>(sp.max_range);
+  obs.sensorPose = mrpt::poses::CPose3D(0, 0, sp.height, 0, 0, 0);
+  obs.resizeScan(static_cast<std::size_t>(n));
+  for (int i = 0; i < n; ++i) {
+    obs.setScanRange(static_cast<std::size_t>(i), scan.range[static_cast<std::size_t>(i)]);
+    obs.setScanRangeValidity(static_cast<std::size_t>(i), scan.is_hit[static_cast<std::size_t>(i)] != 0);
+  }
+  return obs;
+}
 
 MapView buildMrpt3D(const std::vector<sim::Scan>& scans, double res, double max_range, const sim::TruthGrid& region) {
   const Box& R = region.region();
@@ -183,21 +199,11 @@ MapView buildMrpt2D(const std::vector<sim::Scan>& scans, const std::vector<sim::
   grid.insertionOptions.maxDistanceInsertion = static_cast<float>(sp.max_range + 1.0);
   grid.insertionOptions.considerInvalidRangesAsFreeSpace = true;
   grid.insertionOptions.wideningBeamsWithDistance = false;
-  const int n = sp.beams();
   const auto t0 = Clock::now();
   for (std::size_t s = 0; s < scans.size(); ++s) {
-    mrpt::obs::CObservation2DRangeScan obs;
-    obs.aperture = static_cast<float>(sp.fov_deg * kPi / 180.0);
-    obs.rightToLeft = true;
-    obs.maxRange = static_cast<float>(sp.max_range);
-    obs.sensorPose = mrpt::poses::CPose3D(0, 0, sp.height, 0, 0, 0);
-    obs.resizeScan(static_cast<std::size_t>(n));
-    for (int i = 0; i < n; ++i) {
-      obs.setScanRange(static_cast<std::size_t>(i), scans[s].range[static_cast<std::size_t>(i)]);
-      obs.setScanRangeValidity(static_cast<std::size_t>(i), scans[s].is_hit[static_cast<std::size_t>(i)] != 0);
-    }
     const sim::Pose& p = poses[s];
-    grid.insertObservation(obs, mrpt::poses::CPose3D(p.position.x(), p.position.y(), p.position.z(), p.yaw, 0, 0));
+    grid.insertObservation(scanObservation(scans[s], sp),
+                           mrpt::poses::CPose3D(p.position.x(), p.position.y(), p.position.z(), p.yaw, 0, 0));
   }
   MapView v("mrpt_grid2d", region.size());
   v.insert_seconds = secondsSince(t0);

@@ -7,7 +7,10 @@
 
 #include <Eigen/Core>
 
+#include <mrpt/obs/CObservation2DRangeScan.h>
+
 #include "rtog/core/log_odds.hpp"
+#include "rtog/core/occupancy_map.hpp"
 #include "rtog/core/params.hpp"
 #include "rtog/sim/metrics.hpp"
 #include "rtog/sim/sensors.hpp"
@@ -39,10 +42,23 @@ struct RtogVariant {
 /// when v.pose_blur (OccupancyMap::insertBlurred() over its sigma points).
 MapView buildRtog(const std::vector<sim::Scan>& scans, double res, double max_range, const sim::TruthGrid& region,
                   const RtogVariant& v, const Eigen::Matrix3d& pose_cov);
+/// rtog's MRPT map type in the mrpt_grid preset (builders_mrpt_grid.cpp) with `v`'s model and
+/// pose blur, MRPT's sensor model (kMrptOcc / kMrptFree): `planar` scans in a 2D section at `poses`,
+/// otherwise (planar null) point clouds in a 3D section of the region's box.
+MapView buildRtogMrptGrid(const std::vector<sim::Scan>& scans, const std::vector<sim::Pose>& poses,
+                          const sim::ScannerParams* planar, double res, double max_range, const sim::TruthGrid& region,
+                          const RtogVariant& v, const Eigen::Matrix3d& pose_cov);
+/// The cells of `map` in the region into `out` (P(occupied) and class).
+void readRtog(const OccupancyMap& map, const sim::TruthGrid& region, MapView& out);
 /// OctoMap's OcTree with its default probabilities.
 MapView buildOctomap(const std::vector<sim::Scan>& scans, double res, double max_range, const sim::TruthGrid& region);
 /// MRPT's COccupancyGridMap3D fed point clouds and no-return rays.
 MapView buildMrpt3D(const std::vector<sim::Scan>& scans, double res, double max_range, const sim::TruthGrid& region);
+/// Same sensor model as the others, as far as MRPT's options go: P(occ | hit) = 0.7 and
+/// P(free | miss) = 0.6. (MRPT's grids triple the occupied log-odds increment internally.)
+constexpr float kMrptOcc = 0.7f, kMrptFree = 0.6f;
+/// A planar scan as the CObservation2DRangeScan an MRPT driver would write.
+mrpt::obs::CObservation2DRangeScan scanObservation(const sim::Scan& scan, const sim::ScannerParams& sp);
 /// MRPT's COccupancyGridMap2D fed CObservation2DRangeScans at `poses` (the ones the scans were
 /// placed with: with pose noise, the believed poses).
 MapView buildMrpt2D(const std::vector<sim::Scan>& scans, const std::vector<sim::Pose>& poses,

@@ -155,7 +155,9 @@ TEST(PoseUncertainty, TheIniKeyReadsOffOrOnAndIsChecked) {
   EXPECT_TRUE(on->insertionOptions.poseUncertainty);
   auto off = rtog_test::mapFromIni("sensorModelPreset=octomap\n");
   EXPECT_FALSE(off->insertionOptions.poseUncertainty);
-  for (const char* bad : {"sensorModelPreset=octomap\nposeUncertainty=maybe\n", "poseUncertainty=on\n"}) {
+  // Both presets take it (mrpt_grid: on the grid's raster, test_mrpt_grid_estimator.cpp).
+  EXPECT_TRUE(rtog_test::mapFromIni("poseUncertainty=on\n")->insertionOptions.poseUncertainty);
+  for (const char* bad : {"sensorModelPreset=octomap\nposeUncertainty=maybe\n", "poseUncertainty=maybe\n"}) {
     try {
       rtog_test::mapFromIni(bad);
       ADD_FAILURE() << "accepted: " << bad;

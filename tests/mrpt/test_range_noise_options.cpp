@@ -70,7 +70,9 @@ TEST(RangeNoiseOptions, OptionsReadWriteAndSerializeBack) {
   EXPECT_EQ(back.insertionOptions.rangeNoiseCutoff, io.rangeNoiseCutoff);
 }
 
-TEST(RangeNoiseOptions, BadValuesAndTheGridPresetAreRefusedByKey) {
+// Range noise in both presets (in mrpt_grid on the grid's raster and int8 lattice,
+// test_mrpt_grid_estimator.cpp); bad values refused by key in either.
+TEST(RangeNoiseOptions, BadValuesAreRefusedByKeyInBothPresets) {
   const auto refused = [](const std::string& opts, const std::string& key) {
     try {
       mapFromIni(opts);
@@ -80,13 +82,17 @@ TEST(RangeNoiseOptions, BadValuesAndTheGridPresetAreRefusedByKey) {
       EXPECT_NE(std::string(e.what()).find("insertOpts"), std::string::npos) << e.what();
     }
   };
-  refused("sensorModel=rangeNoise\n", "sensorModel");  // mrpt_grid is the default preset
-  const std::string o = "sensorModelPreset=octomap\nsensorModel=rangeNoise\n";
-  refused(o + "rangeNoiseStd=-0.01\n", "rangeNoiseStd");
-  refused(o + "rangeNoiseStd=nan\n", "rangeNoiseStd");
-  refused(o + "rangeNoiseStdPerMeter=inf\n", "rangeNoiseStdPerMeter");
-  refused(o + "rangeNoiseCutoff=20\n", "rangeNoiseCutoff");
-  refused(o + "rangeNoiseCutoff=0\n", "rangeNoiseCutoff");
+  for (const std::string preset : {"", "sensorModelPreset=octomap\n"}) {  // mrpt_grid is the default preset
+    const std::string o = preset + "sensorModel=rangeNoise\n";
+    auto m = mapFromIni(o);
+    ASSERT_TRUE(m);
+    EXPECT_EQ(m->insertionOptions.sensorModel, "rangeNoise");
+    refused(o + "rangeNoiseStd=-0.01\n", "rangeNoiseStd");
+    refused(o + "rangeNoiseStd=nan\n", "rangeNoiseStd");
+    refused(o + "rangeNoiseStdPerMeter=inf\n", "rangeNoiseStdPerMeter");
+    refused(o + "rangeNoiseCutoff=20\n", "rangeNoiseCutoff");
+    refused(o + "rangeNoiseCutoff=0\n", "rangeNoiseCutoff");
+  }
 }
 
 }  // namespace

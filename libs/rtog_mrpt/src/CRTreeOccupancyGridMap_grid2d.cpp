@@ -1,9 +1,14 @@
 // rtog::CRTreeOccupancyGridMap: the 2D view (a COccupancyGridMap2D of a height band), the
-// mrpt_grid preset's grid geometry, and the grid queries MRPT users call on a 2D grid. (The
+// mrpt_grid preset's grid geometry and 2D scans (grid_scan.hpp: the grid's steps; grid_graded.hpp:
+// with range noise or from an uncertain pose), and the grid queries MRPT users call on a 2D grid. (The
 // likelihood of planar scans on the view is in CRTreeOccupancyGridMap_likelihood.cpp.)
 #include "CRTreeOccupancyGridMap_grid2d.hpp"
 #include "rtog/core/band.hpp"
+#include "grid_graded.hpp"
+#include "grid_scan.hpp"
+#include "grid_tiles.hpp"
 #include "mrpt_grid.hpp"
+#include "pose_sigma.hpp"
 #include "options_check.hpp"
 #include "CRTreeOccupancyGridMap_caches.hpp"
 
@@ -17,6 +22,7 @@
 namespace rtog {
 
 using Grid2D = mrpt::maps::COccupancyGridMap2D;
+using mrpt::poses::CPose3D;
 
 // Our enumerators must be MRPT's numbers: configs and serialized maps carry them.
 static_assert(int(CRTreeOccupancyGridMap::lmMeanInformation) == int(Grid2D::lmMeanInformation));
@@ -295,6 +301,66 @@ CRTreeOccupancyGridMap::TCellCounts CRTreeOccupancyGridMap::gridViewCellCounts()
   TCellCounts n;
   for (const auto l : v->grid.getRawMap()) (l > 0 ? n.free : l < 0 ? n.occupied : n.unknown)++;
   return n;
+}
+
+// ---- 2D scans in the mrpt_grid preset ----------------------------------------
+
+bool CRTreeOccupancyGridMap::insertGridScan(const mrpt::obs::CObservation2DRangeScan& scan, const CPose3D& robotPose,
+                                            GridScanUpdate* update) {
+  syncParams();
+  InsertStats stats;
+  std::size_t invalid = 0;
+  if (sensorModelFromString(insertionOptions.sensorModel) == SensorModel::RangeNoise && !update)
+    return insertGradedScan(scan, {pose_sigma::SigmaPose{1.0, robotPose}});
+  // With the view's tiles kept, the scan's steps are what they follow.
+  bool follow;
+  {
+    std::lock_guard<std::mutex> lk(caches_->mutex);
+    follow = caches_->tiles != nullptr;
+  }
+  GridScanUpdate own;
+  GridScanUpdate* upd = update ? update : follow ? &own : nullptr;
+  if (!mrpt_grid::insertScan(map_, frame_, scan, robotPose, insertionOptions, upd, stats, invalid)) return false;
+  invalidRangesSkipped += invalid;
+  lastInsertStats = stats;
+  totalInsertStats += stats;
+  if (follow)
+    followGridScan(*upd);
+  else
+    notifyMapChanged();
+  return true;
+}
+
+bool CRTreeOccupancyGridMap::insertGradedScan(const mrpt::obs::CObservation2DRangeScan& scan,
+                                              const std::vector<pose_sigma::SigmaPose>& poses) {
+  syncParams();
+  InsertStats stats;
+  std::size_t invalid = 0;
+  if (!mrpt_grid::insertGradedScan(map_, frame_, scan, poses, insertionOptions, stats, invalid)) return false;
+  invalidRangesSkipped += invalid;
+  lastInsertStats = stats;
+  totalInsertStats += stats;
+  notifyMapChanged();
+  return true;
+}
+
+// The 2D view's tiles (grid_tiles.hpp) follow the scan's steps: see tilesLikelihood() for when
+// they stand for the view.
+void CRTreeOccupancyGridMap::followGridScan(const GridScanUpdate& upd) {
+  std::lock_guard<std::mutex> lk(caches_->mutex);
+  caches_->dropCellData();
+  GridTiles* tiles = caches_->tiles.get();
+  if (!tiles) return;
+  if (!mrpt_grid::layerInBand(frame_, map_.resolution(), gridViewOptions.gridView_minZ, gridViewOptions.gridView_maxZ)) {
+    caches_->tiles.reset();  // the first scan's layer is not in the view: made again when needed
+    return;
+  }
+  if (!tiles->frame().sameGeometry(frame_)) tiles->setFrame(frame_);
+  const float* after = upd.after.data();
+  for (const auto& run : upd.runs)
+    OccupancyMap::forEachRunCell(run, [&](std::int32_t x, std::int32_t y, StepKind) { tiles->setCell(x, y, toMrptCell(*after++)); });
+  const FieldConstants f(caches_->tiles_likelihood, frame_.resolution);
+  tiles->dropStaleTerms(f.window);
 }
 
 }  // namespace rtog

@@ -1,5 +1,7 @@
 // rtog::CRTreeOccupancyGridMap: the mrpt_grid preset in 3D, COccupancyGridMap3D's rule and API
 // (mrpt_grid3d.hpp).
+#include <optional>
+
 #include <mrpt/maps/COccupancyGridMap3D.h>
 #include <mrpt/maps/CSimplePointsMap.h>
 #include <mrpt/opengl/COctoMapVoxels.h>
@@ -7,6 +9,7 @@
 #include "rtog/mrpt/CRTreeOccupancyGridMap.h"
 #include "mrpt_grid.hpp"
 #include "mrpt_grid3d.hpp"
+#include "pose_sigma.hpp"
 #include "sensor_points.hpp"
 
 namespace rtog {
@@ -21,23 +24,47 @@ void CRTreeOccupancyGridMap::setGridFrame3D(const mrpt::math::TPoint3D& lo, cons
                                     resolution, map_.resolution());
 }
 
-bool CRTreeOccupancyGridMap::insertGrid3D(const mrpt::obs::CObservation& obs, const CPose3D& robotPose) {
-  mrpt::maps::CSimplePointsMap pts;
-  mrpt::math::TPoint3D sensor;
-  if (mrpt_grid3d::gridPoints(obs, robotPose, insertionOptions.decimation_3d_range, pts, sensor)) {
-    // The grid's own points, every `decimation`-th a ray (its insertPointCloud).
-    insertPointCloud(sensor, pts);
-    return true;
+namespace {
+/// Every `decimation`-th point of `pts` a ray from `sensor` (COccupancyGridMap3D::insertPointCloud).
+mrpt_grid3d::RaySet raysOf(double weight, const mrpt::math::TPoint3D& sensor, const mrpt::maps::CPointsMap& pts,
+                           std::size_t decimation) {
+  const auto& xs = pts.getPointsBufferRef_x();
+  const auto& ys = pts.getPointsBufferRef_y();
+  const auto& zs = pts.getPointsBufferRef_z();
+  const std::size_t dec = std::max<std::size_t>(decimation, 1);
+  return mrpt_grid3d::RaySet{weight, sensor, (xs.size() + dec - 1) / dec, [&xs, &ys, &zs, dec](std::size_t i) {
+                               return mrpt::math::TPoint3D(xs[i * dec], ys[i * dec], zs[i * dec]);
+                             }};
+}
+}  // namespace
+
+bool CRTreeOccupancyGridMap::insertGrid3D(const mrpt::obs::CObservation& obs,
+                                          const std::vector<pose_sigma::SigmaPose>& poses) {
+  // Each pose's rays: the grid's own points (every `decimation`-th a ray, as its
+  // insertPointCloud), or for point clouds, Velodyne and rotating scans their points (decimated
+  // already) by the same rule.
+  std::vector<mrpt::maps::CSimplePointsMap> grid(poses.size());
+  std::vector<std::vector<Eigen::Vector3f>> other(poses.size());
+  std::vector<mrpt_grid3d::RaySet> sets;
+  std::size_t invalid = 0;
+  for (std::size_t i = 0; i < poses.size(); ++i) {
+    mrpt::math::TPoint3D sensor;
+    if (mrpt_grid3d::gridPoints(obs, poses[i].pose, insertionOptions.decimation_3d_range, grid[i], sensor)) {
+      sets.push_back(raysOf(poses[i].weight, sensor, grid[i], insertionOptions.decimation));
+      continue;
+    }
+    detail::SensorPoints sp;
+    if (!sensorPoints(obs, poses[i].pose, true, sp)) return false;
+    std::vector<Eigen::Vector3f>& p = other[i];
+    p.resize(sp.size());
+    std::size_t dropped = 0;
+    p.resize(sp.read(0, sp.size(), p.data(), nullptr, dropped));
+    if (i == 0) invalid = sp.invalid + dropped;
+    sets.push_back(mrpt_grid3d::RaySet{poses[i].weight, mrpt::math::TPoint3D(sp.origin.x(), sp.origin.y(), sp.origin.z()),
+                                       p.size(), [&p](std::size_t j) { return mrpt::math::TPoint3D(p[j].x(), p[j].y(), p[j].z()); }});
   }
-  // Point clouds, Velodyne and rotating scans: their points (decimated already) by the same rule.
-  detail::SensorPoints sp;
-  if (!sensorPoints(obs, robotPose, true, sp)) return false;
-  std::vector<Eigen::Vector3f> p(sp.size());
-  std::size_t dropped = 0;
-  p.resize(sp.read(0, sp.size(), p.data(), nullptr, dropped));
-  stepRays("insertObservation", mrpt::math::TPoint3D(sp.origin.x(), sp.origin.y(), sp.origin.z()), p.size(),
-           [&](std::size_t i) { return mrpt::math::TPoint3D(p[i].x(), p[i].y(), p[i].z()); });
-  invalidRangesSkipped += sp.invalid + dropped;
+  stepRays("insertObservation", sets);
+  invalidRangesSkipped += invalid;
   return true;
 }
 
@@ -60,28 +87,25 @@ float CRTreeOccupancyGridMap::getCellFreeness(unsigned cx, unsigned cy, unsigned
   return mrpt::maps::COccupancyGridMap3D::l2p(static_cast<mrpt::maps::COccupancyGridMap3D::voxelType>(cell));
 }
 
-void CRTreeOccupancyGridMap::stepRays(const char* what, const mrpt::math::TPoint3D& sensor, std::size_t n,
-                                      const std::function<mrpt::math::TPoint3D(std::size_t)>& endOf) {
+void CRTreeOccupancyGridMap::stepRays(const char* what, const std::vector<mrpt_grid3d::RaySet>& sets) {
   const TGridFrame3D& f = definedFrame(frame3d_, what);
   syncParams();
-  lastInsertStats = mrpt_grid3d::insertRays(map_, f, sensor, n, endOf, mrpt_grid3d::stepsOf(insertionOptions));
+  std::optional<RangeNoiseRule> noise;
+  if (sensorModelFromString(insertionOptions.sensorModel) == SensorModel::RangeNoise)
+    noise.emplace(map_.logOddsModel(), insertionOptions.toInsertParams());
+  lastInsertStats = mrpt_grid3d::insertRays(map_, f, sets, mrpt_grid3d::stepsOf(insertionOptions), noise ? &*noise : nullptr);
   totalInsertStats += lastInsertStats;
   notifyMapChanged();
 }
 
 void CRTreeOccupancyGridMap::insertRay(const mrpt::math::TPoint3D& sensor, const mrpt::math::TPoint3D& end, bool) {
   // `end` in double, as the grid takes it (the points of an observation are floats).
-  stepRays("insertRay", sensor, 1, [&](std::size_t) { return end; });
+  stepRays("insertRay", {mrpt_grid3d::RaySet{1.0, sensor, 1, [&](std::size_t) { return end; }}});
 }
 
 void CRTreeOccupancyGridMap::insertPointCloud(const mrpt::math::TPoint3D& sensor, const mrpt::maps::CPointsMap& pts,
                                               float) {
-  const auto& xs = pts.getPointsBufferRef_x();
-  const auto& ys = pts.getPointsBufferRef_y();
-  const auto& zs = pts.getPointsBufferRef_z();
-  const std::size_t dec = std::max<std::size_t>(insertionOptions.decimation, 1), n = (xs.size() + dec - 1) / dec;
-  stepRays("insertPointCloud", sensor, n,
-           [&](std::size_t i) { return mrpt::math::TPoint3D(xs[i * dec], ys[i * dec], zs[i * dec]); });
+  stepRays("insertPointCloud", {raysOf(1.0, sensor, pts, insertionOptions.decimation)});
 }
 
 void CRTreeOccupancyGridMap::getAsOctoMapVoxels(mrpt::opengl::COctoMapVoxels& gl) const {

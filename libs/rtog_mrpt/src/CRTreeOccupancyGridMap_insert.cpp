@@ -1,7 +1,7 @@
 // rtog::CRTreeOccupancyGridMap: turning MRPT observations into beams and inserting them, at a
 // pose or an uncertain pose. The sensor specifics are helpers: sensor_points.hpp (point clouds,
-// depth, Velodyne), sonar_cones.hpp (CObservationRange as cones), grid_scan.hpp (2D scans in
-// the mrpt_grid preset), pose_sigma.hpp (the sigma points of a pose covariance).
+// depth, Velodyne), sonar_cones.hpp (CObservationRange as cones), pose_sigma.hpp (the sigma
+// points of a pose covariance); 2D scans of the mrpt_grid preset are in CRTreeOccupancyGridMap_grid2d.cpp.
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -21,7 +21,6 @@
 #include "depth_unprojection.hpp"
 #include "fingerprint.hpp"
 #include "rotating_scan.hpp"
-#include "grid_scan.hpp"
 #include "CRTreeOccupancyGridMap_grid2d.hpp"
 #include "mrpt_grid.hpp"
 #include "pose_sigma.hpp"
@@ -243,7 +242,7 @@ bool CRTreeOccupancyGridMap::internal_insertObservation(const mrpt::obs::CObserv
   if (insertionOptions.mrptGrid()) {
     // A 3D section: every observation (sonar above) as COccupancyGridMap3D. Otherwise 2D scans as
     // COccupancyGridMap2D, and 3D observations (which that grid does not take) below.
-    if (frame3d_.defined) return insertGrid3D(obs, robotPose ? *robotPose : CPose3D());
+    if (frame3d_.defined) return insertGrid3D(obs, {pose_sigma::SigmaPose{1.0, robotPose ? *robotPose : CPose3D()}});
     if (const auto* scan = dynamic_cast<const mrpt::obs::CObservation2DRangeScan*>(&obs))
       return insertGridScan(*scan, robotPose ? *robotPose : CPose3D());
   }
@@ -265,50 +264,7 @@ bool CRTreeOccupancyGridMap::internal_insertObservation(const mrpt::obs::CObserv
 }
 
 
-// ---- 2D scans in the mrpt_grid preset, sonar cones ----------------------------------------
-
-bool CRTreeOccupancyGridMap::insertGridScan(const mrpt::obs::CObservation2DRangeScan& scan, const CPose3D& robotPose,
-                                            GridScanUpdate* update) {
-  syncParams();
-  InsertStats stats;
-  std::size_t invalid = 0;
-  // With the view's tiles kept, the scan's steps are what they follow.
-  bool follow;
-  {
-    std::lock_guard<std::mutex> lk(caches_->mutex);
-    follow = caches_->tiles != nullptr;
-  }
-  GridScanUpdate own;
-  GridScanUpdate* upd = update ? update : follow ? &own : nullptr;
-  if (!mrpt_grid::insertScan(map_, frame_, scan, robotPose, insertionOptions, upd, stats, invalid)) return false;
-  invalidRangesSkipped += invalid;
-  lastInsertStats = stats;
-  totalInsertStats += stats;
-  if (follow)
-    followGridScan(*upd);
-  else
-    notifyMapChanged();
-  return true;
-}
-
-// The 2D view's tiles (grid_tiles.hpp) follow the scan's steps: see tilesLikelihood() for when
-// they stand for the view.
-void CRTreeOccupancyGridMap::followGridScan(const GridScanUpdate& upd) {
-  std::lock_guard<std::mutex> lk(caches_->mutex);
-  caches_->dropCellData();
-  GridTiles* tiles = caches_->tiles.get();
-  if (!tiles) return;
-  if (!mrpt_grid::layerInBand(frame_, map_.resolution(), gridViewOptions.gridView_minZ, gridViewOptions.gridView_maxZ)) {
-    caches_->tiles.reset();  // the first scan's layer is not in the view: made again when needed
-    return;
-  }
-  if (!tiles->frame().sameGeometry(frame_)) tiles->setFrame(frame_);
-  const float* after = upd.after.data();
-  for (const auto& run : upd.runs)
-    OccupancyMap::forEachRunCell(run, [&](std::int32_t x, std::int32_t y, StepKind) { tiles->setCell(x, y, toMrptCell(*after++)); });
-  const FieldConstants f(caches_->tiles_likelihood, frame_.resolution);
-  tiles->dropStaleTerms(f.window);
-}
+// ---- sonar cones (sonar_cones.hpp)
 
 std::vector<ConeReading> CRTreeOccupancyGridMap::sonarReadings(const mrpt::obs::CObservationRange& o,
                                                                const CPose3D& robotPose, std::size_t& invalid) const {
@@ -340,10 +296,24 @@ bool CRTreeOccupancyGridMap::insertObservation(const mrpt::obs::CObservation& ob
   if (!insertionOptions.poseUncertainty) return insertObservation(obs, pose.mean);
   // A sonar reading already spreads over its cone: inserted at the mean (doc/sonar.md).
   if (dynamic_cast<const mrpt::obs::CObservationRange*>(&obs)) return insertObservation(obs, pose.mean);
-  insertionOptions.validate();  // the mrpt_grid preset has no graded update
   const std::vector<pose_sigma::SigmaPose> sigma = pose_sigma::sigmaPoses(pose);  // throws for a bad covariance
   if (sigma.size() == 1) return insertObservation(obs, pose.mean);  // a certain pose: the plain update
   if (!genericMapParams.enableObservationInsertion) return false;
+  if (insertionOptions.mrptGrid()) {
+    // On the grids' rasters, as the observation at a certain pose is (grid_graded.hpp).
+    const auto* scan = dynamic_cast<const mrpt::obs::CObservation2DRangeScan*>(&obs);
+    bool inserted = false, handled = true;
+    if (frame3d_.defined)
+      inserted = insertGrid3D(obs, sigma);
+    else if (scan)
+      inserted = insertGradedScan(*scan, sigma);
+    else
+      handled = false;  // a 3D observation of a 2D section: the core's mixture, on the int8 lattice
+    if (handled) {
+      if (inserted) publishEvent(mrpt::maps::mrptEventMetricMapInsert(this, &obs, pose.mean));
+      return inserted;
+    }
+  }
   std::vector<ObservationBeams> beams(sigma.size());
   for (std::size_t i = 0; i < sigma.size(); ++i)
     if (!extractBeams(obs, sigma[i].pose, beams[i], true)) return false;

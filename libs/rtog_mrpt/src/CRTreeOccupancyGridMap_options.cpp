@@ -167,6 +167,7 @@ InsertParams CRTreeOccupancyGridMap::TInsertionOptions::toInsertParams() const {
   ip.range_noise_std = rangeNoiseStd;
   ip.range_noise_std_per_meter = rangeNoiseStdPerMeter;
   ip.range_noise_cutoff = rangeNoiseCutoff;
+  if (mrptGrid()) ip.graded_unit = 1.0 / 16.0;  // the int8 grids' unit (mrpt_grid::gradedStep)
   return ip;
 }
 
@@ -174,10 +175,7 @@ void CRTreeOccupancyGridMap::TInsertionOptions::validate() const {
   const std::string sec = "insertOpts";
   if (sensorModelPreset != "mrpt_grid" && sensorModelPreset != "octomap")
     badOption(sec, "sensorModelPreset", "must be mrpt_grid or octomap, got '" + sensorModelPreset + "'");
-  const SensorModel model = sensorModelFromString(sensorModel);  // throws with the accepted names
-  if (model == SensorModel::RangeNoise && mrptGrid())
-    badOption(sec, "sensorModel",
-              "rangeNoise needs sensorModelPreset = octomap (COccupancyGridMap2D's int8 steps have no graded update)");
+  sensorModelFromString(sensorModel);  // throws with the accepted names
   if (!(std::isfinite(rangeNoiseStd) && rangeNoiseStd >= 0.0f))
     badOption(sec, "rangeNoiseStd", "must be a finite sigma >= 0 [m], got " + std::to_string(rangeNoiseStd));
   if (!(std::isfinite(rangeNoiseStdPerMeter) && rangeNoiseStdPerMeter >= 0.0f))
@@ -191,9 +189,6 @@ void CRTreeOccupancyGridMap::TInsertionOptions::validate() const {
   if (!(std::isfinite(horizontalTolerance) && horizontalTolerance >= 0.0f))
     badOption(sec, "horizontalTolerance", "must be a non-negative angle");
   if (!std::isfinite(mapAltitude)) badOption(sec, "mapAltitude", "must be finite");
-  if (mrptGrid() && poseUncertainty)
-    badOption(sec, "poseUncertainty",
-              "on needs sensorModelPreset = octomap (COccupancyGridMap2D's int8 steps have no graded update)");
   if (sonarConeWeighting != "uniform" && sonarConeWeighting != "elfes")
     badOption(sec, "sonarConeWeighting", "must be uniform or elfes, got '" + sonarConeWeighting + "'");
   if (mrptGrid() && wideningBeamsWithDistance)

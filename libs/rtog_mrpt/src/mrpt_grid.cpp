@@ -63,6 +63,12 @@ LogOddsParams logOddsParams(const Steps& s, double occupiedThreshold) {
 
 int cellOfValue(float v) { return static_cast<int>(std::lround(-v * 16.0f)); }
 
+float stepLimit(StepKind kind, int size, const Steps& whole) {
+  if (kind == StepKind::Occupied) return valueOfCell(-127 + size);
+  const int whole_size = kind == StepKind::Free ? whole.free : whole.noecho;
+  return valueOfCell(size == whole_size ? 127 - std::max(whole.free, whole.noecho) : 127 - size);
+}
+
 namespace {
 
 /// mrpt::round, which the grid's geometry uses: to nearest, ties to even (lrint in the default
@@ -226,7 +232,7 @@ void growRect(const TGridFrame2D& f, float x0, float x1, float y0, float y1, flo
 
 void traceScan(const mrpt::obs::CObservation2DRangeScan& o, const ScanPlan& plan,
                const CRTreeOccupancyGridMap::TInsertionOptions& opts, const TGridFrame2D& f,
-               std::vector<OccupancyMap::StepRun>& runs, InsertStats& stats) {
+               std::vector<OccupancyMap::StepRun>& runs, InsertStats& stats, std::vector<float>* ranges) {
   constexpr int kFrBits = OccupancyMap::kRunFracBits;  // the grid's raster: 1/512 cell
   const std::size_t n = o.getScanSize();
   const auto K = static_cast<std::size_t>(opts.decimation);
@@ -236,6 +242,7 @@ void traceScan(const mrpt::obs::CObservation2DRangeScan& o, const ScanPlan& plan
   const int cx0 = x2idx(f, plan.px), cy0 = y2idx(f, plan.py);
   runs.clear();
   runs.reserve(n / K + 1);
+  if (ranges) ranges->clear();
   for (std::size_t i = 0; i < n; i += K) {
     const bool valid = o.getScanRangeValidity(i);
     if (!valid && !opts.considerInvalidRangesAsFreeSpace) {
@@ -263,7 +270,10 @@ void traceScan(const mrpt::obs::CObservation2DRangeScan& o, const ScanPlan& plan
     r.end = valid && o.getScanRange(i) < maxd;
     r.end_x = tx + ox, r.end_y = ty + oy;
     ++(r.end ? stats.rays_hit : stats.rays_truncated);
-    if (r.count > 0 || r.end) runs.push_back(r);
+    if (r.count > 0 || r.end) {
+      runs.push_back(r);
+      if (ranges) ranges->push_back(r.end ? o.getScanRange(i) : 0.0f);
+    }
   }
 }
 

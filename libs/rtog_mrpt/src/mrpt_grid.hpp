@@ -9,6 +9,7 @@
 #include <cmath>
 
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 #include <mrpt/obs/CObservation2DRangeScan.h>
@@ -33,6 +34,34 @@ LogOddsParams logOddsParams(const Steps& s, double occupiedThreshold);
 inline float valueOfCell(int cell) { return static_cast<float>(-cell) / 16.0f; }
 /// The int8 cell of a value of the preset (exact for values the preset makes).
 int cellOfValue(float v);
+
+/// A step of `size` int8 units of `kind` on a grid cell: a whole step of its kind under the
+/// grid's own rule (updateCell_fast_free / _occupied: the cell steps unless it is within the
+/// step of its bound, which it then takes; 127 - max(free, no-echo) is the free kinds' limit), a
+/// smaller one (a graded change, or a cone's weighted step) saturating within itself of the bound.
+/// A size of 0 leaves the cell as it was.
+inline std::int8_t stepCell(std::int8_t c, StepKind kind, int size, const Steps& whole) {
+  if (kind == StepKind::Occupied) {
+    const int limit = -127 + size;
+    return c > limit ? static_cast<std::int8_t>(c - size) : std::int8_t{-127};
+  }
+  const int whole_size = kind == StepKind::Free ? whole.free : whole.noecho;
+  const int limit = size == whole_size ? 127 - std::max(whole.free, whole.noecho) : 127 - size;
+  return c < limit ? static_cast<std::int8_t>(c + size) : std::int8_t{127};
+}
+/// The limit below which (in rtog's values, -cell / 16) a cell takes stepCell()'s step, as StepRule
+/// holds it.
+float stepLimit(StepKind kind, int size, const Steps& whole);
+/// A graded change of the estimator's models (natural log-odds) as a step on the grid's int8
+/// lattice: the nearest whole number of units (1/16; half away from zero), towards occupied for a
+/// positive change. The rounding rule of every graded update of the preset (doc/mrpt_map.md;
+/// InsertParams::graded_unit is the same rule where the core applies the change).
+inline int gradedUnits(float delta) { return static_cast<int>(std::lround(16.0 * static_cast<double>(delta))); }
+inline std::pair<StepKind, int> gradedStep(float delta) {
+  const int units = gradedUnits(delta);
+  return units > 0 ? std::pair<StepKind, int>{StepKind::Occupied, units}
+                   : std::pair<StepKind, int>{StepKind::Free, -units};
+}
 
 /// COccupancyGridMap2D::setSize() and resizeGrid(..., additionalMargin = true), on the geometry.
 void setSize(TGridFrame2D& f, float x_min, float x_max, float y_min, float y_max, float resolution);
@@ -71,8 +100,9 @@ bool planScan(const mrpt::obs::CObservation2DRangeScan& o, const mrpt::poses::CP
               const CRTreeOccupancyGridMap::TInsertionOptions& opts, const TGridFrame2D& f, ScanPlan& plan);
 /// The second half, on the grown geometry: the run of cells each beam steps, in the grid's order,
 /// in lattice keys. Counts beams into `stats` as the core does.
+/// `ranges`, if given, gets each run's reading (0 for a run without an end cell).
 void traceScan(const mrpt::obs::CObservation2DRangeScan& o, const ScanPlan& plan,
                const CRTreeOccupancyGridMap::TInsertionOptions& opts, const TGridFrame2D& f,
-               std::vector<OccupancyMap::StepRun>& runs, InsertStats& stats);
+               std::vector<OccupancyMap::StepRun>& runs, InsertStats& stats, std::vector<float>* ranges = nullptr);
 
 }  // namespace rtog::mrpt_grid

@@ -19,7 +19,8 @@
 
 #include "mrpt_grid.hpp"
 #include "options_check.hpp"
-#include "util/flat_hash_map.hpp"
+#include "grid_cells.hpp"
+#include "grid_graded.hpp"
 
 namespace rtog::mrpt_grid3d {
 
@@ -121,104 +122,23 @@ bool gridPoints(const mrpt::obs::CObservation& obs, const mrpt::poses::CPose3D& 
 
 namespace {
 
-/// One scan's cells while its rays step them, as the grid's int8 cells: blocks of 8^3 grid cells
-/// made on first touch from the map's leaves there, so that a ray's steps cost an array update
-/// (a block lookup each 8 cells or so) and a cell's steps stay in ray order; then written back.
-class ScanCells {
- public:
-  ScanCells(const OccupancyMap& map, const Key& offset) : map_(map), offset_(offset) {}
-
-  std::int8_t& at(int cx, int cy, int cz) {
-    const std::uint64_t key = std::uint64_t(unsigned(cx) >> kBits) | std::uint64_t(unsigned(cy) >> kBits) << 21 |
-                              std::uint64_t(unsigned(cz) >> kBits) << 42;
-    if (key != last_key_) {
-      const auto next = static_cast<std::uint32_t>(blocks_.size());
-      const std::uint32_t b = index_.findOrInsert(key, next);
-      if (b == next) make(cx >> kBits, cy >> kBits, cz >> kBits);
-      last_ = &blocks_[b];
-      last_key_ = key;
-    }
-    const int i = ((cz & kMask) << (2 * kBits)) | ((cy & kMask) << kBits) | (cx & kMask);
-    last_->seen[i >> 6] |= std::uint64_t{1} << (i & 63);
-    return last_->v[i];
-  }
-
-  /// The cells stepped, in lattice keys with their values: greedy boxes of equal cells within a
-  /// block (x runs grown along y, then z), so that a brick first made by this scan does not hold
-  /// a leaf per cell (assignCells takes a new brick's boxes as its leaves).
-  void emit(std::vector<Box>& boxes, std::vector<float>& values) const {
-    for (const Block& b : blocks_) {
-      std::array<std::uint64_t, kCells / 64> open = b.seen;  // stepped, not yet in a box
-      const auto isOpen = [&](int i) { return ((open[static_cast<std::size_t>(i) >> 6] >> (i & 63)) & 1u) != 0; };
-      const auto at = [](int x, int y, int z) { return (z << (2 * kBits)) | (y << kBits) | x; };
-      for (int i = 0; i < kCells; ++i) {
-        if (!isOpen(i)) continue;
-        const int x0 = i & kMask, y0 = (i >> kBits) & kMask, z0 = i >> (2 * kBits);
-        const std::int8_t v = b.v[static_cast<std::size_t>(i)];
-        const auto same = [&](int x, int y, int z) { return isOpen(at(x, y, z)) && b.v[static_cast<std::size_t>(at(x, y, z))] == v; };
-        int x1 = x0, y1 = y0, z1 = z0;
-        while (x1 + 1 < kSide && same(x1 + 1, y0, z0)) ++x1;
-        const auto rowSame = [&](int y, int z) {
-          for (int x = x0; x <= x1; ++x)
-            if (!same(x, y, z)) return false;
-          return true;
-        };
-        while (y1 + 1 < kSide && rowSame(y1 + 1, z0)) ++y1;
-        const auto sliceSame = [&](int z) {
-          for (int y = y0; y <= y1; ++y)
-            if (!rowSame(y, z)) return false;
-          return true;
-        };
-        while (z1 + 1 < kSide && sliceSame(z1 + 1)) ++z1;
-        for (int z = z0; z <= z1; ++z)
-          for (int y = y0; y <= y1; ++y)
-            for (int x = x0; x <= x1; ++x) {
-              const int c = at(x, y, z);
-              open[static_cast<std::size_t>(c) >> 6] &= ~(std::uint64_t{1} << (c & 63));
-            }
-        boxes.push_back(Box{Key{b.x0 + x0, b.y0 + y0, b.z0 + z0}, Key{b.x0 + x1, b.y0 + y1, b.z0 + z1}});
-        values.push_back(mrpt_grid::valueOfCell(v));
-      }
-    }
-  }
-
- private:
-  static constexpr int kBits = 3, kSide = 1 << kBits, kMask = kSide - 1, kCells = kSide * kSide * kSide;
-  struct Block {
-    std::int32_t x0, y0, z0;  // lattice key of its first cell
-    std::array<std::int8_t, kCells> v;
-    std::array<std::uint64_t, kCells / 64> seen;
-  };
-  void make(int bx, int by, int bz) {
-    Block& b = blocks_.emplace_back();
-    b.x0 = offset_.x + bx * kSide, b.y0 = offset_.y + by * kSide, b.z0 = offset_.z + bz * kSide;
-    b.v.fill(0);  // unknown: the grid's 0.5
-    b.seen.fill(0);
-    last_key_ = ~std::uint64_t{0};  // emplace_back may have moved the blocks
-    const Box region{Key{b.x0, b.y0, b.z0}, Key{b.x0 + kMask, b.y0 + kMask, b.z0 + kMask}};
-    map_.forEachLeafIn(region, [&](const Box& leaf, float value) {
-      const auto c = static_cast<std::int8_t>(mrpt_grid::cellOfValue(value));
-      for (std::int32_t z = std::max(leaf.min.z, region.min.z); z <= std::min(leaf.max.z, region.max.z); ++z)
-        for (std::int32_t y = std::max(leaf.min.y, region.min.y); y <= std::min(leaf.max.y, region.max.y); ++y)
-          for (std::int32_t x = std::max(leaf.min.x, region.min.x); x <= std::min(leaf.max.x, region.max.x); ++x)
-            b.v[static_cast<std::size_t>(((z - b.z0) << (2 * kBits)) | ((y - b.y0) << kBits) | (x - b.x0))] = c;
-    });
-  }
-
-  const OccupancyMap& map_;
-  Key offset_;
-  std::vector<Block> blocks_;
-  detail::FlatHashMap64 index_;
-  std::uint64_t last_key_ = ~std::uint64_t{0};
-  Block* last_ = nullptr;
-};
-
 enum class Ray { Traced, SensorOutside, Zero };
 
-/// COccupancyGridMap3D::insertRay, step for step: visit(cx, cy, cz, occupied) for each step.
-template <class Visit>
-Ray traceRay(const TGridFrame3D& f, const mrpt::math::TPoint3D& sensor, const mrpt::math::TPoint3D& end,
-             Visit&& visit) {
+/// COccupancyGridMap3D::insertRay's raster of a ray: n steps from the sensor's cell c by the
+/// fixed-point increments f, then the end's cell t.
+struct Raster {
+  int cx, cy, cz, tx, ty, tz, n;
+  std::int64_t fx, fy, fz;
+  /// Raster cell i (i < n: the i-th free step; beyond, the raster continued), false outside the grid.
+  bool cell(const TGridFrame3D& f, std::int64_t i, int& x, int& y, int& z) const {
+    x = static_cast<int>(((std::int64_t{cx} << kFrBits) + i * fx) >> kFrBits);
+    y = static_cast<int>(((std::int64_t{cy} << kFrBits) + i * fy) >> kFrBits);
+    z = static_cast<int>(((std::int64_t{cz} << kFrBits) + i * fz) >> kFrBits);
+    return !outside(f, x, y, z);
+  }
+};
+
+Ray rasterOf(const TGridFrame3D& f, const mrpt::math::TPoint3D& sensor, const mrpt::math::TPoint3D& end, Raster& r) {
   // An index beyond what the fixed point holds (the grid's int arithmetic would overflow) is
   // left out: no cell of the grid lies there.
   constexpr double kFar = double(1 << 21);
@@ -231,26 +151,78 @@ Ray traceRay(const TGridFrame3D& f, const mrpt::math::TPoint3D& sensor, const mr
     }
     return static_cast<int>(d);
   };
-  int cx = idx(sensor.x, f.x_min), cy = idx(sensor.y, f.y_min), cz = idx(sensor.z, f.z_min);
-  if (far || outside(f, cx, cy, cz)) return Ray::SensorOutside;
-  const int tx = idx(end.x, f.x_min), ty = idx(end.y, f.y_min), tz = idx(end.z, f.z_min);
+  r.cx = idx(sensor.x, f.x_min), r.cy = idx(sensor.y, f.y_min), r.cz = idx(sensor.z, f.z_min);
+  if (far || outside(f, r.cx, r.cy, r.cz)) return Ray::SensorOutside;
+  r.tx = idx(end.x, f.x_min), r.ty = idx(end.y, f.y_min), r.tz = idx(end.z, f.z_min);
   if (far) return Ray::SensorOutside;
-  const int ax = tx - cx, ay = ty - cy, az = tz - cz;
-  const int n = std::max({std::abs(ax), std::abs(ay), std::abs(az)});
-  if (n == 0) return Ray::Zero;  // the grid returns before the occupied step too
-  const float inv = 1.0f / static_cast<float>(n);
+  const int ax = r.tx - r.cx, ay = r.ty - r.cy, az = r.tz - r.cz;
+  r.n = std::max({std::abs(ax), std::abs(ay), std::abs(az)});
+  if (r.n == 0) return Ray::Zero;  // the grid returns before the occupied step too
+  const float inv = 1.0f / static_cast<float>(r.n);
   const auto inc = [inv](int a) { return (a < 0 ? -1 : +1) * mrpt::round((std::abs(a) << kFrBits) * inv); };
-  const int fx = inc(ax), fy = inc(ay), fz = inc(az);
+  r.fx = inc(ax), r.fy = inc(ay), r.fz = inc(az);
+  return Ray::Traced;
+}
+
+/// COccupancyGridMap3D::insertRay, step for step: visit(cx, cy, cz, occupied) for each step (the
+/// free steps stop where the raster leaves the grid; the end's cell only inside it).
+template <class Visit>
+void walk(const TGridFrame3D& f, const Raster& r, Visit&& visit) {
   // 64 bits: the grid's ints where they do not overflow, and defined where they would.
-  std::int64_t px = std::int64_t{cx} << kFrBits, py = std::int64_t{cy} << kFrBits, pz = std::int64_t{cz} << kFrBits;
-  for (int k = 0; k < n; ++k) {
+  std::int64_t px = std::int64_t{r.cx} << kFrBits, py = std::int64_t{r.cy} << kFrBits, pz = std::int64_t{r.cz} << kFrBits;
+  int cx = r.cx, cy = r.cy, cz = r.cz;
+  for (int k = 0; k < r.n; ++k) {
     visit(cx, cy, cz, false);
-    px += fx, py += fy, pz += fz;
+    px += r.fx, py += r.fy, pz += r.fz;
     cx = static_cast<int>(px >> kFrBits), cy = static_cast<int>(py >> kFrBits), cz = static_cast<int>(pz >> kFrBits);
     if (outside(f, cx, cy, cz)) break;
   }
-  if (!outside(f, tx, ty, tz)) visit(tx, ty, tz, true);  // cellByIndex: nothing outside
-  return Ray::Traced;
+  if (!outside(f, r.tx, r.ty, r.tz)) visit(r.tx, r.ty, r.tz, true);  // cellByIndex: nothing outside
+}
+
+/// Counts a ray into `stats`; true if it is traced.
+bool countRay(const mrpt::math::TPoint3D& e, Ray ray, InsertStats& stats) {
+  if (!std::isfinite(e.x) || !std::isfinite(e.y) || !std::isfinite(e.z)) {
+    ++stats.skipped_non_finite;  // the grid would cast a NaN to an index: undefined, not followed
+    return false;
+  }
+  switch (ray) {
+    case Ray::Traced: ++stats.rays_hit; return true;
+    case Ray::SensorOutside: ++stats.skipped_out_of_range; return false;
+    case Ray::Zero: ++stats.skipped_zero_length; return false;
+  }
+  return false;
+}
+
+/// One ray set's steps, ray by ray: the grid's, or graded by gradeBeam() with range noise.
+void setSteps(const TGridFrame3D& f, const RaySet& set, const mrpt_grid::Steps& whole, const RangeNoiseRule* noise,
+              std::vector<mrpt_grid::CellStep>& out, InsertStats& stats) {
+  const Key o = keyOffset(f);
+  const auto key = [&](int x, int y, int z) { return Key{o.x + x, o.y + y, o.z + z}; };
+  for (std::size_t i = 0; i < set.n; ++i) {
+    const mrpt::math::TPoint3D e = set.endOf(i);
+    Raster r{};
+    const bool finite = std::isfinite(e.x) && std::isfinite(e.y) && std::isfinite(e.z);
+    if (!countRay(e, finite ? rasterOf(f, set.sensor, e, r) : Ray::Zero, stats)) continue;
+    const double R = std::sqrt(mrpt::square(e.x - set.sensor.x) + mrpt::square(e.y - set.sensor.y) +
+                               mrpt::square(e.z - set.sensor.z));
+    const double sigma = noise ? noise->sigma(R) : 0.0;
+    if (!(sigma > 0.0)) {
+      walk(f, r, [&](int x, int y, int z, bool occupied) {
+        out.push_back(occupied ? mrpt_grid::CellStep{key(x, y, z), StepKind::Occupied, static_cast<std::uint8_t>(whole.occupied)}
+                               : mrpt_grid::CellStep{key(x, y, z), StepKind::Free, static_cast<std::uint8_t>(whole.free)});
+      });
+      continue;
+    }
+    const Key end = key(r.tx, r.ty, r.tz);
+    mrpt_grid::gradeBeam(*noise, R, sigma, static_cast<std::uint32_t>(r.n), outside(f, r.tx, r.ty, r.tz) ? nullptr : &end,
+                         whole, [&](std::uint32_t k, Key& out_key) {
+                           int x, y, z;
+                           if (!r.cell(f, k, x, y, z)) return false;
+                           out_key = key(x, y, z);
+                           return true;
+                         }, out);
+  }
 }
 
 }  // namespace
@@ -260,39 +232,43 @@ Steps3D stepsOf(const CRTreeOccupancyGridMap::TInsertionOptions& io) {
   return Steps3D{s.free, s.occupied};
 }
 
-InsertStats insertRays(OccupancyMap& map, const TGridFrame3D& f, const mrpt::math::TPoint3D& sensor, std::size_t n,
-                       const std::function<mrpt::math::TPoint3D(std::size_t)>& endOf, const Steps3D& steps) {
+InsertStats insertRays(OccupancyMap& map, const TGridFrame3D& f, const std::vector<RaySet>& sets, const Steps3D& steps,
+                       const RangeNoiseRule* noise) {
   InsertStats stats;
-  ScanCells cells(map, keyOffset(f));
-  // updateCell_fast_free / _occupied, in the grid's int8 arithmetic.
-  const int free_limit = 127 - steps.free, occupied_limit = -127 + steps.occupied;
-  const auto step = [&](int cx, int cy, int cz, bool occupied) {
-    std::int8_t& c = cells.at(cx, cy, cz);
-    if (occupied)
-      c = c > occupied_limit ? static_cast<std::int8_t>(c - steps.occupied) : std::int8_t{-127};
-    else
-      c = c < free_limit ? static_cast<std::int8_t>(c + steps.free) : std::int8_t{127};
-  };
-  for (std::size_t i = 0; i < n; ++i) {
-    const mrpt::math::TPoint3D e = endOf(i);
-    if (!std::isfinite(e.x) || !std::isfinite(e.y) || !std::isfinite(e.z)) {
-      ++stats.skipped_non_finite;  // the grid would cast a NaN to an index: undefined, not followed
-      continue;
+  // updateCell_fast_free / _occupied, in the grid's int8 arithmetic (no no-return beams: the
+  // free limit is 127 - free).
+  const mrpt_grid::Steps whole{steps.free, steps.free, steps.occupied};
+  if (sets.size() == 1 && !noise) {  // the grid's own insertion: each step as it is traced
+    const RaySet& set = sets.front();
+    mrpt_grid::ScanCells cells(map, keyOffset(f));
+    const auto step = [&](int cx, int cy, int cz, bool occupied) {
+      std::int8_t& c = cells.at(cx, cy, cz);
+      c = occupied ? mrpt_grid::stepCell(c, StepKind::Occupied, whole.occupied, whole)
+                   : mrpt_grid::stepCell(c, StepKind::Free, whole.free, whole);
+    };
+    for (std::size_t i = 0; i < set.n; ++i) {
+      const mrpt::math::TPoint3D e = set.endOf(i);
+      Raster r{};
+      const bool finite = std::isfinite(e.x) && std::isfinite(e.y) && std::isfinite(e.z);
+      if (countRay(e, finite ? rasterOf(f, set.sensor, e, r) : Ray::Zero, stats)) walk(f, r, step);
     }
-    switch (traceRay(f, sensor, e, step)) {
-      case Ray::Traced: ++stats.rays_hit; break;
-      case Ray::SensorOutside: ++stats.skipped_out_of_range; break;
-      case Ray::Zero: ++stats.skipped_zero_length; break;
-    }
-  }
-  std::vector<Box> boxes;
-  std::vector<float> values;
-  cells.emit(boxes, values);
-  if (!boxes.empty()) {
-    const InsertStats assigned = map.assignCells(boxes.data(), values.data(), boxes.size());
+    const InsertStats assigned = cells.writeBack(map);
     stats.cells_free = assigned.cells_free, stats.cells_occupied = assigned.cells_occupied;
     stats.leaves_created = assigned.leaves_created, stats.leaves_merged = assigned.leaves_merged;
+    return stats;
   }
+  mrpt_grid::PoseMixture mixture(map, whole, sets.size());
+  std::vector<mrpt_grid::CellStep> cellSteps;
+  for (std::size_t s = 0; s < sets.size(); ++s) {
+    InsertStats own;
+    cellSteps.clear();
+    setSteps(f, sets[s], whole, noise, cellSteps, own);
+    if (s == 0) stats = own;
+    mixture.add(sets[s].weight, cellSteps);
+  }
+  const InsertStats assigned = mixture.writeBack(map);
+  stats.cells_free = assigned.cells_free, stats.cells_occupied = assigned.cells_occupied;
+  stats.leaves_created = assigned.leaves_created, stats.leaves_merged = assigned.leaves_merged;
   return stats;
 }
 

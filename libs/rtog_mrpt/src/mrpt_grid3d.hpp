@@ -21,6 +21,7 @@
 #include <mrpt/poses/CPose3D.h>
 
 #include "rtog/core/occupancy_map.hpp"
+#include "rtog/core/range_noise.hpp"
 #include "rtog/mrpt/CRTreeOccupancyGridMap.h"
 
 namespace rtog::mrpt_grid3d {
@@ -52,13 +53,23 @@ struct Steps3D {
 };
 Steps3D stepsOf(const CRTreeOccupancyGridMap::TInsertionOptions& io);
 
-/// n rays from `sensor` to endOf(0 .. n), in order, each as COccupancyGridMap3D::insertRay steps
-/// the grid's cells (cells outside its extent are not stepped; a ray whose sensor lies outside
-/// counts in skipped_out_of_range, a non-finite end in skipped_non_finite, one ending in the
-/// sensor's cell in skipped_zero_length, the others in rays_hit); the cells it stepped then take
-/// their values in `map` (OccupancyMap::assignCells).
-InsertStats insertRays(OccupancyMap& map, const TGridFrame3D& f, const mrpt::math::TPoint3D& sensor, std::size_t n,
-                       const std::function<mrpt::math::TPoint3D(std::size_t)>& endOf, const Steps3D& steps);
+/// One pose's rays of a scan: from `sensor` to endOf(0 .. n), in order, with the pose's weight.
+struct RaySet {
+  double weight = 1.0;
+  mrpt::math::TPoint3D sensor;
+  std::size_t n = 0;
+  std::function<mrpt::math::TPoint3D(std::size_t)> endOf;
+};
+
+/// The rays of `sets` step the grid's cells as COccupancyGridMap3D::insertRay steps them (cells
+/// outside its extent are not stepped; a ray whose sensor lies outside counts in
+/// skipped_out_of_range, a non-finite end in skipped_non_finite, one ending in the sensor's cell
+/// in skipped_zero_length, the others in rays_hit: the first set's); the cells stepped then take
+/// their values in `map` (OccupancyMap::assignCells). With `noise` (range noise), each ray's band
+/// is graded on the grid's raster (mrpt_grid::gradeBeam); several sets (the sigma poses of an
+/// uncertain pose) are mixed (mrpt_grid::PoseMixture). One set without noise is the grid's insertion.
+InsertStats insertRays(OccupancyMap& map, const TGridFrame3D& f, const std::vector<RaySet>& sets, const Steps3D& steps,
+                       const RangeNoiseRule* noise = nullptr);
 
 /// The keys of a 3D section that COccupancyGridMap3D reads otherwise than COccupancyGridMap2D:
 /// likelihoodMethod by its numbers (0: the likelihood field, 1: ray tracing), decimation_3d_range

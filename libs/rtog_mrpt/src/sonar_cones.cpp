@@ -132,9 +132,8 @@ InsertStats insertOnGrid(OccupancyMap& map, TGridFrame2D& frame, const std::vect
         StepRule rule = grid_rule;
         if (k != wholeStep(kind)) {
           const auto i = static_cast<std::size_t>(kind);
-          const int sign = kind == StepKind::Occupied ? -1 : 1;
-          rule.delta[i] = mrpt_grid::valueOfCell(sign * k);
-          rule.limit[i] = mrpt_grid::valueOfCell(sign * (127 - k));
+          rule.delta[i] = mrpt_grid::valueOfCell(kind == StepKind::Occupied ? -k : k);
+          rule.limit[i] = mrpt_grid::stepLimit(kind, k, full);
         }
         stats += map.applyStepRuns(grown.layer, runs.data(), runs.size(), rule);
       }

@@ -61,6 +61,8 @@ void InsertParams::validate() const {
   };
   nonNegative(range_noise_std, "range_noise_std");
   nonNegative(range_noise_std_per_meter, "range_noise_std_per_meter");
+  if (!(std::isfinite(graded_unit) && graded_unit >= 0.0))
+    throw std::invalid_argument("InsertParams: graded_unit must be finite and >= 0, got " + std::to_string(graded_unit));
   if (!(range_noise_cutoff >= 0.5 && range_noise_cutoff <= 10.0))
     throw std::invalid_argument("InsertParams: range_noise_cutoff must lie in [0.5, 10] sigma, got " +
                                 std::to_string(range_noise_cutoff));

@@ -11,6 +11,7 @@ RangeNoiseRule::RangeNoiseRule(const LogOddsModel& model, const InsertParams& ip
       p_miss_(model.params().prob_miss),
       p0_(model.params().prior),
       l0_(std::log(p0_ / (1.0 - p0_))),
+      ip_(ip),
       std_(ip.range_noise_std),
       std_per_meter_(ip.range_noise_std_per_meter),
       cutoff_(ip.range_noise_cutoff),
@@ -28,15 +29,15 @@ bool RangeNoiseRule::cellDelta(double t_in, double t_out, double r, double sigma
   const double behind = cdf(t_in, r, sigma), before = cdf(t_out, r, sigma);
   if (behind >= 1.0) return false;
   if (before <= 0.0) {
-    delta = miss_;
+    delta = ip_.graded(miss_);
     return true;
   }
   if (behind <= 0.0 && before >= 1.0) {
-    delta = hit_;
+    delta = ip_.graded(hit_);
     return true;
   }
   const double p = (before - behind) * p_hit_ + (1.0 - before) * p_miss_ + behind * p0_;
-  delta = static_cast<float>(std::log(p / (1.0 - p)) - l0_);
+  delta = ip_.graded(std::log(p / (1.0 - p)) - l0_);
   return true;
 }
 

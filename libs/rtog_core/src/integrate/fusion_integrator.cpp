@@ -7,7 +7,7 @@
 
 #include "integrate/fusion_resample.hpp"
 #include "integrate/insert_scratch.hpp"
-#include "integrate/mixture.hpp"
+#include "rtog/core/mixture.hpp"
 #include "parallel/parallel.hpp"
 #include "storage/map_store.hpp"
 #include "util/flat_hash_map.hpp"

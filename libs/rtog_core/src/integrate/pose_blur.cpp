@@ -15,7 +15,7 @@
 
 #include "integrate/beam_integrator.hpp"
 #include "integrate/insert_scratch.hpp"
-#include "integrate/mixture.hpp"
+#include "rtog/core/mixture.hpp"
 #include "parallel/parallel.hpp"
 #include "storage/brick.hpp"
 #include "storage/map_store.hpp"
@@ -36,8 +36,8 @@ struct BrickSource {
 /// with its change logit(P0 + sum) - l0, bricks in Morton order as finalize() leaves them.
 class Mixture {
  public:
-  Mixture(const LogOddsModel& model, const std::vector<double>& weights)
-      : model_(model), weights_(weights), rule_(model.prior()) {}
+  Mixture(const LogOddsModel& model, const std::vector<double>& weights, const InsertParams& ip)
+      : model_(model), weights_(weights), ip_(ip), rule_(model.prior()) {}
 
   void mixBatches(const std::vector<UpdateBatch>& batches, GradedScan& out) {
     std::vector<BrickSource> sources;
@@ -106,7 +106,7 @@ class Mixture {
       for (std::size_t w = 0; w < touched_.size(); ++w) {
         for (std::uint64_t bits = touched_[w]; bits != 0; bits &= bits - 1) {
           const auto i = w * 64 + static_cast<std::size_t>(__builtin_ctzll(bits));
-          cells_.push_back(GradedCell{static_cast<std::uint16_t>(i), rule_.change(sum_[i])});
+          cells_.push_back(GradedCell{static_cast<std::uint16_t>(i), ip_.graded(rule_.change(sum_[i]))});
           sum_[i] = 0.0;
         }
         touched_[w] = 0;
@@ -118,6 +118,7 @@ class Mixture {
 
   const LogOddsModel& model_;
   const std::vector<double>& weights_;
+  const InsertParams& ip_;  // its graded_unit
   ProbabilityMixture rule_;
   std::array<double, kBrickCells> sum_{};
   BrickMask touched_{};
@@ -211,7 +212,7 @@ UpdateSet PoseBlurIntegrator::trace(const WeightedScan* scans, std::size_t n, co
   for (std::size_t i = 0; i < n; ++i) weights[i] = scans[i].weight / total;
   GradedScan& out = scratch.graded[graded ? n : 0];
   out.clear();
-  auto mix = std::make_unique<Mixture>(store.model, weights);  // 36 KB of dense brick sums
+  auto mix = std::make_unique<Mixture>(store.model, weights, ip);  // 36 KB of dense brick sums
   if (graded) {
     mix->mixGraded(scratch.graded, out);
   } else {

@@ -1,6 +1,8 @@
 // Parameters of a map and of one insertion.
 #pragma once
 
+#include <cmath>
+
 #include <cstdint>
 #include <string>
 
@@ -81,6 +83,15 @@ struct InsertParams {
   /// RangeNoise: the surface is taken to lie within this many sigma of the reading; cells beyond
   /// r + cutoff * sigma are left untouched. (Default: 3)
   double range_noise_cutoff = 3.0;
+  /// The graded changes (range noise, pose blur) rounded to whole multiples of this log-odds
+  /// unit, half away from zero, so that a map of integer log-odds stays on its lattice (MRPT's
+  /// int8 grids: 1/16, as the mrpt_grid preset sets it). 0: not rounded. (Default: 0)
+  double graded_unit = 0.0;
+
+  /// A graded change as it enters the map (graded_unit).
+  float graded(double delta) const {
+    return static_cast<float>(graded_unit > 0.0 ? std::round(delta / graded_unit) * graded_unit : delta);
+  }
 
   /// Throws std::invalid_argument naming the field unless the values are usable.
   void validate() const;
