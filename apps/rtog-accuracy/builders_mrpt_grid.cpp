@@ -87,7 +87,11 @@ MapView buildRtogMrptGrid(const std::vector<sim::Scan>& scans, const std::vector
   }
   MapView out(v.name, region.size());
   out.insert_seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+  // Read as the grids are read (readMrpt): a cell at exactly 0.5 is unknown, whether or not it was
+  // observed, so that the preset and MRPT's grids are scored on the same cells.
   readRtog(map.map(), region, out);
+  for (std::size_t i = 0; i < out.p.size(); ++i)
+    if (out.p[i] == 0.5f) out.state[i] = sim::Predicted::Unknown;
   return out;
 }
 
