@@ -10,14 +10,14 @@
 namespace rtog {
 namespace {
 
-// Where the line origin + t * dir (lattice units, |dir| = 1) is inside cell k: [t_in, t_out].
-void cellInterval(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir, const Key& k, double& t_in,
-                  double& t_out) {
+// Where the line origin + t * dir (lattice units, |dir| = 1, `inv` its inverse per axis, 0 where
+// the axis is not crossed) is inside cell k: [t_in, t_out].
+void cellInterval(const Eigen::Vector3d& origin, const Eigen::Vector3d& inv, const Key& k, double& t_in, double& t_out) {
   t_in = 0.0;
   t_out = std::numeric_limits<double>::infinity();
   for (int a = 0; a < 3; ++a) {
-    if (dir[a] == 0.0) continue;
-    const double t1 = (double(k[a]) - origin[a]) / dir[a], t2 = (double(k[a]) + 1.0 - origin[a]) / dir[a];
+    if (inv[a] == 0.0) continue;
+    const double t1 = (double(k[a]) - origin[a]) * inv[a], t2 = t1 + inv[a];
     t_in = std::max(t_in, std::min(t1, t2));
     t_out = std::min(t_out, std::max(t1, t2));
   }
@@ -113,6 +113,8 @@ void GradedScan::traceRangeNoise(const Lattice& lattice, const LogOddsModel& mod
     }
     if (far_key == end_key) far_l = end_l;  // the beam model's walk, exactly
     const Eigen::Vector3d dir_l = (far_l - origin_l).normalized();
+    const Eigen::Vector3d inv_l(dir_l.x() != 0.0 ? 1.0 / dir_l.x() : 0.0, dir_l.y() != 0.0 ? 1.0 / dir_l.y() : 0.0,
+                                dir_l.z() != 0.0 ? 1.0 / dir_l.z() : 0.0);
     // Cells before the band's start take exactly the miss change: the fast walk up to the start's
     // cell, the graded walk from there.
     Eigen::Vector3d from_l = origin_l;
@@ -132,7 +134,7 @@ void GradedScan::traceRangeNoise(const Lattice& lattice, const LogOddsModel& mod
     bool past_end = false;
     const auto visit = [&](const Key& k) {
       double t_in, t_out;
-      cellInterval(origin_l, dir_l, k, t_in, t_out);
+      cellInterval(origin_l, inv_l, k, t_in, t_out);
       t_in *= res;
       t_out *= res;
       if (k == end_key) {

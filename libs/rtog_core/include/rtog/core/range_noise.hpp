@@ -3,6 +3,8 @@
 // walks, the mrpt_grid preset's grid rasters) grades its cells by this one rule.
 #pragma once
 
+#include <limits>
+
 #include "rtog/core/log_odds.hpp"
 #include "rtog/core/params.hpp"
 
@@ -17,6 +19,8 @@ namespace rtog {
 ///   P(occ | r) = w_hit * prob_hit + w_pass * prob_miss + w_behind * prior,
 /// entered as l_meas - l0 = logit(P(occ | r)) - l0. A cell wholly before the band takes the
 /// model's miss change, one holding the whole band its hit change, exactly.
+///
+/// Not to be shared between threads (it keeps its last value of F): one object per thread.
 class RangeNoiseRule {
  public:
   RangeNoiseRule(const LogOddsModel& model, const InsertParams& ip);
@@ -33,10 +37,13 @@ class RangeNoiseRule {
  private:
   double cdf(double t, double r, double sigma) const;  // F, 0 below the band, 1 above it
 
+  // cdf()'s last value (a cell's exit is the next one's entry): one rule object per thread.
+  mutable double last_t_ = std::numeric_limits<double>::quiet_NaN(), last_r_ = 0.0, last_sigma_ = 0.0, last_f_ = 0.0;
+  mutable double inv_of_ = 0.0, inv_sigma_ = 0.0;  // 1 / sigma of the last sigma
   float hit_, miss_;
   double p_hit_, p_miss_, p0_, l0_;
   InsertParams ip_;  // its graded_unit
-  double std_, std_per_meter_, cutoff_, tail_, mass_;  // tail_ = Phi(-cutoff), mass_ = 1 - 2 tail_
+  double std_, std_per_meter_, cutoff_, tail_, mass_, inv_mass_;  // tail_ = Phi(-cutoff), mass_ = 1 - 2 tail_
 };
 
 }  // namespace rtog
