@@ -20,6 +20,7 @@
 #include <mrpt/obs/CObservation2DRangeScan.h>
 #include <mrpt/obs/CObservation.h>
 #include <mrpt/obs/CRawlog.h>
+#include <mrpt/poses/CPose3DPDFGaussian.h>
 #include <octomap/OcTree.h>
 
 #include "methods.hpp"
@@ -194,7 +195,13 @@ void run2D(const std::string& rawlog, const Options& opts, std::vector<Result>& 
     std::function<std::size_t(const mrpt::maps::CMetricMap&)> bytes;
     std::vector<double> times = {};
     std::shared_ptr<mrpt::maps::CMetricMap> map = nullptr;
+    bool blur = false;  // each scan inserted at its pose with kPoseCov (poseUncertainty = on)
   };
+  // The estimator's pose blur at odometry-like uncertainty: 0.05 m in x and y, 1 deg in yaw.
+  mrpt::math::CMatrixDouble66 pose_cov;
+  pose_cov.setZero();
+  pose_cov(0, 0) = pose_cov(1, 1) = 0.05 * 0.05;
+  pose_cov(3, 3) = (M_PI / 180.0) * (M_PI / 180.0);
   for (const double res : opts.resolutions) {
     std::vector<Method2D> methods;
     // Both update rules: mrpt_grid (the MRPT map types' default: COccupancyGridMap2D's cells) and
@@ -214,6 +221,32 @@ void run2D(const std::string& rawlog, const Options& opts, std::vector<Result>& 
                          [](const mrpt::maps::CMetricMap& m) {
                            return dynamic_cast<const CRTreeOccupancyGridMap&>(m).map().memoryBytes();
                          }});
+    // The estimator's models in both presets (merge equal): range noise at a laser's sigma, pose
+    // blur, both (doc/range-noise.md, doc/pose-uncertainty.md; in mrpt_grid on the grid's raster).
+    for (const std::string preset : {"mrpt_grid", "octomap"})
+      for (const int model : {0, 1, 2}) {
+        const bool noise = model != 1, blur = model != 0;
+        const std::string what = noise && blur ? "range noise (sigma 0.02 m + 0.01 m/m), pose blur (sigma 0.05 m, 1 deg)"
+                                 : noise       ? "range noise (sigma 0.02 m + 0.01 m/m)"
+                                               : "pose blur (sigma 0.05 m, 1 deg)";
+        methods.push_back({"rtog (CRTreeOccupancyGridMap), " + preset + ", merge equal, " + what,
+                           [=] {
+                             CRTreeOccupancyGridMap::TInsertionOptions io;
+                             io.sensorModelPreset = preset;
+                             io.maxDistanceInsertion = max_range;
+                             io.sensorModel = noise ? "rangeNoise" : "beam";
+                             io.rangeNoiseStd = 0.02f;
+                             io.rangeNoiseStdPerMeter = 0.01f;
+                             io.poseUncertainty = blur;
+                             auto m = std::make_shared<CRTreeOccupancyGridMap>(res, io);
+                             m->likelihoodOptions.LF_decimation = kLfDecimation;
+                             return m;
+                           },
+                           [](const mrpt::maps::CMetricMap& m) {
+                             return dynamic_cast<const CRTreeOccupancyGridMap&>(m).map().memoryBytes();
+                           },
+                           {}, nullptr, blur});
+      }
     methods.push_back({"MRPT COccupancyGridMap2D",
                        [=] {
                          auto g = std::make_shared<mrpt::maps::COccupancyGridMap2D>(-10.0f, 10.0f, -10.0f, 10.0f,
@@ -234,7 +267,13 @@ void run2D(const std::string& rawlog, const Options& opts, std::vector<Result>& 
       Method2D& m = methods[k];
       m.map = m.make();
       const auto t0 = Clock::now();
-      for (const auto& [pose, scan] : scans) m.map->insertObservation(*scan, pose);
+      if (m.blur) {
+        auto& rtog_map = dynamic_cast<CRTreeOccupancyGridMap&>(*m.map);
+        for (const auto& [pose, scan] : scans)
+          rtog_map.insertObservation(*scan, mrpt::poses::CPose3DPDFGaussian(pose, pose_cov));
+      } else {
+        for (const auto& [pose, scan] : scans) m.map->insertObservation(*scan, pose);
+      }
       // Until the map can be read: rtog covers the scans of its planar cache with leaves.
       if (auto* rtog_map = dynamic_cast<CRTreeOccupancyGridMap*>(m.map.get())) rtog_map->map().flush();
       return seconds(t0, Clock::now());

@@ -41,39 +41,121 @@ void poseSteps(const std::vector<OccupancyMap::StepRun>& runs, const std::vector
   }
 }
 
+/// `plain` (the grid's runs, in order) with the grid's rule, then `band` (single cells' graded
+/// steps) grouped by kind and size, a pass each, through the planar cache.
+InsertStats applyGrouped(OccupancyMap& map, std::int32_t layer, const std::vector<OccupancyMap::StepRun>& plain,
+                         std::vector<CellStep> band, const Steps& whole) {
+  const StepRule grid_rule = stepRule(whole);
+  InsertStats stats = map.applyStepRuns(layer, plain.data(), plain.size(), grid_rule);
+  std::stable_sort(band.begin(), band.end(), [](const CellStep& a, const CellStep& b) {
+    return a.kind != b.kind ? a.kind < b.kind : a.size < b.size;
+  });
+  std::vector<OccupancyMap::StepRun> group;
+  for (std::size_t first = 0; first < band.size();) {
+    std::size_t last = first;
+    group.clear();
+    for (; last < band.size() && band[last].kind == band[first].kind && band[last].size == band[first].size; ++last) {
+      OccupancyMap::StepRun s{};
+      s.x = band[last].key.x, s.y = band[last].key.y;
+      s.kind = band[last].kind;
+      s.count = s.kind == StepKind::Occupied ? 0 : 1;
+      s.end = s.kind == StepKind::Occupied;
+      s.end_x = s.x, s.end_y = s.y;
+      group.push_back(s);
+    }
+    StepRule rule = grid_rule;
+    const auto i = static_cast<std::size_t>(band[first].kind);
+    const int size = band[first].size;
+    rule.delta[i] = valueOfCell(band[first].kind == StepKind::Occupied ? -size : size);
+    rule.limit[i] = stepLimit(band[first].kind, size, whole);
+    stats += map.applyStepRuns(layer, group.data(), group.size(), rule);
+    first = last;
+  }
+  return stats;
+}
+
+/// One pose's beams through the planar cache, as the grid's own scans go (OccupancyMap::applyStepRuns):
+/// a beam whose steps are all the grid's (no range noise, or a band within its end cell) as the
+/// grid's run, in the grid's order; of a beam with graded steps, the free cells before its band
+/// with those runs, and its band's cells after them, grouped by kind and size (each group one
+/// pass: a cell in several beams' bands takes their graded steps in that order).
+InsertStats stepThroughCache(OccupancyMap& map, const std::vector<OccupancyMap::StepRun>& runs,
+                             const std::vector<float>& ranges, const RangeNoiseRule* noise, const Steps& whole,
+                             const TGridFrame2D& f) {
+  constexpr int F = OccupancyMap::kRunFracBits;
+  const std::int32_t ox = keyOffsetX(f), oy = keyOffsetY(f), z = f.layer;
+  std::vector<OccupancyMap::StepRun> plain;
+  std::vector<CellStep> tail, band;
+  plain.reserve(runs.size());
+  for (std::size_t j = 0; j < runs.size(); ++j) {
+    const OccupancyMap::StepRun& r = runs[j];
+    const double R = ranges[j];
+    const double sigma = noise && r.end && r.count > 0 ? noise->sigma(R) : 0.0;
+    if (!(sigma > 0.0)) {
+      plain.push_back(r);
+      continue;
+    }
+    const std::uint32_t prefix = bandStart(*noise, R, sigma, r.count);
+    const Key end{r.end_x, r.end_y, z};
+    tail.clear();
+    gradeBeam(*noise, R, sigma, r.count, &end, whole, [&](std::uint32_t i, Key& k) {
+      k = Key{static_cast<std::int32_t>((std::int64_t{r.x} * (1 << F) + std::int64_t{i} * r.dx) >> F),
+              static_cast<std::int32_t>((std::int64_t{r.y} * (1 << F) + std::int64_t{i} * r.dy) >> F), z};
+      return static_cast<std::uint32_t>(k.x - ox) < f.size_x && static_cast<std::uint32_t>(k.y - oy) < f.size_y;
+    }, tail, prefix);
+    // The grid's own run: the rest of its free cells and its end cell, each with its whole step.
+    std::size_t whole_free = 0;
+    while (whole_free < tail.size() && tail[whole_free].kind == StepKind::Free && tail[whole_free].size == whole.free)
+      ++whole_free;
+    const bool grids = whole_free == r.count - prefix && tail.size() == whole_free + 1 &&
+                       tail.back().kind == StepKind::Occupied && tail.back().size == whole.occupied;
+    if (grids) {
+      plain.push_back(r);
+      continue;
+    }
+    if (prefix + whole_free > 0) {
+      OccupancyMap::StepRun head = r;
+      head.count = prefix + static_cast<std::uint32_t>(std::min<std::size_t>(whole_free, r.count - prefix));
+      head.end = false;
+      plain.push_back(head);
+    }
+    band.insert(band.end(), tail.begin() + static_cast<std::ptrdiff_t>(std::min<std::size_t>(whole_free, r.count - prefix)),
+                tail.end());
+  }
+  return applyGrouped(map, f.layer, plain, band, whole);
+}
+
 }  // namespace
 
 void PoseMixture::add(double weight, const std::vector<CellStep>& steps) {
-  if (!several_) {  // the grid's order, on the map's cells
-    for (const CellStep& c : steps) {
-      std::int8_t& v = at(c.key);
-      v = stepCell(v, c.kind, c.size, whole_);
-    }
-    return;
-  }
   own_.clear();
   now_.clear();
   for (const CellStep& c : steps) {
     const auto next = static_cast<std::uint32_t>(now_.size());
     const std::uint32_t i = own_.findOrInsert(packKey3(c.key), next);
-    if (i == next) now_.emplace_back(c.key, peek(c.key));
-    now_[i].second = stepCell(now_[i].second, c.kind, c.size, whole_);
+    if (i == next) now_.emplace_back(c.key, 0);
+    now_[i].second += c.kind == StepKind::Occupied ? -int{c.size} : int{c.size};  // in cell units
   }
-  for (const auto& [key, v] : now_) {
+  for (const auto& [key, units] : now_) {
     const auto next = static_cast<std::uint32_t>(sums_.size());
     const std::uint32_t i = index_.findOrInsert(packKey3(key), next);
     if (i == next) sums_.emplace_back(key, 0.0);
-    sums_[i].second += mix_.term(weight, valueOfCell(v) - valueOfCell(peek(key)));
+    sums_[i].second += mix_.term(weight, valueOfCell(units));
   }
 }
 
-InsertStats PoseMixture::writeBack(OccupancyMap& map) {
+void PoseMixture::steps(std::vector<CellStep>& out) const {
   for (const auto& [key, sum] : sums_) {
-    const int before = peek(key);
-    const int after = std::clamp(before - gradedUnits(mix_.change(sum)), -127, 127);
-    if (after != before) at(key) = static_cast<std::int8_t>(after);
+    const auto [kind, size] = gradedStep(mix_.change(sum));
+    if (size > 0) out.push_back(CellStep{key, kind, static_cast<std::uint8_t>(std::min(size, 254))});
   }
-  return cells_.writeBack(map);
+}
+
+void applyInOrder(ScanCells& cells, const Key& offset, const std::vector<CellStep>& steps, const Steps& whole) {
+  for (const CellStep& c : steps) {
+    std::int8_t& v = cells.at(c.key.x - offset.x, c.key.y - offset.y, c.key.z - offset.z);
+    v = stepCell(v, c.kind, c.size, whole);
+  }
 }
 
 bool insertGradedScan(OccupancyMap& map, TGridFrame2D& frame, const mrpt::obs::CObservation2DRangeScan& scan,
@@ -105,23 +187,34 @@ bool insertGradedScan(OccupancyMap& map, TGridFrame2D& frame, const mrpt::obs::C
   }
   const Steps whole = stepsOf(io);
   stats = InsertStats{};
-  bool counted = false;
-  std::vector<OccupancyMap::StepRun> runs;
-  std::vector<float> ranges;
-  std::vector<CellStep> steps;
-  PoseMixture mixture(map, whole, poses.size());
-  for (std::size_t i = 0; i < poses.size(); ++i) {
-    if (!plans[i]) continue;
-    InsertStats pose_stats;
-    traceScan(scan, *plans[i], io, grown, runs, pose_stats, &ranges);
-    if (!counted) stats = pose_stats, counted = true;
+  if (poses.size() == 1) {  // the grid's own store: its planar cache
+    std::vector<OccupancyMap::StepRun> runs;
+    std::vector<float> ranges;
+    traceScan(scan, *plans[0], io, grown, runs, stats, &ranges);
+    const InsertStats written = stepThroughCache(map, runs, ranges, rule, whole, grown);
+    stats.cells_free = written.cells_free, stats.cells_occupied = written.cells_occupied;
+    stats.cells_unchanged = written.cells_unchanged;
+  } else {  // several poses: their mixture, each cell one graded step
+    bool counted = false;
+    std::vector<OccupancyMap::StepRun> runs;
+    std::vector<float> ranges;
+    std::vector<CellStep> steps;
+    PoseMixture mixture(map.logOddsModel().prior());
+    for (std::size_t i = 0; i < poses.size(); ++i) {
+      if (!plans[i]) continue;
+      InsertStats pose_stats;
+      traceScan(scan, *plans[i], io, grown, runs, pose_stats, &ranges);
+      if (!counted) stats = pose_stats, counted = true;
+      steps.clear();
+      poseSteps(runs, ranges, rule, whole, grown, steps);
+      mixture.add(poses[i].weight, steps);
+    }
     steps.clear();
-    poseSteps(runs, ranges, rule, whole, grown, steps);
-    mixture.add(poses[i].weight, steps);
+    mixture.steps(steps);
+    const InsertStats written = applyGrouped(map, grown.layer, {}, steps, whole);
+    stats.cells_free = written.cells_free, stats.cells_occupied = written.cells_occupied;
+    stats.cells_unchanged = written.cells_unchanged;
   }
-  const InsertStats written = mixture.writeBack(map);
-  stats.cells_free = written.cells_free, stats.cells_occupied = written.cells_occupied;
-  stats.leaves_created = written.leaves_created, stats.leaves_merged = written.leaves_merged;
   frame = grown;
   invalid = 0;
   if (!io.considerInvalidRangesAsFreeSpace)

@@ -39,10 +39,11 @@ struct CellStep {
 /// raster goes on past the end cell with the same increments (cellAt(i), i > n) to the band's far
 /// edge. Each cell takes RangeNoiseRule's change rounded by gradedStep(); cells wholly before the
 /// band take the whole free step. cellAt returns false where the raster leaves the grid (the beam
-/// stops there). A band within half a stretch of the reading leaves the grid's own steps.
+/// stops there). A band within half a stretch of the reading leaves the grid's own steps. The
+/// cells from `first` on (those before are the caller's, e.g. bandStart()'s whole free steps).
 template <class CellAt>
 void gradeBeam(const RangeNoiseRule& noise, double R, double sigma, std::uint32_t n, const Key* end,
-               const Steps& whole, CellAt&& cellAt, std::vector<CellStep>& out) {
+               const Steps& whole, CellAt&& cellAt, std::vector<CellStep>& out, std::uint32_t first = 0) {
   const double s = R / n, reach = noise.reach(sigma);
   const auto graded = [&](const Key& k, float delta) {
     const auto [kind, size] = gradedStep(delta);
@@ -50,7 +51,7 @@ void gradeBeam(const RangeNoiseRule& noise, double R, double sigma, std::uint32_
   };
   float delta;
   Key k;
-  for (std::uint32_t i = 0; i < n; ++i) {
+  for (std::uint32_t i = first; i < n; ++i) {
     if (!cellAt(i, k)) break;
     const double hi = (i + 0.5) * s;
     if (hi <= R - reach)
@@ -68,38 +69,42 @@ void gradeBeam(const RangeNoiseRule& noise, double R, double sigma, std::uint32_
   }
 }
 
-/// A scan's steps from one or several weighted poses onto the map's cells. One pose: its steps
-/// step the cells in order, as the grid would. Several: each pose's steps are taken on its own
-/// copy of the cells as they were before the scan, and each cell touched by any pose then takes
-/// once the probability mixture (rtog/core/mixture.hpp) of the poses' net changes (a pose that
-/// did not touch it adds none), rounded to the grid's units and kept within +-127.
+/// The raster cells of gradeBeam() wholly before the band (their whole free steps), of n.
+inline std::uint32_t bandStart(const RangeNoiseRule& noise, double R, double sigma, std::uint32_t n) {
+  // Cell i is before the band while (i + 1/2) R / n <= R - reach.
+  const double before = std::floor((R - noise.reach(sigma)) * n / R + 0.5);
+  return before <= 0.0 ? 0u : before >= n ? n : static_cast<std::uint32_t>(before);
+}
+
+/// The mixture of a scan's steps from several weighted poses (pose blur): a pose's change of a
+/// cell is the sum of its steps there (as the grid would step it, one step per beam, saturation
+/// aside), and each cell touched by any pose takes once the probability mixture
+/// (rtog/core/mixture.hpp) of the poses' changes (a pose that did not touch it adds none),
+/// rounded by gradedStep(): one step, which saturates as stepCell() does.
 class PoseMixture {
  public:
-  PoseMixture(const OccupancyMap& map, const Steps& whole, std::size_t poses)
-      : cells_(map, Key{kKeyMin, kKeyMin, kKeyMin}), whole_(whole), several_(poses > 1), mix_(map.logOddsModel().prior()) {}
-
+  explicit PoseMixture(float prior) : mix_(prior) {}
   void add(double weight, const std::vector<CellStep>& steps);
-  /// The cells written back into the map (OccupancyMap::assignCells).
-  InsertStats writeBack(OccupancyMap& map);
+  /// Each touched cell's mixed step (none where it rounds to 0), in the order first touched.
+  void steps(std::vector<CellStep>& out) const;
 
  private:
-  std::int8_t& at(const Key& k) { return cells_.at(k.x - kKeyMin, k.y - kKeyMin, k.z - kKeyMin); }
-  std::int8_t peek(const Key& k) { return cells_.peek(k.x - kKeyMin, k.y - kKeyMin, k.z - kKeyMin); }
-
-  ScanCells cells_;
-  Steps whole_;
-  bool several_;
   ProbabilityMixture mix_;
-  detail::FlatHashMap64 index_, own_;             // packed key -> position in sums_ / now_
-  std::vector<std::pair<Key, double>> sums_;      // the mixture's sum per cell
-  std::vector<std::pair<Key, std::int8_t>> now_;  // one pose's cells after its steps
+  detail::FlatHashMap64 index_, own_;         // packed key -> position in sums_ / now_
+  std::vector<std::pair<Key, double>> sums_;  // the mixture's sum per cell
+  std::vector<std::pair<Key, int>> now_;      // one pose's change per cell, in int8 units
 };
+
+/// `steps` into `cells` one after another (stepCell).
+void applyInOrder(ScanCells& cells, const Key& offset, const std::vector<CellStep>& steps, const Steps& whole);
 
 /// Inserts `scan` taken from the weighted `poses` (a certain pose: one of weight 1) into `map` in a
 /// 2D section, growing `frame` as the grid grows to hold every pose's beams; each pose's beams on
 /// COccupancyGridMap2D's raster (traceScan), range noise grading each hit beam's band
 /// (sensorModel = rangeNoise; the band stops at the grid's border, which always lies 15 cells or
-/// more past an end point), the poses mixed (PoseMixture). False (nothing changed) where the
+/// more past an end point), the poses mixed (PoseMixture); through the planar cache, as the
+/// grid's own scans (the grid's runs in beam order, then graded cells grouped by kind and size).
+/// False (nothing changed) where the
 /// grid would insert nothing from any pose (a pose it would not insert from adds no change);
 /// otherwise `stats` counts the first such pose's beams and the cells written, `invalid` the
 /// invalid ranges not taken as free. A throw leaves `map` and `frame` as they were.

@@ -257,16 +257,24 @@ InsertStats insertRays(OccupancyMap& map, const TGridFrame3D& f, const std::vect
     stats.leaves_created = assigned.leaves_created, stats.leaves_merged = assigned.leaves_merged;
     return stats;
   }
-  mrpt_grid::PoseMixture mixture(map, whole, sets.size());
+  // One set with range noise: its steps in order; several: their mixture, a step a cell.
+  mrpt_grid::PoseMixture mixture(map.logOddsModel().prior());
   std::vector<mrpt_grid::CellStep> cellSteps;
   for (std::size_t s = 0; s < sets.size(); ++s) {
     InsertStats own;
     cellSteps.clear();
     setSteps(f, sets[s], whole, noise, cellSteps, own);
     if (s == 0) stats = own;
-    mixture.add(sets[s].weight, cellSteps);
+    if (sets.size() > 1) mixture.add(sets[s].weight, cellSteps);
   }
-  const InsertStats assigned = mixture.writeBack(map);
+  if (sets.size() > 1) {
+    cellSteps.clear();
+    mixture.steps(cellSteps);
+  }
+  const Key origin{kKeyMin, kKeyMin, kKeyMin};
+  mrpt_grid::ScanCells cells(map, origin);
+  mrpt_grid::applyInOrder(cells, origin, cellSteps, whole);
+  const InsertStats assigned = cells.writeBack(map);
   stats.cells_free = assigned.cells_free, stats.cells_occupied = assigned.cells_occupied;
   stats.leaves_created = assigned.leaves_created, stats.leaves_merged = assigned.leaves_merged;
   return stats;
