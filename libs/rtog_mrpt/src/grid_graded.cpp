@@ -216,9 +216,7 @@ bool insertGradedScan(OccupancyMap& map, TGridFrame2D& frame, const mrpt::obs::C
     stats.cells_unchanged = written.cells_unchanged;
   }
   frame = grown;
-  invalid = 0;
-  if (!io.considerInvalidRangesAsFreeSpace)
-    for (std::size_t i = 0; i < scan.getScanSize(); i += io.decimation) invalid += scan.getScanRangeValidity(i) ? 0 : 1;
+  invalid = invalidNotFree(scan, io);
   return true;
 }
 

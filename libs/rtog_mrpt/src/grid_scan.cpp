@@ -35,9 +35,7 @@ bool insertScan(OccupancyMap& map, TGridFrame2D& frame, const mrpt::obs::CObserv
   const StepRule rule = stepRule(stepsOf(io));
   stats += map.applyStepRuns(grown.layer, runs.data(), runs.size(), rule, update ? &update->after : nullptr);
   frame = grown;
-  invalid = 0;
-  if (!io.considerInvalidRangesAsFreeSpace)
-    for (std::size_t i = 0; i < scan.getScanSize(); i += io.decimation) invalid += scan.getScanRangeValidity(i) ? 0 : 1;
+  invalid = invalidNotFree(scan, io);
   return true;
 }
 

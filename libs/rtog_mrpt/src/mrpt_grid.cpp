@@ -230,6 +230,13 @@ void growRect(const TGridFrame2D& f, float x0, float x1, float y0, float y1, flo
                               " m, beyond the key range (+-" + std::to_string(reach) + " m)");
 }
 
+std::size_t invalidNotFree(const mrpt::obs::CObservation2DRangeScan& o, const CRTreeOccupancyGridMap::TInsertionOptions& opts) {
+  std::size_t invalid = 0;
+  if (!opts.considerInvalidRangesAsFreeSpace)
+    for (std::size_t i = 0; i < o.getScanSize(); i += opts.decimation) invalid += o.getScanRangeValidity(i) ? 0 : 1;
+  return invalid;
+}
+
 void traceScan(const mrpt::obs::CObservation2DRangeScan& o, const ScanPlan& plan,
                const CRTreeOccupancyGridMap::TInsertionOptions& opts, const TGridFrame2D& f,
                std::vector<OccupancyMap::StepRun>& runs, InsertStats& stats, std::vector<float>* ranges) {

@@ -100,6 +100,8 @@ bool planScan(const mrpt::obs::CObservation2DRangeScan& o, const mrpt::poses::CP
               const CRTreeOccupancyGridMap::TInsertionOptions& opts, const TGridFrame2D& f, ScanPlan& plan);
 /// The second half, on the grown geometry: the run of cells each beam steps, in the grid's order,
 /// in lattice keys. Counts beams into `stats` as the core does.
+/// The invalid ranges of `o` (every decimation-th) that the grid does not take as free space.
+std::size_t invalidNotFree(const mrpt::obs::CObservation2DRangeScan& o, const CRTreeOccupancyGridMap::TInsertionOptions& opts);
 /// `ranges`, if given, gets each run's reading (0 for a run without an end cell).
 void traceScan(const mrpt::obs::CObservation2DRangeScan& o, const ScanPlan& plan,
                const CRTreeOccupancyGridMap::TInsertionOptions& opts, const TGridFrame2D& f,
