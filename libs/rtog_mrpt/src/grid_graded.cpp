@@ -1,6 +1,7 @@
 #include "grid_graded.hpp"
 
 #include <algorithm>
+#include <limits>
 #include <cmath>
 #include <memory>
 #include <optional>
@@ -10,10 +11,6 @@
 namespace rtog::mrpt_grid {
 namespace {
 
-std::uint64_t packKey3(const Key& k) {
-  return std::uint64_t(std::uint32_t(k.x - kKeyMin)) | std::uint64_t(std::uint32_t(k.y - kKeyMin)) << 21 |
-         std::uint64_t(std::uint32_t(k.z - kKeyMin)) << 42;
-}
 
 /// One pose's beams as steps, beam by beam in the grid's order: each run's cells, then its end
 /// cell; a hit beam with range noise by gradeBeam().
@@ -47,9 +44,16 @@ InsertStats applyGrouped(OccupancyMap& map, std::int32_t layer, const std::vecto
                          std::vector<CellStep> band, const Steps& whole) {
   const StepRule grid_rule = stepRule(whole);
   InsertStats stats = map.applyStepRuns(layer, plain.data(), plain.size(), grid_rule);
-  std::stable_sort(band.begin(), band.end(), [](const CellStep& a, const CellStep& b) {
-    return a.kind != b.kind ? a.kind < b.kind : a.size < b.size;
-  });
+  // By kind and size, each group in its order (a counting sort: sizes are bytes).
+  {
+    const auto slot = [](const CellStep& c) { return static_cast<std::size_t>(c.kind) * 256 + c.size; };
+    std::vector<std::uint32_t> start(3 * 256 + 1, 0);
+    for (const CellStep& c : band) ++start[slot(c) + 1];
+    for (std::size_t k = 1; k < start.size(); ++k) start[k] += start[k - 1];
+    std::vector<CellStep> sorted(band.size());
+    for (const CellStep& c : band) sorted[start[slot(c)]++] = c;
+    band.swap(sorted);
+  }
   std::vector<OccupancyMap::StepRun> group;
   for (std::size_t first = 0; first < band.size();) {
     std::size_t last = first;
@@ -127,28 +131,74 @@ InsertStats stepThroughCache(OccupancyMap& map, const std::vector<OccupancyMap::
 
 }  // namespace
 
-void PoseMixture::add(double weight, const std::vector<CellStep>& steps) {
-  own_.clear();
-  now_.clear();
-  for (const CellStep& c : steps) {
-    const auto next = static_cast<std::uint32_t>(now_.size());
-    const std::uint32_t i = own_.findOrInsert(packKey3(c.key), next);
-    if (i == next) now_.emplace_back(c.key, 0);
-    now_[i].second += c.kind == StepKind::Occupied ? -int{c.size} : int{c.size};  // in cell units
+namespace {
+constexpr int kUnits = 4096;  // changes beyond +-256 nats: the probability is 0 or 1 in double
+}  // namespace
+
+PoseMixture::PoseMixture(float prior)
+    : mix_(prior), unit_term_(2 * kUnits + 1, std::numeric_limits<double>::quiet_NaN()) {}
+
+double PoseMixture::unitTerm(int units) {
+  const auto i = static_cast<std::size_t>(std::clamp(units, -kUnits, kUnits) + kUnits);
+  double& t = unit_term_[i];
+  if (std::isnan(t)) t = mix_.term(1.0, valueOfCell(static_cast<int>(i) - kUnits));
+  return t;
+}
+
+PoseMixture::Block& PoseMixture::block(const Key& k, int& cell) {
+  const auto bx = static_cast<std::uint32_t>(k.x - kKeyMin) >> 4, by = static_cast<std::uint32_t>(k.y - kKeyMin) >> 4,
+             bz = static_cast<std::uint32_t>(k.z - kKeyMin) >> 1;
+  const std::uint64_t key = std::uint64_t{bx} | std::uint64_t{by} << 21 | std::uint64_t{bz} << 42;
+  if (key != last_key_) {
+    const auto next = static_cast<std::uint32_t>(blocks_.size());
+    last_ = index_.findOrInsert(key, next);
+    if (last_ == next) {
+      blocks_.emplace_back();
+      blocks_.back().first = Key{static_cast<std::int32_t>(bx << 4) + kKeyMin, static_cast<std::int32_t>(by << 4) + kKeyMin,
+                                 static_cast<std::int32_t>(bz << 1) + kKeyMin};
+    }
+    last_key_ = key;
   }
-  for (const auto& [key, units] : now_) {
-    const auto next = static_cast<std::uint32_t>(sums_.size());
-    const std::uint32_t i = index_.findOrInsert(packKey3(key), next);
-    if (i == next) sums_.emplace_back(key, 0.0);
-    sums_[i].second += mix_.term(weight, valueOfCell(units));
+  Block& b = blocks_[last_];
+  cell = ((k.z - b.first.z) << 8) | ((k.y - b.first.y) << 4) | (k.x - b.first.x);
+  return b;
+}
+
+void PoseMixture::add(double weight, const std::vector<CellStep>& steps) {
+  ++stamp_;
+  pose_blocks_.clear();
+  int i;
+  for (const CellStep& c : steps) {
+    Block& b = block(c.key, i);
+    if (b.stamp != stamp_) b.stamp = stamp_, pose_blocks_.push_back(last_);
+    const std::uint64_t bit = std::uint64_t{1} << (i & 63);
+    std::uint64_t& mine = b.mine[static_cast<std::size_t>(i) >> 6];
+    if (!(mine & bit)) mine |= bit, b.now[static_cast<std::size_t>(i)] = 0;
+    b.now[static_cast<std::size_t>(i)] += c.kind == StepKind::Occupied ? -int{c.size} : int{c.size};  // cell units
+  }
+  for (const std::uint32_t at : pose_blocks_) {
+    Block& b = blocks_[at];
+    for (std::size_t w = 0; w < b.mine.size(); ++w) {
+      for (std::uint64_t bits = b.mine[w]; bits != 0; bits &= bits - 1) {
+        const std::size_t c = w * 64 + static_cast<std::size_t>(__builtin_ctzll(bits));
+        b.sum[c] += weight * unitTerm(b.now[c]);
+      }
+      b.touched[w] |= b.mine[w];
+      b.mine[w] = 0;
+    }
   }
 }
 
 void PoseMixture::steps(std::vector<CellStep>& out) const {
-  for (const auto& [key, sum] : sums_) {
-    const auto [kind, size] = gradedStep(mix_.change(sum));
-    if (size > 0) out.push_back(CellStep{key, kind, static_cast<std::uint8_t>(std::min(size, 254))});
-  }
+  for (const Block& b : blocks_)
+    for (std::size_t w = 0; w < b.touched.size(); ++w)
+      for (std::uint64_t bits = b.touched[w]; bits != 0; bits &= bits - 1) {
+        const auto c = static_cast<int>(w * 64) + __builtin_ctzll(bits);
+        const auto [kind, size] = gradedStep(mix_.change(b.sum[static_cast<std::size_t>(c)]));
+        if (size > 0)
+          out.push_back(CellStep{Key{b.first.x + (c & 15), b.first.y + ((c >> 4) & 15), b.first.z + (c >> 8)}, kind,
+                                 static_cast<std::uint8_t>(std::min(size, 254))});
+      }
 }
 
 void applyInOrder(ScanCells& cells, const Key& offset, const std::vector<CellStep>& steps, const Steps& whole) {

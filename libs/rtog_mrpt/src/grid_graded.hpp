@@ -7,6 +7,7 @@
 #pragma once
 
 #include <algorithm>
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <vector>
@@ -83,16 +84,33 @@ inline std::uint32_t bandStart(const RangeNoiseRule& noise, double R, double sig
 /// rounded by gradedStep(): one step, which saturates as stepCell() does.
 class PoseMixture {
  public:
-  explicit PoseMixture(float prior) : mix_(prior) {}
+  explicit PoseMixture(float prior);
   void add(double weight, const std::vector<CellStep>& steps);
-  /// Each touched cell's mixed step (none where it rounds to 0), in the order first touched.
+  /// Each touched cell's mixed step (none where it rounds to 0), block by block.
   void steps(std::vector<CellStep>& out) const;
 
  private:
+  // Cells in blocks of 16 x 16 x 2 (a 2D layer's cells stay together), found by hash once a block
+  // and then by index: a pose's steps cost an add each.
+  static constexpr int kCells = 512;
+  struct Block {
+    Key first;                                       // lattice key of its cell 0
+    std::uint32_t stamp = 0;                         // the last pose that touched it
+    std::array<std::int32_t, kCells> now{};          // that pose's change, in int8 units
+    std::array<double, kCells> sum{};                // the mixture's sum
+    std::array<std::uint64_t, kCells / 64> mine{}, touched{};
+  };
+  Block& block(const Key& k, int& cell);
+  double unitTerm(int units);  // mix_.term(1, units / 16), from a table filled on demand
+
   ProbabilityMixture mix_;
-  detail::FlatHashMap64 index_, own_;         // packed key -> position in sums_ / now_
-  std::vector<std::pair<Key, double>> sums_;  // the mixture's sum per cell
-  std::vector<std::pair<Key, int>> now_;      // one pose's change per cell, in int8 units
+  std::vector<double> unit_term_;
+  detail::FlatHashMap64 index_;  // block key -> position in blocks_
+  std::vector<Block> blocks_;
+  std::vector<std::uint32_t> pose_blocks_;  // the blocks the current pose touched
+  std::uint32_t stamp_ = 0;
+  std::uint64_t last_key_ = ~std::uint64_t{0};
+  std::uint32_t last_ = 0;
 };
 
 /// `steps` into `cells` one after another (stepCell).
