@@ -1,7 +1,9 @@
 // Shared helpers of the MRPT map tests: real rawlogs from Debian's mrpt-common.
 #pragma once
 
+#include <algorithm>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <mrpt/config/CConfigFileMemory.h>
@@ -73,6 +75,19 @@ inline mrpt::obs::CObservation::Ptr firstObservation(const std::string& file) {
   for (std::size_t i = 0; i < rl.size(); ++i)
     if (rl.getType(i) == mrpt::obs::CRawlog::etObservation) return rl.getAsObservation(i);
   throw std::runtime_error("no observation in " + file);
+}
+
+/// The smallest and largest int8 cell that the maps `alone` (cell key -> value; a missing cell is
+/// 0, the grids' unknown) hold at `key`: the range a mixture of them must lie in.
+template <class Maps, class K>
+std::pair<int, int> cellRange(const Maps& alone, const K& key) {
+  int lo = 127, hi = -127;
+  for (const auto& a : alone) {
+    const auto it = a.find(key);
+    const int v = it == a.end() ? 0 : it->second;
+    lo = std::min(lo, v), hi = std::max(hi, v);
+  }
+  return {lo, hi};
 }
 
 }  // namespace rtog_test

@@ -133,12 +133,7 @@ TEST(MrptGrid3DEstimator, PoseBlurMixesTheSigmaPosesOnTheGridsLattice) {
     }
   std::size_t outside = 0, partial = 0, saturated = 0;
   for (const auto& [k, c] : mixed) {
-    int lo = 127, hi = -127;
-    for (const auto& a : alone) {
-      const auto it = a.find(k);
-      const int v = it == a.end() ? 0 : it->second;
-      lo = std::min(lo, v), hi = std::max(hi, v);
-    }
+    const auto [lo, hi] = cellRange(alone, k);
     if (std::max(std::abs(lo), std::abs(hi)) > 127 - 20) {  // within a few steps of a bound
       ++saturated;
       continue;

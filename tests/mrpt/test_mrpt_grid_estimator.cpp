@@ -210,12 +210,7 @@ TEST(MrptGridEstimator, PoseBlurMixesTheSigmaPosesOnTheGridsLattice) {
   const auto plain = cellsOf(*mean->r);
   std::size_t outside = 0, differ_from_mean = 0;
   for (const auto& [k, c] : mixed) {
-    int lo = 127, hi = -127;
-    for (const auto& a : alone) {
-      const auto it = a.find(k);
-      const int v = it == a.end() ? 0 : it->second;
-      lo = std::min(lo, v), hi = std::max(hi, v);
-    }
+    const auto [lo, hi] = cellRange(alone, k);
     outside += c < lo - 1 || c > hi + 1;
     const auto it = plain.find(k);
     differ_from_mean += it == plain.end() || it->second != c;
