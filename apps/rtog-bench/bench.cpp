@@ -204,23 +204,29 @@ void run2D(const std::string& rawlog, const Options& opts, std::vector<Result>& 
   pose_cov(3, 3) = (M_PI / 180.0) * (M_PI / 180.0);
   for (const double res : opts.resolutions) {
     std::vector<Method2D> methods;
-    // Both update rules: mrpt_grid (the MRPT map types' default: COccupancyGridMap2D's cells) and
-    // octomap (one update per cell and scan, OctoMap's clamping).
-    for (const std::string preset : {"mrpt_grid", "octomap"})
-    for (const std::string policy : {"equal", "clamped", "off"})
-      methods.push_back({"rtog (CRTreeOccupancyGridMap), " + preset + ", merge " + policy,
+    // rtog's MRPT map type: `name` after the common prefix, its options set by `set`.
+    const auto rtogMethod = [&](const std::string& name, std::function<void(CRTreeOccupancyGridMap::TInsertionOptions&)> set,
+                                bool blur) {
+      methods.push_back({"rtog (CRTreeOccupancyGridMap), " + name,
                          [=] {
                            CRTreeOccupancyGridMap::TInsertionOptions io;
-                           io.sensorModelPreset = preset;
                            io.maxDistanceInsertion = max_range;
-                           io.mergePolicy = policy;
+                           set(io);
                            auto m = std::make_shared<CRTreeOccupancyGridMap>(res, io);
                            m->likelihoodOptions.LF_decimation = kLfDecimation;
                            return m;
                          },
                          [](const mrpt::maps::CMetricMap& m) {
                            return dynamic_cast<const CRTreeOccupancyGridMap&>(m).map().memoryBytes();
-                         }});
+                         },
+                         {}, nullptr, blur});
+    };
+    // Both update rules: mrpt_grid (the MRPT map types' default: COccupancyGridMap2D's cells) and
+    // octomap (one update per cell and scan, OctoMap's clamping).
+    for (const std::string preset : {"mrpt_grid", "octomap"})
+      for (const std::string policy : {"equal", "clamped", "off"})
+        rtogMethod(preset + ", merge " + policy, [=](auto& io) { io.sensorModelPreset = preset, io.mergePolicy = policy; },
+                   false);
     // The estimator's models in both presets (merge equal): range noise at a laser's sigma, pose
     // blur, both (doc/range-noise.md, doc/pose-uncertainty.md; in mrpt_grid on the grid's raster).
     for (const std::string preset : {"mrpt_grid", "octomap"})
@@ -229,23 +235,15 @@ void run2D(const std::string& rawlog, const Options& opts, std::vector<Result>& 
         const std::string what = noise && blur ? "range noise (sigma 0.02 m + 0.01 m/m), pose blur (sigma 0.05 m, 1 deg)"
                                  : noise       ? "range noise (sigma 0.02 m + 0.01 m/m)"
                                                : "pose blur (sigma 0.05 m, 1 deg)";
-        methods.push_back({"rtog (CRTreeOccupancyGridMap), " + preset + ", merge equal, " + what,
-                           [=] {
-                             CRTreeOccupancyGridMap::TInsertionOptions io;
-                             io.sensorModelPreset = preset;
-                             io.maxDistanceInsertion = max_range;
-                             io.sensorModel = noise ? "rangeNoise" : "beam";
-                             io.rangeNoiseStd = 0.02f;
-                             io.rangeNoiseStdPerMeter = 0.01f;
-                             io.poseUncertainty = blur;
-                             auto m = std::make_shared<CRTreeOccupancyGridMap>(res, io);
-                             m->likelihoodOptions.LF_decimation = kLfDecimation;
-                             return m;
-                           },
-                           [](const mrpt::maps::CMetricMap& m) {
-                             return dynamic_cast<const CRTreeOccupancyGridMap&>(m).map().memoryBytes();
-                           },
-                           {}, nullptr, blur});
+        rtogMethod(preset + ", merge equal, " + what,
+                   [=](auto& io) {
+                     io.sensorModelPreset = preset;
+                     io.sensorModel = noise ? "rangeNoise" : "beam";
+                     io.rangeNoiseStd = 0.02f;
+                     io.rangeNoiseStdPerMeter = 0.01f;
+                     io.poseUncertainty = blur;
+                   },
+                   blur);
       }
     methods.push_back({"MRPT COccupancyGridMap2D",
                        [=] {

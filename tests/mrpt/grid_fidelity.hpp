@@ -36,12 +36,20 @@ inline std::string replaceAll(std::string s, const std::string& from, const std:
   return s;
 }
 
-/// The stock config's grid sections, the map renamed to `type` as a user would paste them.
-inline mrpt::maps::CMultiMetricMap mapsFrom(const std::string& ini, const std::string& prefix, const std::string& type) {
-  const std::string text = type == "occupancyGrid"
-                               ? ini
-                               : replaceAll(replaceAll(ini, "occupancyGrid_count", type + "_count"),
-                                            "_occupancyGrid_00_", "_" + type + "_00_");
+/// The stock config's grid sections, the map renamed to `type` as a user would paste them, with
+/// `extra` lines added to the map's _insertOpts.
+inline mrpt::maps::CMultiMetricMap mapsFrom(const std::string& ini, const std::string& prefix, const std::string& type,
+                                            const std::string& extra = "") {
+  std::string text = type == "occupancyGrid"
+                         ? ini
+                         : replaceAll(replaceAll(ini, "occupancyGrid_count", type + "_count"),
+                                      "_occupancyGrid_00_", "_" + type + "_00_");
+  if (!extra.empty()) {
+    const std::string sec = "[" + prefix + "_" + type + "_00_insertOpts]";
+    const std::size_t at = text.find(sec);
+    if (at == std::string::npos) throw std::runtime_error("no section " + sec);
+    text.insert(at + sec.size(), "\n" + extra + "\n");
+  }
   mrpt::config::CConfigFileMemory cfg(text);
   mrpt::maps::TSetOfMetricMapInitializers inits;
   inits.loadFromConfigFile(cfg, prefix);

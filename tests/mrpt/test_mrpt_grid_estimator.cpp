@@ -33,18 +33,14 @@ struct Pair {
   CRTreeOccupancyGridMap* r = nullptr;
 };
 
-/// The stock section pasted twice: the grid, and rtreeOccupancyGrid with `extra` lines added to
-/// its _insertOpts.
-std::unique_ptr<Pair> pasted(const std::string& extra = "") {
-  const std::string ini = readText(kConfigs + kSection);
+/// A stock config's grid section pasted twice: the grid, and rtreeOccupancyGrid with `extra` lines
+/// added to its _insertOpts.
+std::unique_ptr<Pair> pasted(const std::string& extra = "", const std::string& config = kSection,
+                             const std::string& prefix = "MappingApplication") {
+  const std::string ini = readText(kConfigs + config);
   auto p = std::make_unique<Pair>();
-  p->stock = mapsFrom(ini, "MappingApplication", "occupancyGrid");
-  std::string ours = ini;
-  const std::string sec = "[MappingApplication_occupancyGrid_00_insertOpts]";
-  const std::size_t at = ours.find(sec);
-  if (at == std::string::npos) throw std::runtime_error("no insertOpts section in " + std::string(kSection));
-  ours.insert(at + sec.size(), "\n" + extra + "\n");
-  p->ours = mapsFrom(ours, "MappingApplication", "rtreeOccupancyGrid");
+  p->stock = mapsFrom(ini, prefix, "occupancyGrid");
+  p->ours = mapsFrom(ini, prefix, "rtreeOccupancyGrid", extra);
   p->g = p->stock.mapByClass<COccupancyGridMap2D>().get();
   p->r = p->ours.mapByClass<CRTreeOccupancyGridMap>().get();
   if (!p->g || !p->r) throw std::runtime_error("the pasted sections made no maps");
@@ -88,26 +84,39 @@ int stockCell(const COccupancyGridMap2D& g, int kx, int ky) {
 }  // namespace
 
 // sigma = 0, and a sigma far below half a raster stretch: every beam's band lies in its end cell,
-// so the scan steps the grid's cells with the grid's steps in the grid's order.
-TEST(MrptGridEstimator, RangeNoiseAsSigmaGoesToZeroIsTheStockGridOnSena) {
-  for (const std::string extra : {"sensorModel = rangeNoise\nrangeNoiseStd = 0\nrangeNoiseStdPerMeter = 0",
-                                  "sensorModel = rangeNoise\nrangeNoiseStd = 0.0001\nrangeNoiseStdPerMeter = 0.00001"}) {
-    auto p = pasted(extra);
-    std::size_t scans = 0;
-    for (const Frame& f : sena())
-      if (const auto s = scanOf(f)) {
-        const bool ins = p->g->insertObservation(*s, f.pose);
-        EXPECT_EQ(p->r->insertObservation(*s, f.pose), ins);
-        scans += ins;
-      }
-    const Figures fr = compareRTree(*p->g, *p->r);
-    std::cout << "SENA, range noise (" << p->r->insertionOptions.rangeNoiseStd << " m + "
-              << p->r->insertionOptions.rangeNoiseStdPerMeter << " m/m) in mrpt_grid: " << scans << " scans, "
-              << fr.cells << " cells, " << fr.differ << " differ from the stock grid\n";
-    EXPECT_GT(scans, 200u);
-    EXPECT_EQ(fr.differ, 0u);
-    EXPECT_EQ(p->r->map().checkInvariants(), "");
-  }
+// so the scan steps the grid's cells with the grid's steps in the grid's order. On SENA with
+// icp-slam's section, and on the two simplemaps with rbpf-slam's and pf-localization's.
+TEST(MrptGridEstimator, RangeNoiseAsSigmaGoesToZeroIsTheStockGrid) {
+  struct Case {
+    std::string what, config, prefix;
+    std::vector<Frame> frames;
+  };
+  const std::vector<Case> cases = {
+      {"SENA", kSection, "MappingApplication", sena()},
+      {"Malaga simplemap", "rbpf-slam/gridmapping_optimal_sampling.ini", "MappingApplication",
+       simplemapFrames(dataset("malaga-cs-fac-building.simplemap.gz"))},
+      {"localization_demo simplemap", "pf-localization/localization_demo.ini", "MetricMap",
+       simplemapFrames(dataset("localization_demo.simplemap.gz"))}};
+  for (const Case& c : cases)
+    for (const std::string extra : {"sensorModel = rangeNoise\nrangeNoiseStd = 0\nrangeNoiseStdPerMeter = 0",
+                                    "sensorModel = rangeNoise\nrangeNoiseStd = 0.0001\nrangeNoiseStdPerMeter = 0.00001"}) {
+      auto p = pasted(extra, c.config, c.prefix);
+      std::size_t scans = 0;
+      for (const Frame& f : c.frames)
+        for (const auto& o : *f.sf) {
+          if (!IS_CLASS(*o, mrpt::obs::CObservation2DRangeScan)) continue;
+          const bool ins = p->g->insertObservation(*o, f.pose);
+          EXPECT_EQ(p->r->insertObservation(*o, f.pose), ins);
+          scans += ins;
+        }
+      const Figures fr = compareRTree(*p->g, *p->r);
+      std::cout << c.what << ", range noise (" << p->r->insertionOptions.rangeNoiseStd << " m + "
+                << p->r->insertionOptions.rangeNoiseStdPerMeter << " m/m) in mrpt_grid: " << scans << " scans, "
+                << fr.cells << " cells, " << fr.differ << " differ from the stock grid\n";
+      EXPECT_GT(scans, 50u);
+      EXPECT_EQ(fr.differ, 0u) << c.what;
+      EXPECT_EQ(p->r->map().checkInvariants(), "");
+    }
 }
 
 // sigma = 5 cm + 1 %: the cells far from every reading took the same whole free steps as the
@@ -220,4 +229,39 @@ TEST(MrptGridEstimator, PoseBlurMixesTheSigmaPosesOnTheGridsLattice) {
   EXPECT_GT(mixed.size(), 1000u);
   EXPECT_EQ(outside, 0u);
   EXPECT_GT(differ_from_mean, 100u);
+}
+
+// A particle filter scores between insertions: the 2D view's tiles are then kept and follow each
+// scan's steps (the graded ones too) instead of being made again. The scores after 60 scans must be
+// those of a map that made its view once, at the end, from its cells.
+TEST(MrptGridEstimator, TheViewFollowsGradedScansAsARebuildWouldMakeIt) {
+  for (const bool blur : {false, true}) {
+    const std::string extra = "sensorModel = rangeNoise\nrangeNoiseStd = 0.05\nrangeNoiseStdPerMeter = 0.01" +
+                              std::string(blur ? "\nposeUncertainty = on" : "");
+    auto followed = pasted(extra), rebuilt = pasted(extra);
+    mrpt::math::CMatrixDouble66 cov;
+    cov.setZero();
+    cov(0, 0) = cov(1, 1) = 0.03 * 0.03;
+    cov(3, 3) = mrpt::square(mrpt::DEG2RAD(1.0));
+    std::vector<std::pair<mrpt::poses::CPose3D, mrpt::obs::CObservation2DRangeScan::Ptr>> done;
+    for (std::size_t i = 0; i < 60 && i < sena().size(); ++i) {
+      const auto s = scanOf(sena()[i]);
+      if (!s) continue;
+      const mrpt::poses::CPose3DPDFGaussian pose(sena()[i].pose, blur ? cov : mrpt::math::CMatrixDouble66());
+      ASSERT_TRUE(followed->r->insertObservation(*s, pose));
+      ASSERT_TRUE(rebuilt->r->insertObservation(*s, pose));
+      followed->r->computeObservationLikelihood(*s, sena()[i].pose);  // keeps the tiles
+      done.emplace_back(sena()[i].pose, s);
+    }
+    ASSERT_GT(done.size(), 40u);
+    std::size_t differ = 0;
+    for (std::size_t i = 0; i < done.size(); i += 4) {
+      const mrpt::poses::CPose3D q = done[i].first + mrpt::poses::CPose3D(0.1, -0.05, 0, 0.03, 0, 0);
+      differ += followed->r->computeObservationLikelihood(*done[i].second, q) !=
+                rebuilt->r->computeObservationLikelihood(*done[i].second, q);
+    }
+    std::cout << "SENA, 60 graded scans" << (blur ? " from uncertain poses" : "") << ": " << differ
+              << " likelihoods differ between the followed view and one made from the cells\n";
+    EXPECT_EQ(differ, 0u);
+  }
 }

@@ -307,17 +307,13 @@ CRTreeOccupancyGridMap::TCellCounts CRTreeOccupancyGridMap::gridViewCellCounts()
 
 bool CRTreeOccupancyGridMap::insertGridScan(const mrpt::obs::CObservation2DRangeScan& scan, const CPose3D& robotPose,
                                             GridScanUpdate* update) {
+  if (sensorModelFromString(insertionOptions.sensorModel) == SensorModel::RangeNoise)
+    return insertGradedScan(scan, {pose_sigma::SigmaPose{1.0, robotPose}}, update);
   syncParams();
   InsertStats stats;
   std::size_t invalid = 0;
-  if (sensorModelFromString(insertionOptions.sensorModel) == SensorModel::RangeNoise && !update)
-    return insertGradedScan(scan, {pose_sigma::SigmaPose{1.0, robotPose}});
   // With the view's tiles kept, the scan's steps are what they follow.
-  bool follow;
-  {
-    std::lock_guard<std::mutex> lk(caches_->mutex);
-    follow = caches_->tiles != nullptr;
-  }
+  const bool follow = followsGridScans();
   GridScanUpdate own;
   GridScanUpdate* upd = update ? update : follow ? &own : nullptr;
   if (!mrpt_grid::insertScan(map_, frame_, scan, robotPose, insertionOptions, upd, stats, invalid)) return false;
@@ -331,16 +327,27 @@ bool CRTreeOccupancyGridMap::insertGridScan(const mrpt::obs::CObservation2DRange
   return true;
 }
 
+bool CRTreeOccupancyGridMap::followsGridScans() const {
+  std::lock_guard<std::mutex> lk(caches_->mutex);
+  return caches_->tiles != nullptr;
+}
+
 bool CRTreeOccupancyGridMap::insertGradedScan(const mrpt::obs::CObservation2DRangeScan& scan,
-                                              const std::vector<pose_sigma::SigmaPose>& poses) {
+                                              const std::vector<pose_sigma::SigmaPose>& poses, GridScanUpdate* update) {
   syncParams();
   InsertStats stats;
   std::size_t invalid = 0;
-  if (!mrpt_grid::insertGradedScan(map_, frame_, scan, poses, insertionOptions, stats, invalid)) return false;
+  const bool follow = followsGridScans();
+  GridScanUpdate own;
+  GridScanUpdate* upd = update ? update : follow ? &own : nullptr;
+  if (!mrpt_grid::insertGradedScan(map_, frame_, scan, poses, insertionOptions, upd, stats, invalid)) return false;
   invalidRangesSkipped += invalid;
   lastInsertStats = stats;
   totalInsertStats += stats;
-  notifyMapChanged();
+  if (follow)
+    followGridScan(*upd);
+  else
+    notifyMapChanged();
   return true;
 }
 

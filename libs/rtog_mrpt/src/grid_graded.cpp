@@ -1,23 +1,30 @@
 #include "grid_graded.hpp"
 
 #include <algorithm>
-#include <limits>
 #include <cmath>
-#include <memory>
+#include <limits>
 #include <optional>
 #include <stdexcept>
-
+#include <utility>
 
 namespace rtog::mrpt_grid {
 namespace {
 
+constexpr int kUnits = 4096;  // PoseMixture's changes beyond +-256 nats: the probability is 0 or 1 in double
+
+/// Cell i of the 2D grid's raster `r` (past its end cell for i > count), false outside the grid.
+bool rasterCell(const OccupancyMap::StepRun& r, std::uint32_t i, const TGridFrame2D& f, Key& k) {
+  constexpr int F = OccupancyMap::kRunFracBits;
+  k = Key{static_cast<std::int32_t>((std::int64_t{r.x} * (1 << F) + std::int64_t{i} * r.dx) >> F),
+          static_cast<std::int32_t>((std::int64_t{r.y} * (1 << F) + std::int64_t{i} * r.dy) >> F), f.layer};
+  return static_cast<std::uint32_t>(k.x - keyOffsetX(f)) < f.size_x && static_cast<std::uint32_t>(k.y - keyOffsetY(f)) < f.size_y;
+}
 
 /// One pose's beams as steps, beam by beam in the grid's order: each run's cells, then its end
 /// cell; a hit beam with range noise by gradeBeam().
 void poseSteps(const std::vector<OccupancyMap::StepRun>& runs, const std::vector<float>& ranges,
                const RangeNoiseRule* noise, const Steps& whole, const TGridFrame2D& f, std::vector<CellStep>& out) {
-  constexpr int F = OccupancyMap::kRunFracBits;
-  const std::int32_t ox = keyOffsetX(f), oy = keyOffsetY(f), z = f.layer;
+  const std::int32_t z = f.layer;
   for (std::size_t j = 0; j < runs.size(); ++j) {
     const OccupancyMap::StepRun& r = runs[j];
     const double R = ranges[j];
@@ -30,20 +37,27 @@ void poseSteps(const std::vector<OccupancyMap::StepRun>& runs, const std::vector
       continue;
     }
     const Key end{r.end_x, r.end_y, z};
-    gradeBeam(*noise, R, sigma, r.count, &end, whole, [&](std::uint32_t i, Key& k) {
-      k = Key{static_cast<std::int32_t>((std::int64_t{r.x} * (1 << F) + std::int64_t{i} * r.dx) >> F),
-              static_cast<std::int32_t>((std::int64_t{r.y} * (1 << F) + std::int64_t{i} * r.dy) >> F), z};
-      return static_cast<std::uint32_t>(k.x - ox) < f.size_x && static_cast<std::uint32_t>(k.y - oy) < f.size_y;
-    }, out);
+    gradeBeam(*noise, R, sigma, r.count, &end, whole, [&](std::uint32_t i, Key& k) { return rasterCell(r, i, f, k); }, out);
   }
 }
 
 /// `plain` (the grid's runs, in order) with the grid's rule, then `band` (single cells' graded
-/// steps) grouped by kind and size, a pass each, through the planar cache.
+/// steps) grouped by kind and size, a pass each, through the planar cache; `update`, if given,
+/// receives every run applied and the value after each step, in that order.
 InsertStats applyGrouped(OccupancyMap& map, std::int32_t layer, const std::vector<OccupancyMap::StepRun>& plain,
-                         std::vector<CellStep> band, const Steps& whole) {
+                         std::vector<CellStep> band, const Steps& whole, CRTreeOccupancyGridMap::GridScanUpdate* update) {
+  std::vector<float> after;
+  const auto apply = [&](const std::vector<OccupancyMap::StepRun>& runs, const StepRule& rule) {
+    const InsertStats s = map.applyStepRuns(layer, runs.data(), runs.size(), rule, update ? &after : nullptr);
+    if (update) {
+      update->runs.insert(update->runs.end(), runs.begin(), runs.end());
+      update->after.insert(update->after.end(), after.begin(), after.end());
+    }
+    return s;
+  };
+  if (update) update->runs.clear(), update->after.clear();
   const StepRule grid_rule = stepRule(whole);
-  InsertStats stats = map.applyStepRuns(layer, plain.data(), plain.size(), grid_rule);
+  InsertStats stats = apply(plain, grid_rule);
   // By kind and size, each group in its order (a counting sort: sizes are bytes).
   {
     const auto slot = [](const CellStep& c) { return static_cast<std::size_t>(c.kind) * 256 + c.size; };
@@ -72,7 +86,7 @@ InsertStats applyGrouped(OccupancyMap& map, std::int32_t layer, const std::vecto
     const int size = band[first].size;
     rule.delta[i] = valueOfCell(band[first].kind == StepKind::Occupied ? -size : size);
     rule.limit[i] = stepLimit(band[first].kind, size, whole);
-    stats += map.applyStepRuns(layer, group.data(), group.size(), rule);
+    stats += apply(group, rule);
     first = last;
   }
   return stats;
@@ -85,9 +99,8 @@ InsertStats applyGrouped(OccupancyMap& map, std::int32_t layer, const std::vecto
 /// pass: a cell in several beams' bands takes their graded steps in that order).
 InsertStats stepThroughCache(OccupancyMap& map, const std::vector<OccupancyMap::StepRun>& runs,
                              const std::vector<float>& ranges, const RangeNoiseRule* noise, const Steps& whole,
-                             const TGridFrame2D& f) {
-  constexpr int F = OccupancyMap::kRunFracBits;
-  const std::int32_t ox = keyOffsetX(f), oy = keyOffsetY(f), z = f.layer;
+                             const TGridFrame2D& f, CRTreeOccupancyGridMap::GridScanUpdate* update) {
+  const std::int32_t z = f.layer;
   std::vector<OccupancyMap::StepRun> plain;
   std::vector<CellStep> tail, band;
   plain.reserve(runs.size());
@@ -102,11 +115,8 @@ InsertStats stepThroughCache(OccupancyMap& map, const std::vector<OccupancyMap::
     const std::uint32_t prefix = bandStart(*noise, R, sigma, r.count);
     const Key end{r.end_x, r.end_y, z};
     tail.clear();
-    gradeBeam(*noise, R, sigma, r.count, &end, whole, [&](std::uint32_t i, Key& k) {
-      k = Key{static_cast<std::int32_t>((std::int64_t{r.x} * (1 << F) + std::int64_t{i} * r.dx) >> F),
-              static_cast<std::int32_t>((std::int64_t{r.y} * (1 << F) + std::int64_t{i} * r.dy) >> F), z};
-      return static_cast<std::uint32_t>(k.x - ox) < f.size_x && static_cast<std::uint32_t>(k.y - oy) < f.size_y;
-    }, tail, prefix);
+    gradeBeam(*noise, R, sigma, r.count, &end, whole, [&](std::uint32_t i, Key& k) { return rasterCell(r, i, f, k); },
+              tail, prefix);
     // The grid's own run: the rest of its free cells and its end cell, each with its whole step.
     std::size_t whole_free = 0;
     while (whole_free < tail.size() && tail[whole_free].kind == StepKind::Free && tail[whole_free].size == whole.free)
@@ -126,13 +136,9 @@ InsertStats stepThroughCache(OccupancyMap& map, const std::vector<OccupancyMap::
     band.insert(band.end(), tail.begin() + static_cast<std::ptrdiff_t>(std::min<std::size_t>(whole_free, r.count - prefix)),
                 tail.end());
   }
-  return applyGrouped(map, f.layer, plain, band, whole);
+  return applyGrouped(map, f.layer, plain, std::move(band), whole, update);
 }
 
-}  // namespace
-
-namespace {
-constexpr int kUnits = 4096;  // changes beyond +-256 nats: the probability is 0 or 1 in double
 }  // namespace
 
 PoseMixture::PoseMixture(float prior)
@@ -210,7 +216,7 @@ void applyInOrder(ScanCells& cells, const Key& offset, const std::vector<CellSte
 
 bool insertGradedScan(OccupancyMap& map, TGridFrame2D& frame, const mrpt::obs::CObservation2DRangeScan& scan,
                       const std::vector<pose_sigma::SigmaPose>& poses, const CRTreeOccupancyGridMap::TInsertionOptions& io,
-                      InsertStats& stats, std::size_t& invalid) {
+                      CRTreeOccupancyGridMap::GridScanUpdate* update, InsertStats& stats, std::size_t& invalid) {
   std::optional<RangeNoiseRule> noise;
   if (sensorModelFromString(io.sensorModel) == SensorModel::RangeNoise) noise.emplace(map.logOddsModel(), io.toInsertParams());
   const RangeNoiseRule* rule = noise ? &*noise : nullptr;
@@ -241,7 +247,8 @@ bool insertGradedScan(OccupancyMap& map, TGridFrame2D& frame, const mrpt::obs::C
     std::vector<OccupancyMap::StepRun> runs;
     std::vector<float> ranges;
     traceScan(scan, *plans[0], io, grown, runs, stats, &ranges);
-    const InsertStats written = stepThroughCache(map, runs, ranges, rule, whole, grown);
+    const InsertStats written = stepThroughCache(map, runs, ranges, rule, whole, grown, update);
+    if (update) std::copy(std::begin(plans[0]->grow), std::end(plans[0]->grow), update->grow);
     stats.cells_free = written.cells_free, stats.cells_occupied = written.cells_occupied;
     stats.cells_unchanged = written.cells_unchanged;
   } else {  // several poses: their mixture, each cell one graded step
@@ -261,7 +268,9 @@ bool insertGradedScan(OccupancyMap& map, TGridFrame2D& frame, const mrpt::obs::C
     }
     steps.clear();
     mixture.steps(steps);
-    const InsertStats written = applyGrouped(map, grown.layer, {}, steps, whole);
+    const InsertStats written = applyGrouped(map, grown.layer, {}, std::move(steps), whole, update);
+    if (update) update->grow[0] = grown.x_min, update->grow[1] = grown.x_max, update->grow[2] = grown.y_min,
+                update->grow[3] = grown.y_max;
     stats.cells_free = written.cells_free, stats.cells_occupied = written.cells_occupied;
     stats.cells_unchanged = written.cells_unchanged;
   }

@@ -122,12 +122,15 @@ void applyInOrder(ScanCells& cells, const Key& offset, const std::vector<CellSte
 /// (sensorModel = rangeNoise; the band stops at the grid's border, which always lies 15 cells or
 /// more past an end point), the poses mixed (PoseMixture); through the planar cache, as the
 /// grid's own scans (the grid's runs in beam order, then graded cells grouped by kind and size).
+/// `update`, if given, receives what changed, as grid_scan.hpp's insertScan gives it (for several
+/// poses, `grow` is the grown grid's rectangle).
 /// False (nothing changed) where the
 /// grid would insert nothing from any pose (a pose it would not insert from adds no change);
 /// otherwise `stats` counts the first such pose's beams and the cells written, `invalid` the
 /// invalid ranges not taken as free. A throw leaves `map` and `frame` as they were.
 bool insertGradedScan(OccupancyMap& map, TGridFrame2D& frame, const mrpt::obs::CObservation2DRangeScan& scan,
                       const std::vector<pose_sigma::SigmaPose>& poses,
-                      const CRTreeOccupancyGridMap::TInsertionOptions& io, InsertStats& stats, std::size_t& invalid);
+                      const CRTreeOccupancyGridMap::TInsertionOptions& io, CRTreeOccupancyGridMap::GridScanUpdate* update,
+                      InsertStats& stats, std::size_t& invalid);
 
 }  // namespace rtog::mrpt_grid

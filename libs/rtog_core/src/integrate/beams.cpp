@@ -45,7 +45,7 @@ RangeNoiseRule::RangeNoiseRule(const LogOddsModel& model, const InsertParams& ip
       p_miss_(model.params().prob_miss),
       p0_(model.params().prior),
       l0_(std::log(p0_ / (1.0 - p0_))),
-      ip_(ip),
+      unit_(ip.graded_unit),
       std_(ip.range_noise_std),
       std_per_meter_(ip.range_noise_std_per_meter),
       cutoff_(ip.range_noise_cutoff),
@@ -69,16 +69,16 @@ bool RangeNoiseRule::cellDelta(double t_in, double t_out, double r, double sigma
   const double behind = cdf(t_in, r, sigma), before = cdf(t_out, r, sigma);
   if (behind >= 1.0) return false;
   if (before <= 0.0) {
-    delta = ip_.graded(miss_);
+    delta = InsertParams::gradedChange(miss_, unit_);
     return true;
   }
   if (behind <= 0.0 && before >= 1.0) {
-    delta = ip_.graded(hit_);
+    delta = InsertParams::gradedChange(hit_, unit_);
     return true;
   }
   const double p = (before - behind) * p_hit_ + (1.0 - before) * p_miss_ + behind * p0_;
   // In single precision, the precision of the stored change (and half the cost of the double log).
-  delta = ip_.graded(double{std::log(static_cast<float>(p / (1.0 - p)))} - l0_);
+  delta = InsertParams::gradedChange(double{std::log(static_cast<float>(p / (1.0 - p)))} - l0_, unit_);
   return true;
 }
 

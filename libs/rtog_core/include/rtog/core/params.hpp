@@ -89,8 +89,9 @@ struct InsertParams {
   double graded_unit = 0.0;
 
   /// A graded change as it enters the map (graded_unit).
-  float graded(double delta) const {
-    return static_cast<float>(graded_unit > 0.0 ? std::round(delta / graded_unit) * graded_unit : delta);
+  float graded(double delta) const { return gradedChange(delta, graded_unit); }
+  static float gradedChange(double delta, double unit) {
+    return static_cast<float>(unit > 0.0 ? std::round(delta / unit) * unit : delta);
   }
 
   /// Throws std::invalid_argument naming the field unless the values are usable.

@@ -42,7 +42,7 @@ class RangeNoiseRule {
   mutable double inv_of_ = 0.0, inv_sigma_ = 0.0;  // 1 / sigma of the last sigma
   float hit_, miss_;
   double p_hit_, p_miss_, p0_, l0_;
-  InsertParams ip_;  // its graded_unit
+  double unit_;  // InsertParams::graded_unit
   double std_, std_per_meter_, cutoff_, tail_, mass_, inv_mass_;  // tail_ = Phi(-cutoff), mass_ = 1 - 2 tail_
 };
 

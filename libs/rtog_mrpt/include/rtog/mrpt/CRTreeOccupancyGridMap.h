@@ -390,7 +390,10 @@ class CRTreeOccupancyGridMap : public mrpt::maps::CMetricMap {
   void followGridScan(const GridScanUpdate& upd);
   /// A 2D scan of a 2D section in the mrpt_grid preset from weighted poses, with the graded
   /// models (range noise, pose blur) on the grid's raster (src/grid_graded.hpp).
-  bool insertGradedScan(const mrpt::obs::CObservation2DRangeScan& scan, const std::vector<pose_sigma::SigmaPose>& poses);
+  bool insertGradedScan(const mrpt::obs::CObservation2DRangeScan& scan, const std::vector<pose_sigma::SigmaPose>& poses,
+                        GridScanUpdate* update = nullptr);
+  /// Whether the 2D view's tiles are kept, so that a 2D scan's steps are followed into them.
+  bool followsGridScans() const;
   /// lmLikelihoodField_Thrun of a planar scan on the view's tiles (made from the map first if
   /// none are kept); nullopt where the tiles cannot stand for the view (see the .cpp).
   std::optional<double> tilesLikelihood(const mrpt::obs::CObservation2DRangeScan& scan,
