@@ -1,11 +1,10 @@
 // rtog::CRTreeOccupancyGridMap: the 2D view (a COccupancyGridMap2D of a height band), the
-// mrpt_grid preset's grid geometry and 2D scans (grid_scan.hpp: the grid's steps; grid_graded.hpp:
-// with range noise or from an uncertain pose), and the grid queries MRPT users call on a 2D grid. (The
+// mrpt_grid preset's grid geometry and 2D scans (grid_graded.hpp: the grid's steps, with range
+// noise or from an uncertain pose), and the grid queries MRPT users call on a 2D grid. (The
 // likelihood of planar scans on the view is in CRTreeOccupancyGridMap_likelihood.cpp.)
 #include "CRTreeOccupancyGridMap_grid2d.hpp"
 #include "rtog/core/band.hpp"
 #include "grid_graded.hpp"
-#include "grid_scan.hpp"
 #include "grid_tiles.hpp"
 #include "mrpt_grid.hpp"
 #include "pose_sigma.hpp"
@@ -307,24 +306,8 @@ CRTreeOccupancyGridMap::TCellCounts CRTreeOccupancyGridMap::gridViewCellCounts()
 
 bool CRTreeOccupancyGridMap::insertGridScan(const mrpt::obs::CObservation2DRangeScan& scan, const CPose3D& robotPose,
                                             GridScanUpdate* update) {
-  if (sensorModelFromString(insertionOptions.sensorModel) == SensorModel::RangeNoise)
-    return insertGradedScan(scan, {pose_sigma::SigmaPose{1.0, robotPose}}, update);
-  syncParams();
-  InsertStats stats;
-  std::size_t invalid = 0;
-  // With the view's tiles kept, the scan's steps are what they follow.
-  const bool follow = followsGridScans();
-  GridScanUpdate own;
-  GridScanUpdate* upd = update ? update : follow ? &own : nullptr;
-  if (!mrpt_grid::insertScan(map_, frame_, scan, robotPose, insertionOptions, upd, stats, invalid)) return false;
-  invalidRangesSkipped += invalid;
-  lastInsertStats = stats;
-  totalInsertStats += stats;
-  if (follow)
-    followGridScan(*upd);
-  else
-    notifyMapChanged();
-  return true;
+  // The grid's steps are the graded path's with one pose and no band (grid_graded.hpp).
+  return insertGradedScan(scan, {pose_sigma::SigmaPose{1.0, robotPose}}, update);
 }
 
 bool CRTreeOccupancyGridMap::followsGridScans() const {
@@ -340,6 +323,7 @@ bool CRTreeOccupancyGridMap::insertGradedScan(const mrpt::obs::CObservation2DRan
   const bool follow = followsGridScans();
   GridScanUpdate own;
   GridScanUpdate* upd = update ? update : follow ? &own : nullptr;
+  // With the view's tiles kept, the scan's steps are what they follow.
   if (!mrpt_grid::insertGradedScan(map_, frame_, scan, poses, insertionOptions, upd, stats, invalid)) return false;
   invalidRangesSkipped += invalid;
   lastInsertStats = stats;

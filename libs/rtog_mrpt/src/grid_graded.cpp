@@ -247,10 +247,8 @@ bool insertGradedScan(OccupancyMap& map, TGridFrame2D& frame, const mrpt::obs::C
     std::vector<OccupancyMap::StepRun> runs;
     std::vector<float> ranges;
     traceScan(scan, *plans[0], io, grown, runs, stats, &ranges);
-    const InsertStats written = stepThroughCache(map, runs, ranges, rule, whole, grown, update);
+    stats += stepThroughCache(map, runs, ranges, rule, whole, grown, update);
     if (update) std::copy(std::begin(plans[0]->grow), std::end(plans[0]->grow), update->grow);
-    stats.cells_free = written.cells_free, stats.cells_occupied = written.cells_occupied;
-    stats.cells_unchanged = written.cells_unchanged;
   } else {  // several poses: their mixture, each cell one graded step
     bool counted = false;
     std::vector<OccupancyMap::StepRun> runs;
@@ -268,11 +266,9 @@ bool insertGradedScan(OccupancyMap& map, TGridFrame2D& frame, const mrpt::obs::C
     }
     steps.clear();
     mixture.steps(steps);
-    const InsertStats written = applyGrouped(map, grown.layer, {}, std::move(steps), whole, update);
+    stats += applyGrouped(map, grown.layer, {}, std::move(steps), whole, update);
     if (update) update->grow[0] = grown.x_min, update->grow[1] = grown.x_max, update->grow[2] = grown.y_min,
                 update->grow[3] = grown.y_max;
-    stats.cells_free = written.cells_free, stats.cells_occupied = written.cells_occupied;
-    stats.cells_unchanged = written.cells_unchanged;
   }
   frame = grown;
   invalid = invalidNotFree(scan, io);

@@ -122,8 +122,9 @@ void applyInOrder(ScanCells& cells, const Key& offset, const std::vector<CellSte
 /// (sensorModel = rangeNoise; the band stops at the grid's border, which always lies 15 cells or
 /// more past an end point), the poses mixed (PoseMixture); through the planar cache, as the
 /// grid's own scans (the grid's runs in beam order, then graded cells grouped by kind and size).
-/// `update`, if given, receives what changed, as grid_scan.hpp's insertScan gives it (for several
-/// poses, `grow` is the grown grid's rectangle).
+/// `update`, if given, receives the runs stepped, each step's value after it and the rectangle
+/// the grid grew to (for several poses, the grown grid's). One pose without range noise is
+/// COccupancyGridMap2D's insertion (the preset's plain 2D scans take this path).
 /// False (nothing changed) where the
 /// grid would insert nothing from any pose (a pose it would not insert from adds no change);
 /// otherwise `stats` counts the first such pose's beams and the cells written, `invalid` the
