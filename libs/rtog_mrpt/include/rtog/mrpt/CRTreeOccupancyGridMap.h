@@ -379,21 +379,18 @@ class CRTreeOccupancyGridMap : public mrpt::maps::CMetricMap {
 
   /// cos/sin of the scan's beam angles, from the cache when the geometry is the last one's.
   std::shared_ptr<const ScanAngles> scanAngles(const mrpt::obs::CObservation2DRangeScan& scan) const;
-  /// A 3D observation (or a 2D scan in a 3D section) from weighted poses (a certain pose: one of
-  /// weight 1) with COccupancyGridMap3D's rule; false for a type that has no points.
+  /// An observation of a 3D section from weighted poses (one of weight 1: a certain pose) by
+  /// COccupancyGridMap3D's rule; false for a type without points.
   bool insertGrid3D(const mrpt::obs::CObservation& obs, const std::vector<pose_sigma::SigmaPose>& poses);
-  /// Rays into the 3D grid (std::logic_error naming `what` without one), graded by the options'
-  /// sensor model (src/mrpt_grid3d.hpp).
+  /// Rays into the 3D grid (std::logic_error naming `what` without one; src/mrpt_grid3d.hpp).
   void stepRays(const char* what, const std::vector<mrpt_grid3d::RaySet>& sets);
-  /// After a grid scan: the 2D view's copy-on-write tiles, if kept, take its steps; the other
+  /// After a grid scan: the view's tiles, if kept (followsGridScans), take its steps; the other
   /// caches are dropped as by notifyMapChanged().
   void followGridScan(const GridScanUpdate& upd);
-  /// A 2D scan of a 2D section in the mrpt_grid preset from weighted poses, with the graded
-  /// models (range noise, pose blur) on the grid's raster (src/grid_graded.hpp).
+  bool followsGridScans() const;
+  /// A 2D scan of a 2D section in the mrpt_grid preset from weighted poses (src/grid_graded.hpp).
   bool insertGradedScan(const mrpt::obs::CObservation2DRangeScan& scan, const std::vector<pose_sigma::SigmaPose>& poses,
                         GridScanUpdate* update = nullptr);
-  /// Whether the 2D view's tiles are kept, so that a 2D scan's steps are followed into them.
-  bool followsGridScans() const;
   /// lmLikelihoodField_Thrun of a planar scan on the view's tiles (made from the map first if
   /// none are kept); nullopt where the tiles cannot stand for the view (see the .cpp).
   std::optional<double> tilesLikelihood(const mrpt::obs::CObservation2DRangeScan& scan,
