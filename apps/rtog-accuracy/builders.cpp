@@ -42,21 +42,15 @@ MapView buildRtog(const std::vector<sim::Scan>& scans, double res, double max_ra
   // The sigma points of the pose error, each a (dx, dy, dyaw) to apply to the believed scan.
   const std::vector<SigmaPoint> sigma = v.pose_blur ? sigmaPoints(pose_cov) : std::vector<SigmaPoint>{};
   const auto t0 = Clock::now();
-  std::vector<sim::Scan> copies;
-  std::vector<WeightedScan> blurred;
+  std::vector<PoseMove> moves;
   for (const auto& s : scans) {
     if (!v.pose_blur) {
       map.insertPointCloud(s.origin, s.points.data(), s.points.size(), ip, s.is_hit.data());
       continue;
     }
-    copies.clear();
-    blurred.clear();
-    for (const SigmaPoint& sp : sigma)
-      copies.push_back(sim::displaced(s, sim::PoseError{sp.offset[0], sp.offset[1], sp.offset[2]}));
-    for (std::size_t i = 0; i < sigma.size(); ++i)
-      blurred.push_back(WeightedScan{sigma[i].weight, copies[i].origin, copies[i].points.data(), copies[i].points.size(),
-                                     copies[i].is_hit.data()});
-    map.insertBlurred(blurred, ip);
+    moves.clear();
+    for (const SigmaPoint& sp : sigma) moves.push_back(planarMove(sp.weight, s.origin, sp.offset[0], sp.offset[1], sp.offset[2]));
+    map.insertBlurred(s.origin, s.points.data(), s.points.size(), moves.data(), moves.size(), ip, s.is_hit.data());
   }
   MapView out(v.name, region.size());
   out.insert_seconds = secondsSince(t0);

@@ -73,7 +73,7 @@ class RtogMethod : public Method {
 
 /// A scan taken from an uncertain pose, blurred into the map (doc/pose-uncertainty.md): a planar
 /// pose covariance diag(sigma^2, sigma^2, sigma_yaw^2) about each scan's origin, its six sigma
-/// poses, the scan moved to each (timed: a user's adapter does the same) and inserted blurred.
+/// poses as moves of the scan (timed: a user's adapter does the same), inserted blurred.
 class RtogBlurredMethod : public Method {
  public:
   RtogBlurredMethod(std::string label, double res, InsertParams ip, double sigma, double sigma_yaw)
@@ -88,20 +88,14 @@ class RtogBlurredMethod : public Method {
   std::string name() const override { return label_; }
   double build(const Dataset& d) override {
     map_ = std::make_unique<OccupancyMap>(params_);
-    std::vector<std::vector<Eigen::Vector3f>> moved(sigma_.size());
-    std::vector<WeightedScan> scans(sigma_.size());
+    std::vector<PoseMove> moves(sigma_.size());
     const auto t0 = Clock::now();
     for (const Scan& s : d.scans) {
       for (std::size_t i = 0; i < sigma_.size(); ++i) {
         const Eigen::VectorXd& o = sigma_[i].offset;
-        const Eigen::Vector3d origin = s.origin + Eigen::Vector3d(o[0], o[1], 0.0);
-        const Eigen::Matrix3d rot = Eigen::AngleAxisd(o[2], Eigen::Vector3d::UnitZ()).toRotationMatrix();
-        moved[i].resize(s.points.size());
-        for (std::size_t k = 0; k < s.points.size(); ++k)
-          moved[i][k] = (origin + rot * (s.points[k].cast<double>() - s.origin)).cast<float>();
-        scans[i] = WeightedScan{sigma_[i].weight, origin, moved[i].data(), moved[i].size(), nullptr};
+        moves[i] = planarMove(sigma_[i].weight, s.origin, o[0], o[1], o[2]);
       }
-      map_->insertBlurred(scans, ip_);
+      map_->insertBlurred(s.origin, s.points.data(), s.points.size(), moves.data(), moves.size(), ip_);
     }
     return seconds(t0, Clock::now());
   }

@@ -55,7 +55,7 @@ foreach(f IN LISTS private)
      text MATCHES "(applyBatches|applyGraded|applyAssigned)\\(")
     fail("${f}: calls an update-set applier (only MapEngine::apply may)")
   endif()
-  if(text MATCHES "planar_?\\.(apply|applyStepRuns|cover)\\(")
+  if(text MATCHES "planar_?\\.(apply|applyStepRuns|applyGradedLayer|cover)\\(")
     fail("${f}: changes the planar cache (only MapEngine::apply and flush may)")
   endif()
   if(NOT f MATCHES "^src/integrate/(brick_update|batch_apply|assign_apply)\\.(hpp|cpp)$" AND

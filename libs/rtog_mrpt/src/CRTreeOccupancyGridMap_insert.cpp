@@ -314,14 +314,15 @@ bool CRTreeOccupancyGridMap::insertObservation(const mrpt::obs::CObservation& ob
       return inserted;
     }
   }
-  std::vector<ObservationBeams> beams(sigma.size());
-  for (std::size_t i = 0; i < sigma.size(); ++i)
-    if (!extractBeams(obs, sigma[i].pose, beams[i], true)) return false;
-  const std::vector<WeightedScan> scans = pose_sigma::weightedScans(sigma, beams);
+  // Traced once at the mean and moved to each sigma pose (OccupancyMap::insertBlurred).
+  ObservationBeams beams;
+  if (!extractBeams(obs, pose.mean, beams, true)) return false;
+  const std::vector<PoseMove> moves = pose_sigma::poseMoves(sigma, pose.mean);
   syncParams();
-  lastInsertStats = map_.insertBlurred(scans, insertionOptions.toInsertParams());
+  lastInsertStats = map_.insertBlurred(beams.origin, beams.points.data(), beams.points.size(), moves.data(), moves.size(),
+                                       insertionOptions.toInsertParams(), beams.is_hit.data());
   totalInsertStats += lastInsertStats;
-  invalidRangesSkipped += beams[0].invalid;
+  invalidRangesSkipped += beams.invalid;
   notifyMapChanged();
   publishEvent(mrpt::maps::mrptEventMetricMapInsert(this, &obs, pose.mean));
   return true;

@@ -18,12 +18,19 @@ std::vector<SigmaPose> sigmaPoses(const mrpt::poses::CPose3DPDFGaussian& pose) {
   return out;
 }
 
-std::vector<WeightedScan> weightedScans(const std::vector<SigmaPose>& sigma, const std::vector<ObservationBeams>& beams) {
-  std::vector<WeightedScan> scans;
-  for (std::size_t i = 0; i < sigma.size(); ++i)
-    scans.push_back(WeightedScan{sigma[i].weight, beams[i].origin, beams[i].points.data(), beams[i].points.size(),
-                                 beams[i].is_hit.data()});
-  return scans;
+std::vector<PoseMove> poseMoves(const std::vector<SigmaPose>& sigma, const mrpt::poses::CPose3D& mean) {
+  const auto isometry = [](const mrpt::poses::CPose3D& p) {
+    Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
+    for (int r = 0; r < 3; ++r) {
+      for (int c = 0; c < 3; ++c) t.linear()(r, c) = p.getRotationMatrix()(r, c);
+      t.translation()[r] = p.m_coords[static_cast<std::size_t>(r)];
+    }
+    return t;
+  };
+  const Eigen::Isometry3d back = isometry(mean).inverse();
+  std::vector<PoseMove> moves;
+  for (const SigmaPose& s : sigma) moves.push_back(PoseMove{s.weight, isometry(s.pose) * back});
+  return moves;
 }
 
 }  // namespace rtog::pose_sigma

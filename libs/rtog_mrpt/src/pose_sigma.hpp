@@ -24,8 +24,8 @@ struct SigmaPose {
 /// std::invalid_argument for a matrix that is not a covariance.
 std::vector<SigmaPose> sigmaPoses(const mrpt::poses::CPose3DPDFGaussian& pose);
 
-/// The beams extracted at each sigma pose, weighted, as OccupancyMap::insertBlurred takes them
-/// (pointing into `beams`).
-std::vector<WeightedScan> weightedScans(const std::vector<SigmaPose>& sigma, const std::vector<ObservationBeams>& beams);
+/// Each sigma pose as the move (map frame) that carries the mean pose to it, pose * mean^-1, as
+/// OccupancyMap::insertBlurred takes them with the beams extracted at the mean.
+std::vector<PoseMove> poseMoves(const std::vector<SigmaPose>& sigma, const mrpt::poses::CPose3D& mean);
 
 }  // namespace rtog::pose_sigma

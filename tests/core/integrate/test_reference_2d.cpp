@@ -12,6 +12,7 @@
 
 #include "rtog/mrpt/rawlog_poses.h"
 
+#include "map_cells.hpp"
 #include "test_support.hpp"
 
 using namespace rtog;
@@ -120,6 +121,52 @@ TEST(Reference2D, PlanarCacheEqualsTheGeneralPath) {
     EXPECT_EQ(a.cellCount(), b.cellCount());
     test::expectMatchesReference(a, ref, true);
     test::expectMatchesReference(b, ref, true);
+  }
+}
+
+// Graded 2D scans (range noise; pose blur, traced and moved) go into the planar cache too, with
+// the general path's cells and values bit for bit.
+TEST(Reference2D, GradedPlanarScansEqualTheGeneralPath) {
+  const auto scans = loadSenaScans(40);
+  for (const BlurMethod blur : {BlurMethod::Auto, BlurMethod::Trace, BlurMethod::Move}) {
+    for (const bool blurred : {false, true}) {
+      if (!blurred && blur != BlurMethod::Auto) continue;  // the blur method is for blurred scans only
+      InsertParams cached;
+      cached.max_range = 30.0;
+      cached.model = SensorModel::RangeNoise;
+      cached.range_noise_std = 0.03;
+      cached.blur_method = blur;
+      InsertParams general = cached;
+      general.planar_cache = false;
+      OccupancyMap a(params2D(MergePolicy::Equal)), b(params2D(MergePolicy::Equal));
+      bool pending = false;
+      for (const auto& s : scans) {
+        InsertStats sa, sb;
+        if (blurred) {
+          std::vector<PoseMove> moves;
+          for (int i = 0; i < 6; ++i) moves.push_back(planarMove(1.0, s.origin, 0.04 * (i % 3 - 1), 0.03 * (i / 3), 0.01 * (i - 2.5)));
+          sa = a.insertBlurred(s.origin, s.points, moves, cached);
+          sb = b.insertBlurred(s.origin, s.points, moves, general);
+        } else {
+          sa = a.insertPointCloud(s.origin, s.points, cached);
+          sb = b.insertPointCloud(s.origin, s.points, general);
+        }
+        pending = pending || a.hasPendingCover();
+        EXPECT_FALSE(b.hasPendingCover());
+        sa.leaves_created = sb.leaves_created;
+        sa.leaves_merged = sb.leaves_merged;
+        sa.leaves_split = sb.leaves_split;
+        ASSERT_EQ(sa, sb);
+      }
+      EXPECT_TRUE(pending);
+      EXPECT_EQ(a.checkInvariants(), "");
+      const auto ca = test::cellsOf(a), cb = test::cellsOf(b);
+      ASSERT_EQ(ca.size(), cb.size());
+      for (std::size_t i = 0; i < ca.size(); ++i) {
+        ASSERT_EQ(ca[i].first, cb[i].first);
+        ASSERT_EQ(ca[i].second, cb[i].second);
+      }
+    }
   }
 }
 

@@ -23,6 +23,7 @@ struct ScratchPool {
 std::size_t InsertScratch::memoryBytes() const {
   std::size_t bytes = sizeof(*this) + planar_beams.capacity() * sizeof(PlanarBeam) +
                       assigned.capacity() * sizeof(AssignedPiece);
+  for (const auto& m : moved_points) bytes += m.capacity() * sizeof(Eigen::Vector3f);
   for (const GradedScan& g : graded) bytes += sizeof(g) + g.memoryBytes();
   for (const UpdateBatch& b : batches) bytes += sizeof(b) + b.memoryBytes();
   for (const ApplyContext& c : apply_ctx) bytes += c.memoryBytes();
@@ -37,6 +38,7 @@ void InsertScratch::shrink() {
   std::vector<PlanarBeam>().swap(planar_beams);
   for (GradedScan& g : graded) g = GradedScan();
   std::vector<AssignedPiece>().swap(assigned);
+  std::vector<std::vector<Eigen::Vector3f>>().swap(moved_points);
 }
 
 ScratchScope::ScratchScope(std::unique_ptr<InsertScratch>& slot) : slot_(slot), owner_(slot == nullptr) {

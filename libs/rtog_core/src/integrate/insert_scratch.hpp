@@ -30,6 +30,7 @@ struct InsertScratch {
   std::vector<PlanarBeam> planar_beams;
   std::vector<GradedScan> graded;  // RangeNoise scans per thread; pose blur, cones, fusion
   std::vector<AssignedPiece> assigned;  // grouped by brick
+  std::vector<std::vector<Eigen::Vector3f>> moved_points;  // pose blur: the scan moved to each pose
 
   std::size_t memoryBytes() const;
   /// Frees the buffers that grow with a scan, keeping the per-thread objects.

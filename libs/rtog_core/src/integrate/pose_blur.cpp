@@ -222,6 +222,7 @@ UpdateSet PoseBlurIntegrator::trace(const WeightedScan* scans, std::size_t n, co
   UpdateSet set = UpdateSet::nothing(UpdateSet::Kind::Graded, part[0]);
   set.stats.cells_free = set.stats.cells_occupied = set.stats.cells_unchanged = 0;
   set.graded.push_back(&out);
+  set.planar_ok = ip.planar_cache;
   set.threads = ip.threads;
   return set;
 }

@@ -30,6 +30,7 @@ UpdateSet RangeNoiseIntegrator::trace(const Eigen::Vector3d& origin, const Eigen
       [&](std::size_t t) { scratch.graded[t].finalize(); });
   UpdateSet set;
   set.kind = UpdateSet::Kind::Graded;
+  set.planar_ok = ip.planar_cache;
   for (std::size_t t = 0; t < threads; ++t) {
     set.stats += part[t];
     set.graded.push_back(&scratch.graded[t]);

@@ -39,6 +39,8 @@ struct UpdateSet {
   const std::vector<PlanarBatch>* planar = nullptr;  // Planar: batches [0, planar_count) of layer z
   std::size_t planar_count = 0;
   std::vector<const GradedScan*> graded;  // Graded, Sequence
+  /// Graded: into the planar cache if every cell lies in one z-layer (InsertParams::planar_cache).
+  bool planar_ok = false;
   std::int32_t z = 0;                     // Planar, StepRuns
   const StepRun* runs = nullptr;          // StepRuns
   std::size_t run_count = 0;

@@ -33,6 +33,15 @@ InsertStats MapEngine::apply(UpdateSet&& set) {
       stats = planar.applyStepRuns(store, set.z, set.runs, set.run_count, *set.rule, set.after);
       cover_pending.store(true, std::memory_order_release);
       return stats;
+    case UpdateSet::Kind::Graded: {
+      std::int32_t z = 0;
+      if (set.planar_ok && gradedLayer(set.graded, z)) {
+        planar.applyGradedLayer(store, set.graded, z, stats);
+        cover_pending.store(true, std::memory_order_release);
+        return stats;
+      }
+      break;
+    }
     default:
       break;
   }

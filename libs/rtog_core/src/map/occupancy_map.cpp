@@ -65,6 +65,13 @@ InsertStats OccupancyMap::insertBlurred(const WeightedScan* scans, std::size_t n
   return engine_->integrate([&](const IntegrationContext& c) { return PoseBlurIntegrator(c).trace(scans, n, ip); });
 }
 
+InsertStats OccupancyMap::insertBlurred(const Eigen::Vector3d& origin, const Eigen::Vector3f* points,
+                                        std::size_t count, const PoseMove* moves, std::size_t n,
+                                        const InsertParams& ip, const std::uint8_t* is_hit) {
+  return engine_->integrate(
+      [&](const IntegrationContext& c) { return PoseBlurIntegrator(c).resample(origin, points, count, is_hit, moves, n, ip); });
+}
+
 InsertStats OccupancyMap::insertCones(const ConeReading* readings, std::size_t n, ConeWeighting w,
                                       const InsertParams& ip) {
   return engine_->integrate([&](const IntegrationContext& c) { return ConeIntegrator(c).trace(readings, n, w, ip); });

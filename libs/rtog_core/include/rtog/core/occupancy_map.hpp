@@ -81,6 +81,20 @@ class OccupancyMap {
   InsertStats insertBlurred(const std::vector<WeightedScan>& scans, const InsertParams& ip = {}) {
     return insertBlurred(scans.data(), scans.size(), ip);
   }
+  /// The same blur of a scan given once, as seen from the mean pose (map frame, as
+  /// insertPointCloud() takes it), with each pose of the set as a rigid move of it (PoseMove). The
+  /// scan is traced once; pose i's probability of a cell is the one the mean trace gives the
+  /// point move_i^-1 (cell centre), which is the traced pose's up to the raster (cells of a beam
+  /// moved, not the moved beam's cells: equal for moves by whole cells). The mixture is then the
+  /// same. A cell no move reaches takes no change. Throws as insertBlurred(scans) does, and
+  /// std::invalid_argument for a move that is not finite.
+  InsertStats insertBlurred(const Eigen::Vector3d& origin, const Eigen::Vector3f* points, std::size_t count,
+                            const PoseMove* moves, std::size_t n, const InsertParams& ip = {},
+                            const std::uint8_t* is_hit = nullptr);
+  InsertStats insertBlurred(const Eigen::Vector3d& origin, const std::vector<Eigen::Vector3f>& points,
+                            const std::vector<PoseMove>& moves, const InsertParams& ip = {}) {
+    return insertBlurred(origin, points.data(), points.size(), moves.data(), moves.size(), ip);
+  }
 
   /// Integrates readings of range sensors with a wide beam (sonar, IR; rtog/core/cone.hpp), in
   /// order, each one measurement: the cells of its cone (coneCells) take weight * the hit change

@@ -44,6 +44,9 @@ struct MapParams {
 /// The machine's hardware threads (at least 1): the default thread count of an insertion.
 int defaultThreadCount();
 
+/// How a pose-blurred scan's poses are evaluated (InsertParams::blur_method).
+enum class BlurMethod : std::uint8_t { Auto, Trace, Move };
+
 /// Per-call insertion settings.
 struct InsertParams {
   SensorModel model = SensorModel::BeamBased;  ///< (Default: BeamBased)
@@ -87,6 +90,14 @@ struct InsertParams {
   /// unit, half away from zero, so that a map of integer log-odds stays on its lattice (MRPT's
   /// int8 grids: 1/16, as the mrpt_grid preset sets it). 0: not rounded. (Default: 0)
   double graded_unit = 0.0;
+  /// A pose-blurred scan given as moves of the scan at the mean pose (OccupancyMap::insertBlurred
+  /// with PoseMove): how each pose's change of the cells is found. Trace: the scan moved and
+  /// traced from each pose. Move: traced once, at the mean, and the trace moved to each pose (the
+  /// same up to the raster; a lookup per cell and pose instead of a walk per beam and pose).
+  /// Auto: Move where the beams surely cross the cells they touch many times over (their cell
+  /// steps are 8 times the cells of the scan's bounding box or more: a depth image's), Trace
+  /// otherwise (LiDAR rings, 2D scans). (Default: Auto)
+  BlurMethod blur_method = BlurMethod::Auto;
 
   /// A graded change as it enters the map (graded_unit).
   float graded(double delta) const { return gradedChange(delta, graded_unit); }

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 
 namespace rtog {
 
@@ -21,6 +22,24 @@ struct WeightedScan {
   std::size_t count = 0;
   const std::uint8_t* is_hit = nullptr;  ///< optional, as in insertPointCloud()
 };
+
+/// One pose of OccupancyMap::insertBlurred() given as a move of the scan taken at the mean pose:
+/// the rigid motion (map frame) that carries the mean pose to this pose, x -> move * x (for MRPT
+/// poses, pose_i * mean^-1), with the pose's weight.
+struct PoseMove {
+  double weight = 1.0;
+  Eigen::Isometry3d move = Eigen::Isometry3d::Identity();
+};
+
+/// The move of a planar pose error about a sensor at `about`: shifted by (dx, dy), turned by dyaw
+/// about the vertical through `about`.
+inline PoseMove planarMove(double weight, const Eigen::Vector3d& about, double dx, double dy, double dyaw) {
+  PoseMove m;
+  m.weight = weight;
+  m.move = Eigen::Translation3d(about + Eigen::Vector3d(dx, dy, 0.0)) * Eigen::AngleAxisd(dyaw, Eigen::Vector3d::UnitZ()) *
+           Eigen::Translation3d(-about);
+  return m;
+}
 
 /// A sample of a zero-mean Gaussian: an offset to add to the mean and its weight.
 struct SigmaPoint {

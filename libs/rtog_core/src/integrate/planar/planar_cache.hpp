@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "integrate/graded_scan.hpp"
 #include "integrate/planar/planar_batch.hpp"
 #include "integrate/planar/step_codec.hpp"
 #include "rtog/core/log_odds.hpp"
@@ -33,6 +34,10 @@ struct PlanarLayer {
   std::array<std::int8_t, kLayerCells> code;
 };
 
+/// Whether every cell of `scans` (graded cells and miss masks) lies in one z-layer, and which:
+/// false for scans of no cell.
+bool gradedLayer(const std::vector<const GradedScan*>& scans, std::int32_t& z);
+
 class PlanarCache {
  public:
   bool empty() const { return layers_.empty(); }
@@ -44,6 +49,9 @@ class PlanarCache {
 
   /// Applies the union of batches[0 .. count) of a scan in z-layer `z` (occupied winning).
   void apply(MapStore& store, const std::vector<PlanarBatch>& batches, std::size_t count, int z, InsertStats& stats);
+  /// Applies the union of graded scans whose cells all lie in z-layer `z` (gradedLayer), as the
+  /// graded applier does (planar_graded.cpp).
+  void applyGradedLayer(MapStore& store, const std::vector<const GradedScan*>& scans, std::int32_t z, InsertStats& stats);
   /// Applies grid steps in their order (OccupancyMap::applyStepRuns); throws std::out_of_range,
   /// changing nothing, if a cell has no key.
   InsertStats applyStepRuns(MapStore& store, std::int32_t z, const StepRun* runs, std::size_t n, const StepRule& rule,
