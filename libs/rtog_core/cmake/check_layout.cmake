@@ -99,7 +99,7 @@ endif()
 file(GLOB_RECURSE mrpt_files ${MRPT_DIR}/*.cpp ${MRPT_DIR}/*.hpp ${MRPT_DIR}/*.h)
 foreach(f IN LISTS mrpt_files)
   file(READ ${f} text)
-  if(text MATCHES "#include \"(base|storage|integrate|map|kernels|parallel|plan)/" OR text MATCHES "rtog/core/detail")
+  if(text MATCHES "#include \"(base|storage|integrate|map|kernels|parallel|plan|explore)/" OR text MATCHES "rtog/core/detail")
     fail("${f}: includes a private header of the core")
   endif()
   # The core's containers (util/, header-only, target rtog_core_util) only in private sources.
