@@ -10,9 +10,11 @@
 #include <vector>
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 
 #include "rtog/core/key.hpp"
 #include "rtog/core/occupancy_map.hpp"
+#include "rtog/core/plan.hpp"
 
 namespace rtog {
 
@@ -61,5 +63,68 @@ struct FieldValue {
 FieldValue occupancyAt(const OccupancyMap& map, const Eigen::Vector3d& x);
 /// O(x, y) in the band [min_z, max_z] [m] (z of the gradient 0).
 FieldValue occupancyAt2D(const OccupancyMap& map, const Eigen::Vector3d& x, double min_z, double max_z);
+
+/// A sensor whose view is scored: its rays in the sensor's frame. Laser2D: `beams` rays spread
+/// evenly over `aperture` in the x-y plane, x forward. Depth: a pinhole camera of width x height
+/// pixels, every `stride`-th pixel a ray, z forward, x right, y down (the optical frame).
+struct ViewSensor {
+  enum class Kind { Laser2D, Depth };
+  Kind kind = Kind::Laser2D;
+  double max_range = 8.0;   ///< [m] (Default: 8)
+  double aperture = 3.14159265358979323846;  ///< Laser2D [rad] (Default: pi)
+  int beams = 181;          ///< Laser2D (Default: 181)
+  int width = 640, height = 480;             ///< Depth (Default: 640 x 480)
+  double fx = 525.0, fy = 525.0, cx = 319.5, cy = 239.5;  ///< Depth (Default: a Kinect's)
+  int stride = 8;           ///< Depth: a ray every stride-th pixel in each direction (Default: 8)
+  /// The unit rays. Throws std::invalid_argument for a range, aperture, count or intrinsics that
+  /// cannot make a sensor.
+  std::vector<Eigen::Vector3d> rays() const;
+};
+
+/// What a view of the sensor at a pose is expected to teach the map.
+struct ViewGain {
+  double bits = 0.0;              ///< the expected entropy reduction, summed over the cells
+  std::int64_t cells = 0;         ///< cells a ray reaches with probability > 1/2
+  std::int64_t unknown_cells = 0; ///< of them, unknown now
+};
+
+/// The expected information gain of a scan from `sensor_pose` (map frame), with the map's own
+/// inverse model. Each ray walks its cells out to max_range. Unknown space does not stop a ray (as
+/// frontier explorers assume); a known cell stops it with its probability of being occupied, so a
+/// ray reaches a cell with the product of (1 - P) of the known cells before it; a ray stops where
+/// that falls under 1e-3. A cell reached by several rays is updated once per scan, as insertion
+/// updates it: it is observed with 1 - prod over the rays of (1 - reach). Observed, it is hit with
+/// its probability P (the prior for an unknown cell) and missed otherwise; its gain is
+/// H(P) - [P H(l + hit) + (1 - P) H(l + miss)] with the model's clamped update, H in bits.
+ViewGain informationGain(const OccupancyMap& map, const Eigen::Isometry3d& sensor_pose, const ViewSensor& sensor);
+
+/// Candidate views around the frontier regions, scored by gain against the risk-aware path cost.
+struct ViewOptions {
+  ViewSensor sensor;
+  FrontierOptions frontiers;   ///< planar: 2D views at sensor_z, planned in the band; else 3D
+  double sensor_z = 0.3;       ///< planar: the sensor's height [m] (Default: 0.3)
+  double standoff = 1.0;       ///< candidates lie this far [m] from a region's centroid (Default: 1)
+  int candidates_per_region = 8;     ///< around the centroid, facing it (Default: 8)
+  std::size_t max_regions = 16;      ///< the largest regions (Default: 16)
+  std::size_t planned = 12;          ///< the candidates of highest gain that get a path (Default: 12)
+  /// score = gain * exp(-lambda * cost): the utility of Gonzalez-Banos and Latombe, gain
+  /// discounted by the path cost f(P) = Te sum T(C) + Ta length(P). (Default: 0.2)
+  double lambda = 0.2;
+  PlanOptions plan;            ///< Te, Ta, unknown risk, radius of the path
+};
+
+struct View {
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();  ///< the sensor's pose (map frame)
+  ViewGain gain;
+  std::size_t region = 0;      ///< index in frontierRegions()
+  bool reachable = false;      ///< a path from the start was found
+  double path_cost = 0.0, path_length = 0.0;
+  double score = 0.0;          ///< 0 if not reachable
+};
+
+/// The next-best views from `from`: candidates in free cells (not nearer than the plan's radius
+/// to an occupied one) around the largest frontier regions, their gains, paths for the `planned`
+/// of highest gain; those ranked by score, best first. Throws std::invalid_argument for bad options.
+std::vector<View> nextBestViews(const OccupancyMap& map, const Eigen::Vector3d& from, const ViewOptions& options);
 
 }  // namespace rtog

@@ -1,0 +1,159 @@
+// Information gain and next-best views (rtog/core/explore.hpp): the gain equals a per-cell
+// computation written the plain way (every cell of the map in a hash table, each ray walked, the
+// cells' reach multiplied out) on small real maps; an unknown-only map gives the sensor's whole
+// footprint at the prior's gain; views on the first part of SENA lie where the robot may stand,
+// face unknown space, have paths and are ranked by their utility.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <unordered_map>
+#include <unordered_set>
+
+#include "rtog/core/explore.hpp"
+#include "rtog/core/log_odds.hpp"
+#include "rtog/core/ray_traversal.hpp"
+#include "test_helpers.hpp"
+
+using namespace rtog;
+using namespace rtog_test;
+
+namespace {
+
+double bits(double p) { return p > 0 && p < 1 ? -(p * std::log2(p) + (1 - p) * std::log2(1 - p)) : 0.0; }
+
+double plainGain(const OccupancyMap& m, const Eigen::Isometry3d& pose, const ViewSensor& s) {
+  std::unordered_map<Key, float, KeyHash> cells;
+  m.forEachLeaf([&](const Box& b, float v) { forEachCell(b, [&](const Key& k) { cells[k] = v; }); });
+  const LogOddsModel& lm = m.logOddsModel();
+  std::unordered_map<Key, double, KeyHash> missed;
+  const Lattice& lat = m.lattice();
+  const Eigen::Vector3d o = pose.translation();
+  for (const Eigen::Vector3d& r : s.rays()) {
+    const Eigen::Vector3d end = o + pose.linear() * r * s.max_range;
+    double reach = 1.0;
+    traverseRay(lat.toLattice(o), lat.toLattice(end), lat.key(o), lat.key(end), [&](const Key& k) {
+      if (reach < 1e-3) return;
+      auto it = missed.find(k);
+      if (it == missed.end()) it = missed.emplace(k, 1.0).first;
+      it->second *= 1 - reach;
+      const auto c = cells.find(k);
+      if (c != cells.end()) reach *= 1 - probability(c->second);
+    });
+  }
+  double total = 0;
+  for (const auto& [k, q] : missed) {
+    const auto c = cells.find(k);
+    const float l = c == cells.end() ? lm.prior() : c->second;
+    const double p = probability(l);
+    const double g = bits(p) - (p * bits(probability(lm.update(l, lm.hitDelta()))) +
+                                (1 - p) * bits(probability(lm.update(l, lm.missDelta()))));
+    total += (1 - q) * g;
+  }
+  return total;
+}
+
+CRTreeOccupancyGridMap::Ptr senaPart(std::size_t frames, const std::string& opts = "mergePolicy=equal") {
+  auto m = mapFromIni(opts);
+  for (const auto& f : loadOdometryFrames(dataset(kSena), frames))
+    for (const auto& obs : *f.sf) m->insertObservation(*obs, f.pose);
+  return m;
+}
+
+}  // namespace
+
+TEST(InformationGain, EqualsThePlainPerCellSumOnRealMaps) {
+  const auto m = senaPart(20);
+  const OccupancyMap& map = m->map();
+  ViewSensor laser;
+  laser.max_range = 6.0;
+  laser.beams = 91;
+  ViewSensor depth;
+  depth.kind = ViewSensor::Kind::Depth;
+  depth.max_range = 4.0;
+  depth.stride = 32;
+  int checked = 0;
+  for (const double x : {0.5, 2.0, 4.0})
+    for (const double yaw : {0.0, 1.5, -2.5}) {
+      Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+      pose.translation() = Eigen::Vector3d(x, 0.3, 0.3);
+      pose.linear() = Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+      for (const ViewSensor& s : {laser, depth}) {
+        const ViewGain g = informationGain(map, pose, s);
+        const double want = plainGain(map, pose, s);
+        EXPECT_NEAR(g.bits, want, 1e-9 * std::max(1.0, want)) << x << " " << yaw;
+        EXPECT_GT(g.bits, 0.0);
+        ++checked;
+      }
+    }
+  EXPECT_EQ(checked, 18);
+}
+
+TEST(InformationGain, AnUnknownOnlyMapGivesTheWholeFootprint) {
+  MapParams p;
+  p.resolution = 0.1;
+  OccupancyMap empty(p);
+  ViewSensor laser;
+  laser.max_range = 5.0;
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  pose.translation() = Eigen::Vector3d(0.33, -0.21, 0.27);
+  std::unordered_set<Key, KeyHash> footprint;
+  const Lattice& lat = empty.lattice();
+  for (const Eigen::Vector3d& r : laser.rays()) {
+    const Eigen::Vector3d end = pose.translation() + r * laser.max_range;
+    traverseRay(lat.toLattice(pose.translation()), lat.toLattice(end), lat.key(pose.translation()), lat.key(end),
+                [&](const Key& k) { footprint.insert(k); });
+  }
+  const ViewGain g = informationGain(empty, pose, laser);
+  const LogOddsModel& lm = empty.logOddsModel();
+  const double p0 = probability(lm.prior());
+  const double per_cell = bits(p0) - (p0 * bits(probability(lm.first(lm.hitDelta()))) +
+                                      (1 - p0) * bits(probability(lm.first(lm.missDelta()))));
+  EXPECT_EQ(g.cells, static_cast<std::int64_t>(footprint.size()));
+  EXPECT_EQ(g.unknown_cells, g.cells);
+  EXPECT_NEAR(g.bits, per_cell * double(footprint.size()), 1e-9 * g.bits);
+  EXPECT_GT(footprint.size(), 3000u);
+  ViewSensor bad;
+  bad.max_range = -1;
+  EXPECT_THROW(informationGain(empty, pose, bad), std::invalid_argument);
+}
+
+TEST(NextBestViews, OnSenaLieInFreeSpaceFaceTheUnknownAndAreRanked) {
+  const auto m = senaPart(110);
+  const OccupancyMap& map = m->map();
+  ViewOptions o;
+  o.frontiers.planar = true;
+  o.frontiers.min_z = -0.5, o.frontiers.max_z = 1.0;
+  o.frontiers.min_region_cells = 20;
+  o.plan.radius = 0.2;
+  o.sensor.max_range = 6.0;
+  o.sensor.beams = 91;
+  const auto frames = loadOdometryFrames(dataset(kSena), 110);
+  const Eigen::Vector3d from(frames.back().pose.x(), frames.back().pose.y(), 0.3);
+  const std::vector<View> views = nextBestViews(map, from, o);
+  ASSERT_GE(views.size(), 3u);
+  EXPECT_TRUE(views.front().reachable);
+  for (std::size_t i = 0; i < views.size(); ++i) {
+    const View& v = views[i];
+    if (i > 0) {
+      EXPECT_LE(v.score, views[i - 1].score);
+    }
+    EXPECT_GT(v.gain.bits, 0.0);
+    EXPECT_GT(v.gain.unknown_cells, 0);
+    if (v.reachable) {
+      EXPECT_GE(v.path_cost, v.path_length * o.plan.ta - 1e-9);
+    }
+    EXPECT_FALSE(map.nearestOccupied(v.pose.translation(), 0.2).found);
+  }
+  // A view's gain falls once its scan is in the map: what it would learn is learnt.
+  const View& best = views.front();
+  const ViewGain before = best.gain;
+  OccupancyMap after = map;
+  std::vector<Eigen::Vector3f> ends;
+  for (const Eigen::Vector3d& r : o.sensor.rays())
+    ends.push_back((best.pose.translation() + best.pose.linear() * r * 3.0).cast<float>());
+  after.insertPointCloud(best.pose.translation(), ends);
+  EXPECT_LT(informationGain(after, best.pose, o.sensor).bits, 0.8 * before.bits);
+  ViewOptions bad = o;
+  bad.standoff = 0;
+  EXPECT_THROW(nextBestViews(map, from, bad), std::invalid_argument);
+}
