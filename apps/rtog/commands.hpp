@@ -11,6 +11,7 @@
 #include <string>
 #include <utility>
 
+#include "rtog/core/explore.hpp"
 #include "rtog/core/occupancy_map.hpp"
 #include "rtog/core/plan.hpp"
 
@@ -154,6 +155,19 @@ struct ImageOptions {
 /// Image operations on a map's band (rtog/image/grid_ops.hpp), written all or nothing. Throws
 /// std::invalid_argument for bad options, std::runtime_error for unreadable maps or failed writes.
 int imageOps(const ImageOptions& opts, std::ostream& out);
+
+struct ExploreCommandOptions {
+  std::string map_path;        ///< the map (.rtog)
+  Eigen::Vector3d from{0, 0, 0};  ///< the robot [m]
+  bool three_d = false;        ///< 3D frontiers and views (from given with Z), not a band's
+  ViewOptions views;           ///< sensor, frontiers (band), standoff, candidates, lambda, plan
+  std::string out_path;        ///< JSON: frontier regions and ranked views
+  std::string png_path;        ///< the band with the frontiers and the best views drawn; empty: none
+};
+
+/// Frontiers and next-best views of a saved map (rtog/core/explore.hpp), written all or nothing.
+/// Throws std::invalid_argument for bad options, std::runtime_error for unreadable maps or failed writes.
+int explore(const ExploreCommandOptions& opts, std::ostream& out);
 
 /// What `e` says in one line a person reads: MRPT's exceptions (a header, the message cut at its
 /// first ']', a location, a call stack) give the message they were made of, without MRPT's

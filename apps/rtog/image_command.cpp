@@ -15,22 +15,6 @@
 
 namespace rtog::cli {
 
-namespace {
-
-/// Grey 255 (1 - P), unknown light blue, one pixel a cell, row 0 the highest y.
-cv::Mat bandCells(const image::GridImage& g) {
-  cv::Mat img(g.p.size(), CV_8UC3);
-  for (int r = 0; r < g.p.rows; ++r)
-    for (int c = 0; c < g.p.cols; ++c) {
-      const float p = g.p.at<float>(r, c);
-      const auto grey = std::isnan(p) ? 0 : static_cast<int>(std::lround(255.0 * (1.0 - p)));
-      img.at<cv::Vec3b>(r, c) = std::isnan(p) ? cv::Vec3b(235, 206, 135) : cv::Vec3b(grey, grey, grey);
-    }
-  return img;
-}
-
-}  // namespace
-
 int imageOps(const ImageOptions& o, std::ostream& out) {
   if (o.out_path.empty()) throw std::invalid_argument("image: --out FILE.json is required");
   if (!(o.threshold > 0.0 && o.threshold < 1.0)) throw std::invalid_argument("image: --threshold must lie in (0, 1)");
@@ -78,7 +62,7 @@ int imageOps(const ImageOptions& o, std::ostream& out) {
     if (o.hough) po.legend.push_back({cv::Vec3b(0, 0, 230), "Hough walls"});
     if (o.segment) po.legend.push_back({cv::Vec3b(120, 180, 90), "free regions (tinted)"});
     po.probability_ramp = true;
-    image::Picture pic(bandCells(g), g.x0 * g.resolution, g.y0 * g.resolution, g.resolution, po);
+    image::Picture pic(image::probabilityCells(g), g.x0 * g.resolution, g.y0 * g.resolution, g.resolution, po);
     cv::Mat& img = pic.canvas();
     if (o.segment)
       for (int r = 0; r < labels.rows; ++r)

@@ -160,6 +160,28 @@ int main(int argc, char** argv) {
   bool plan_cells = false;
   pn->add_flag("--cells", plan_cells, "2D: search every cell, not crossing the map's alike free cuboids whole (same path cost)");
 
+  rtog::cli::ExploreCommandOptions xo;
+  std::vector<double> x_from, x_band;
+  std::string x_sensor = "laser2d";
+  auto* xp = app.add_subcommand("explore", "Frontier regions and next-best views: expected information gain against path cost");
+  xp->add_option("map", xo.map_path, "Map file (.rtog)")->required()->check(path);
+  xp->add_option("--from", x_from, "The robot X Y [Z] [m] (with Z: 3D frontiers and views)")->required()->expected(2, 3);
+  xp->add_option("--sensor", x_sensor, "laser2d | depth")->capture_default_str()->check(CLI::IsMember({"laser2d", "depth"}));
+  xp->add_option("--max-range", xo.views.sensor.max_range, "Sensor range [m]")->capture_default_str()->check(number(Sign::Positive, 1000.0));
+  xp->add_option("--aperture", xo.views.sensor.aperture, "laser2d: aperture [rad]")->capture_default_str()->check(within(1e-3, 6.2832));
+  xp->add_option("--beams", xo.views.sensor.beams, "laser2d: beams")->capture_default_str()->check(rtog::app::checks::integer(1, 100000));
+  xp->add_option("--stride", xo.views.sensor.stride, "depth: a ray every N-th pixel (640 x 480, Kinect intrinsics)")
+      ->capture_default_str()->check(rtog::app::checks::integer(1, 640));
+  xp->add_option("--band", x_band, "2D: the height band ZMIN ZMAX [m] of the frontiers and plans")->expected(2);
+  xp->add_option("--sensor-z", xo.views.sensor_z, "2D: the sensor's height [m]")->capture_default_str()->check(number(Sign::Any));
+  xp->add_option("--standoff", xo.views.standoff, "Candidates this far from a region's centroid [m]")->capture_default_str()->check(number(Sign::Positive, 1000.0));
+  xp->add_option("--min-region", xo.views.frontiers.min_region_cells, "Frontier regions of fewer cells are dropped")
+      ->capture_default_str()->check(rtog::app::checks::integer(1, 1000000000));
+  xp->add_option("--lambda", xo.views.lambda, "Utility gain * exp(-lambda * path cost)")->capture_default_str()->check(number(Sign::NonNegative));
+  xp->add_option("--radius", xo.views.plan.radius, "Robot radius [m]")->capture_default_str()->check(number(Sign::NonNegative, kMaxCellLength));
+  xp->add_option("--out", xo.out_path, "Regions and ranked views (.json)")->required()->check(path);
+  xp->add_option("--png", xo.png_path, "The band with the frontiers and the best views (.png)")->check(path);
+
   rtog::cli::ImageOptions im;
   std::vector<double> im_band;
   double im_slice = 0.0;
@@ -245,6 +267,14 @@ int main(int argc, char** argv) {
       if (isz->count() > 0) im.zmin = im.zmax = im_slice;
       if (!im_band.empty()) im.zmin = im_band[0], im.zmax = im_band[1];
       return rtog::cli::imageOps(im, std::cout);
+    }
+    if (xp->parsed()) {
+      xo.three_d = x_from.size() == 3;
+      if (xo.three_d && !x_band.empty()) throw std::invalid_argument("explore: --band is for 2D exploration (X Y), not 3D");
+      xo.from = Eigen::Vector3d(x_from[0], x_from[1], xo.three_d ? x_from[2] : xo.views.sensor_z);
+      if (!x_band.empty()) xo.views.frontiers.min_z = x_band[0], xo.views.frontiers.max_z = x_band[1];
+      xo.views.sensor.kind = x_sensor == "depth" ? rtog::ViewSensor::Kind::Depth : rtog::ViewSensor::Kind::Laser2D;
+      return rtog::cli::explore(xo, std::cout);
     }
     if (pn->parsed()) {
       if (from.size() != to.size()) throw std::invalid_argument("plan: --from and --to need as many coordinates (X Y, or X Y Z)");

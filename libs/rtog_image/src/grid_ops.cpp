@@ -34,6 +34,17 @@ GridImage bandImage(const OccupancyMap& map, double zmin, double zmax) {
   return g;
 }
 
+cv::Mat probabilityCells(const GridImage& g) {
+  cv::Mat img(g.p.size(), CV_8UC3);
+  for (int r = 0; r < g.p.rows; ++r)
+    for (int c = 0; c < g.p.cols; ++c) {
+      const float p = g.p.at<float>(r, c);
+      const auto grey = std::isnan(p) ? 0 : static_cast<int>(std::lround(255.0 * (1.0 - p)));
+      img.at<cv::Vec3b>(r, c) = std::isnan(p) ? cv::Vec3b(235, 206, 135) : cv::Vec3b(grey, grey, grey);
+    }
+  return img;
+}
+
 cv::Mat threshold(const GridImage& g, double p) {
   cv::Mat m(g.p.size(), CV_8U, cv::Scalar(0));
   for (int r = 0; r < g.p.rows; ++r)

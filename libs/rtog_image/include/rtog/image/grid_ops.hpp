@@ -30,6 +30,9 @@ struct GridImage {
 /// std::invalid_argument for an empty map or zmin > zmax, std::length_error beyond 2^28 pixels.
 GridImage bandImage(const OccupancyMap& map, double zmin, double zmax);
 
+/// CV_8UC3 for a picture (picture.hpp): grey 255 (1 - P), unknown light blue, one pixel a cell.
+cv::Mat probabilityCells(const GridImage& g);
+
 /// CV_8U: 255 where P >= p (unknown pixels 0).
 cv::Mat threshold(const GridImage& g, double p);
 /// The image blurred by a Gaussian of sigma [m], unknown pixels left out of the weights
