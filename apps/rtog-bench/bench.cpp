@@ -300,6 +300,7 @@ void run2D(const std::string& rawlog, const Options& opts, std::vector<Result>& 
       r.extra["likelihood_us_per_scan"] = median(passes) / double(scans.size()) * 1e6;
       r.extra["likelihood_sum"] = sink;
       measureCopies(*m.map, r);
+      if (!m.blur) measureFrontiers(*m.map, r);
       log << "  " << std::left << std::setw(48) << m.name << " res " << res << ": " << r.insert_seconds << " s, "
           << r.extra["likelihood_us_per_scan"] << " us/likelihood\n";
       out.push_back(r);

@@ -10,6 +10,9 @@
 
 #include <Eigen/Core>
 
+namespace mrpt::maps {
+class CMetricMap;
+}
 namespace rtog {
 class OccupancyMap;
 }
@@ -65,6 +68,11 @@ struct Options {
 bool selected(const Options& opts, const std::string& method);
 /// The middle value (of an even count the upper one); 0 for none.
 double median(std::vector<double> v);
+
+/// The 2D frontier of a built map (frontier_rows.cpp): extra["frontier_ms"] (median of 9) and
+/// extra["frontier_cells"], from rtog's cuboids or by a dense scan of a COccupancyGridMap2D; other
+/// maps are left out.
+void measureFrontiers(const mrpt::maps::CMetricMap& map, Result& r);
 
 /// `s` with every character but letters and digits made '_', for file names.
 std::string slug(std::string s);

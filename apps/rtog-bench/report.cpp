@@ -262,6 +262,19 @@ void writeMarkdown(const std::vector<Result>& results, const RunInfo& run, std::
          << grid2d->extra.at("copy_heap_bytes") / 1048576.0 << " MiB) | " << std::setprecision(3) << ratio << "× | "
          << (ratio <= 0.01 ? "PASS" : "FAIL") << " |\n";
     }
+    if (grid2d && grid2d->extra.count("frontier_ms")) {
+      // Exploration's first step: the 2D frontier, from the cuboids against a dense scan of the grid.
+      for (const auto& r : results) {
+        if (r.dataset != ds || r.resolution != res || estimatorRow(r) || !r.extra.count("frontier_ms") ||
+            r.method.rfind("rtog (CRTreeOccupancyGridMap)", 0) != 0)
+          continue;
+        const double ratio = r.extra.at("frontier_ms") / grid2d->extra.at("frontier_ms");
+        md << "| " << ds << " | " << res << " | 2D frontier from cuboids against a dense scan of COccupancyGridMap2D ("
+           << r.method << ": " << std::setprecision(3) << r.extra.at("frontier_ms") << " ms, "
+           << r.extra.at("frontier_cells") << " cells; the grid " << grid2d->extra.at("frontier_ms") << " ms, "
+           << grid2d->extra.at("frontier_cells") << " cells) | " << ratio << "× | – (a figure) |\n";
+      }
+    }
     if (grid2d && rtog2d_ins) {
       const double ins = rtog2d_ins->insert_seconds / grid2d->insert_seconds;
       const double lik =

@@ -4,7 +4,6 @@
 // next row knows nothing, found by interval arithmetic, not column by column.
 #include <algorithm>
 #include <cmath>
-#include <map>
 
 #include "explore/frontier.hpp"
 #include "rtog/core/band.hpp"
@@ -16,7 +15,6 @@ struct Segment {
   std::int32_t x0, x1;
   bool free;
 };
-using Rows = std::map<std::int32_t, std::vector<Segment>>;
 
 /// The parts of [a, b] that no segment of `row` covers, appended to out.
 void unknownParts(const std::vector<Segment>* row, std::int32_t a, std::int32_t b,
@@ -36,9 +34,11 @@ void unknownParts(const std::vector<Segment>* row, std::int32_t a, std::int32_t 
 
 void frontier2D(const OccupancyMap& map, const Box& region, std::vector<FrontierPiece>& pieces, std::vector<Box>& boxes) {
   const float occ = map.logOddsModel().occupiedThreshold();
-  Rows rows;
+  if (region.isEmpty()) return;
+  // A row of segments per y of the band's rectangle (rows without known columns stay empty).
+  std::vector<std::vector<Segment>> rows(static_cast<std::size_t>(region.extent(1)));
   forEachBandRun(map, region, [&](std::int32_t y, std::int32_t x0, std::int32_t x1, const float* best) {
-    std::vector<Segment>& row = rows[y];
+    std::vector<Segment>& row = rows[static_cast<std::size_t>(y - region.min.y)];
     for (std::int32_t x = x0; x <= x1; ++x) {
       const float v = best[x - x0];
       if (std::isnan(v)) continue;
@@ -49,18 +49,18 @@ void frontier2D(const OccupancyMap& map, const Box& region, std::vector<Frontier
         row.push_back(Segment{x, x, free});
     }
   });
-  for (auto& [y, row] : rows)
-    std::sort(row.begin(), row.end(), [](const Segment& a, const Segment& b) { return a.x0 < b.x0; });
+  for (auto& row : rows) std::sort(row.begin(), row.end(), [](const Segment& a, const Segment& b) { return a.x0 < b.x0; });
   const auto rowAt = [&](std::int64_t y) -> const std::vector<Segment>* {
-    if (y < kKeyMin || y > kKeyMax) return nullptr;
-    const auto it = rows.find(static_cast<std::int32_t>(y));
-    return it == rows.end() ? nullptr : &it->second;
+    if (y < region.min.y || y > region.max.y) return nullptr;
+    return &rows[static_cast<std::size_t>(y - region.min.y)];
   };
   const auto box = [&](std::int32_t y, std::int32_t x0, std::int32_t x1) {
     return Box{Key{x0, y, region.min.z}, Key{x1, y, region.max.z}};
   };
   std::vector<std::pair<std::int32_t, std::int32_t>> parts;
-  for (const auto& [y, row] : rows) {
+  for (std::size_t r = 0; r < rows.size(); ++r) {
+    const std::vector<Segment>& row = rows[r];
+    const auto y = static_cast<std::int32_t>(region.min.y + static_cast<std::int64_t>(r));
     for (std::size_t i = 0; i < row.size(); ++i) {
       const Segment& s = row[i];
       if (!s.free) continue;
