@@ -12,28 +12,13 @@
 using namespace rtog;
 using namespace rtog::sim;
 
-namespace {
-
-ExplorationParams params() {
-  ExplorationParams p;
-  p.scanner.max_range = 6.0;
-  p.scanner.step_deg = 1.0;
-  p.views.plan.radius = 0.25;
-  p.views.standoff = 1.0;
-  p.views.planned = 48;
-  p.views.frontiers.min_region_cells = 10;
-  return p;
-}
-
-}  // namespace
-
 TEST(Exploration, InformationGainViewsCoverTheWorldsInFewerMetres) {
   int fewer = 0;
   for (std::uint32_t seed = 1; seed <= 6; ++seed) {
     const World w = World::generate(WorldParams{}, seed);
     double metres[2] = {0, 0};
     for (const ExploreStrategy s : {ExploreStrategy::NearestFrontier, ExploreStrategy::InformationGain}) {
-      const auto steps = explore(w, s, params());
+      const auto steps = explore(w, s, ExplorationParams::indoor());
       ASSERT_GE(steps.size(), 2u);
       for (std::size_t i = 1; i < steps.size(); ++i) {
         EXPECT_GE(steps[i].coverage, steps[i - 1].coverage);

@@ -25,6 +25,19 @@ struct ExplorationParams {
   double stop_coverage = 0.95; ///< stop once this share of the free space is known (Default: 0.95)
   ViewOptions views;           ///< candidates and scoring (the band and sensor are set from the scanner)
   std::uint32_t seed = 7;      ///< the scanner's noise
+
+  /// The runs of doc/exploration.md: a 6 m scanner of 1 degree steps, a robot of 0.25 m radius,
+  /// candidates 1 m from regions of 10 cells or more, 48 of them planned.
+  static ExplorationParams indoor() {
+    ExplorationParams p;
+    p.scanner.max_range = 6.0;
+    p.scanner.step_deg = 1.0;
+    p.views.plan.radius = 0.25;
+    p.views.standoff = 1.0;
+    p.views.planned = 48;
+    p.views.frontiers.min_region_cells = 10;
+    return p;
+  }
 };
 
 /// The state after each view driven to (step 0: the first scan at the start).
