@@ -12,6 +12,8 @@
 #include "rtog/core/explore.hpp"
 #include "rtog/core/log_odds.hpp"
 #include "rtog/core/ray_traversal.hpp"
+#include "rtog/image/tum_dataset.hpp"
+#include "rtog/mrpt/map_exploration.h"
 #include "test_helpers.hpp"
 
 using namespace rtog;
@@ -156,4 +158,60 @@ TEST(NextBestViews, OnSenaLieInFreeSpaceFaceTheUnknownAndAreRanked) {
   ViewOptions bad = o;
   bad.standoff = 0;
   EXPECT_THROW(nextBestViews(map, from, bad), std::invalid_argument);
+}
+
+// The MRPT map gives the core's regions, views (as MRPT poses) and field on its cells.
+TEST(NextBestViews, TheMrptMapGivesTheCoresAnswers) {
+  const auto m = senaPart(60);
+  FrontierOptions band;
+  band.planar = true;
+  const auto a = frontierRegions(*m, band), b = frontierRegions(m->map(), band);
+  ASSERT_EQ(a.size(), b.size());
+  for (std::size_t i = 0; i < a.size(); ++i) EXPECT_EQ(a[i].cells, b[i].cells);
+  ViewOptions o;
+  o.frontiers = band;
+  o.frontiers.min_region_cells = 20;
+  const auto views = nextBestViews(*m, mrpt::math::TPoint3D(0, 0, 0.3), o);
+  const auto core = nextBestViews(m->map(), Eigen::Vector3d(0, 0, 0.3), o);
+  ASSERT_EQ(views.size(), core.size());
+  ASSERT_FALSE(views.empty());
+  for (std::size_t i = 0; i < views.size(); ++i) {
+    EXPECT_EQ(views[i].view.score, core[i].score);
+    const Eigen::Vector3d p = core[i].pose.translation();
+    EXPECT_NEAR(views[i].pose.x(), p.x(), 1e-12);
+    EXPECT_NEAR(views[i].pose.y(), p.y(), 1e-12);
+    const Eigen::Vector3d fwd = core[i].pose.linear().col(0);
+    EXPECT_NEAR(views[i].pose.yaw(), std::atan2(fwd.y(), fwd.x()), 1e-9);
+  }
+  EXPECT_EQ(occupancyAt(*m, mrpt::math::TPoint3D(1.02, 0.33, 0.31)).log_odds,
+            occupancyAt(m->map(), Eigen::Vector3d(1.02, 0.33, 0.31)).log_odds);
+}
+
+// 3D: a depth camera's views on TUM frames, planned through the cells.
+TEST(NextBestViews, DepthViewsIn3DOnTum) {
+  const image::DepthSequence seq = image::readTumSequence(RTOG_TEST_TUM_DIR);
+  MapParams p;
+  p.resolution = 0.1;
+  OccupancyMap map(p);
+  InsertParams ip;
+  ip.max_range = 4.0;
+  for (std::size_t i = 0; i < seq.frames.size(); i += 3) {
+    const image::WorldScan s = image::loadDepthScan(seq.frames[i], seq.intrinsics, 4);
+    map.insertPointCloud(s.origin, s.points, ip);
+  }
+  const image::WorldScan first = image::loadDepthScan(seq.frames[0], seq.intrinsics, 8);
+  ViewOptions o;
+  o.sensor.kind = ViewSensor::Kind::Depth;
+  o.sensor.max_range = 3.0;
+  o.sensor.stride = 32;
+  o.frontiers.min_region_cells = 30;
+  o.max_regions = 6;
+  o.planned = 6;
+  const std::vector<View> views = nextBestViews(map, first.origin, o);
+  ASSERT_FALSE(views.empty());
+  EXPECT_TRUE(views.front().reachable);
+  for (const View& v : views) {
+    EXPECT_EQ(map.stateAt(v.pose.translation()), CellState::Free);
+    EXPECT_GT(v.gain.bits, 0.0);
+  }
 }
