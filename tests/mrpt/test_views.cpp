@@ -22,6 +22,7 @@ using namespace rtog_test;
 namespace {
 
 double bits(double p) { return p > 0 && p < 1 ? -(p * std::log2(p) + (1 - p) * std::log2(1 - p)) : 0.0; }
+double rtog_test_bits(double p) { return bits(p); }
 
 double plainGain(const OccupancyMap& m, const Eigen::Isometry3d& pose, const ViewSensor& s) {
   std::unordered_map<Key, float, KeyHash> cells;
@@ -39,7 +40,7 @@ double plainGain(const OccupancyMap& m, const Eigen::Isometry3d& pose, const Vie
       if (it == missed.end()) it = missed.emplace(k, 1.0).first;
       it->second *= 1 - reach;
       const auto c = cells.find(k);
-      if (c != cells.end()) reach *= 1 - probability(c->second);
+      if (c != cells.end() && c->second >= lm.occupiedThreshold()) reach *= 1 - probability(c->second);
     });
   }
   double total = 0;
@@ -214,4 +215,58 @@ TEST(NextBestViews, DepthViewsIn3DOnTum) {
     EXPECT_EQ(map.stateAt(v.pose.translation()), CellState::Free);
     EXPECT_GT(v.gain.bits, 0.0);
   }
+}
+
+// The gain model against the log (the octomap preset: the core's own update, each cell once a
+// scan): from the map of SENA's first 110 frames, each later frame's
+// predicted gain (informationGain at its real sensor pose, with its laser's aperture, beams and the
+// map's insertion range) against the information the frame adds when inserted alone (the sum over
+// cells of 1 - H, unknown cells 0). The frames that see most must be the ones predicted to.
+TEST(InformationGain, PredictsWhatSenasLaterFramesAdd) {
+  const auto frames = loadOdometryFrames(dataset(kSena));
+  const std::size_t first = 110;
+  auto half = mapFromIni("mergePolicy=equal\nsensorModelPreset=octomap");
+  for (std::size_t i = 0; i < first; ++i)
+    for (const auto& obs : *frames[i].sf) half->insertObservation(*obs, frames[i].pose);
+  const auto information = [](const OccupancyMap& m) {
+    double total = 0;
+    m.forEachLeaf([&](const Box& b, float v) { total += double(b.volume()) * (1.0 - bits(probability(v))); });
+    return total;
+  };
+  const double before = information(half->map());
+  std::vector<double> predicted, realised;
+  for (std::size_t i = first; i < frames.size(); i += 3) {
+    for (const auto& obs : *frames[i].sf) {
+      const auto scan = std::dynamic_pointer_cast<mrpt::obs::CObservation2DRangeScan>(obs);
+      if (!scan) continue;
+      const mrpt::poses::CPose3D sensor = frames[i].pose + scan->sensorPose;
+      Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+      pose.translation() = Eigen::Vector3d(sensor.x(), sensor.y(), sensor.z());
+      pose.linear() = Eigen::AngleAxisd(sensor.yaw(), Eigen::Vector3d::UnitZ()).toRotationMatrix();
+      ViewSensor laser;
+      laser.aperture = scan->aperture;
+      laser.beams = static_cast<int>(scan->getScanSize());
+      laser.max_range = std::min<double>(scan->maxRange, half->insertionOptions.maxDistanceInsertion);
+      predicted.push_back(informationGain(half->map(), pose, laser).bits);
+      auto one = mapFromIni("mergePolicy=equal\nsensorModelPreset=octomap");
+      one->map() = half->map();
+      one->insertObservation(*scan, frames[i].pose);
+      realised.push_back(information(one->map()) - before);
+    }
+  }
+  ASSERT_GE(predicted.size(), 30u);
+  // Pearson correlation, and the ratio of the totals.
+  const auto mean = [](const std::vector<double>& v) { double s = 0; for (double x : v) s += x; return s / double(v.size()); };
+  const double mp = mean(predicted), mr = mean(realised);
+  double sxy = 0, sxx = 0, syy = 0;
+  for (std::size_t k = 0; k < predicted.size(); ++k) {
+    sxy += (predicted[k] - mp) * (realised[k] - mr);
+    sxx += (predicted[k] - mp) * (predicted[k] - mp);
+    syy += (realised[k] - mr) * (realised[k] - mr);
+  }
+  const double r = sxy / std::sqrt(sxx * syy);
+  std::printf("%zu later frames: predicted %.1f bits a frame, realised %.1f (%.2f of it); correlation %.3f\n",
+              predicted.size(), mp, mr, mr / mp, r);
+  EXPECT_GT(r, 0.7);
+  EXPECT_GT(mr, 0.5 * mp);
 }

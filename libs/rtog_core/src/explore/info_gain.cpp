@@ -54,6 +54,7 @@ ViewGain gainOf(CellReader& cells, const OccupancyMap& map, const Eigen::Isometr
                 double max_range) {
   const Lattice& lattice = map.lattice();
   const LogOddsModel& model = map.logOddsModel();
+  const float occupied = model.occupiedThreshold();
   struct Seen {
     double missed = 1.0;  // prod over rays of (1 - reach)
     float log_odds;
@@ -75,7 +76,7 @@ ViewGain gainOf(CellReader& cells, const OccupancyMap& map, const Eigen::Isometr
       const bool known = !std::isnan(v);
       auto it = seen.try_emplace(packKey(k), Seen{1.0, known ? v : model.prior(), known}).first;
       it->second.missed *= 1.0 - reach;
-      if (known) reach *= 1.0 - probability(v);
+      if (known && v >= occupied) reach *= 1.0 - probability(v);
     });
   }
   ViewGain g;

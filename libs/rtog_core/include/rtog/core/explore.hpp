@@ -90,9 +90,10 @@ struct ViewGain {
 
 /// The expected information gain of a scan from `sensor_pose` (map frame), with the map's own
 /// inverse model. Each ray walks its cells out to max_range. Unknown space does not stop a ray (as
-/// frontier explorers assume); a known cell stops it with its probability of being occupied, so a
-/// ray reaches a cell with the product of (1 - P) of the known cells before it; a ray stops where
-/// that falls under 1e-3. A cell reached by several rays is updated once per scan, as insertion
+/// frontier explorers assume), nor do free cells (below the occupied threshold: their P is the
+/// map's doubt, and a clamped free cell's 0.12 would end every ray within 20 cells); an occupied
+/// cell stops it with its probability, so a ray reaches a cell with the product of (1 - P) of the
+/// occupied cells before it; a ray stops where that falls under 1e-3. A cell reached by several rays is updated once per scan, as insertion
 /// updates it: it is observed with 1 - prod over the rays of (1 - reach). Observed, it is hit with
 /// its probability P (the prior for an unknown cell) and missed otherwise; its gain is
 /// H(P) - [P H(l + hit) + (1 - P) H(l + miss)] with the model's clamped update, H in bits.
