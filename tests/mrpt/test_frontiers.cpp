@@ -17,7 +17,7 @@
 
 #include "registration_helpers.hpp"
 #include "rtog/core/explore.hpp"
-#include "rtog/image/tum_dataset.hpp"
+#include "tum_map.hpp"
 
 using namespace rtog;
 using namespace rtog_test;
@@ -168,18 +168,11 @@ TEST(Frontiers, MalagaSimplemapEqualsBruteForce) {
 }
 
 TEST(Frontiers, TumDepthFramesEqualBruteForce) {
-  const image::DepthSequence seq = image::readTumSequence(RTOG_TEST_TUM_DIR);
   for (const MergePolicy policy : {MergePolicy::Off, MergePolicy::Clamped, MergePolicy::Equal}) {
     MapParams p;
     p.resolution = 0.05;
     p.merge = policy;
-    OccupancyMap m(p);
-    InsertParams ip;
-    ip.max_range = 4.0;
-    for (std::size_t i = 0; i < seq.frames.size(); i += 3) {
-      const image::WorldScan s = image::loadDepthScan(seq.frames[i], seq.intrinsics, 4);
-      m.insertPointCloud(s.origin, s.points, ip);
-    }
+    const OccupancyMap m = test::tumMap(RTOG_TEST_TUM_DIR, p, 3, 4);
     expectFrontiersAsBruteForce(m, {}, std::string("TUM 3D, ") + toString(policy));
     FrontierOptions band;
     band.planar = true;

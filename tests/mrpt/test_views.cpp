@@ -12,7 +12,7 @@
 #include "rtog/core/explore.hpp"
 #include "rtog/core/log_odds.hpp"
 #include "rtog/core/ray_traversal.hpp"
-#include "rtog/image/tum_dataset.hpp"
+#include "tum_map.hpp"
 #include "rtog/mrpt/map_exploration.h"
 #include "test_helpers.hpp"
 
@@ -22,7 +22,6 @@ using namespace rtog_test;
 namespace {
 
 double bits(double p) { return p > 0 && p < 1 ? -(p * std::log2(p) + (1 - p) * std::log2(1 - p)) : 0.0; }
-double rtog_test_bits(double p) { return bits(p); }
 
 double plainGain(const OccupancyMap& m, const Eigen::Isometry3d& pose, const ViewSensor& s) {
   std::unordered_map<Key, float, KeyHash> cells;
@@ -190,16 +189,10 @@ TEST(NextBestViews, TheMrptMapGivesTheCoresAnswers) {
 
 // 3D: a depth camera's views on TUM frames, planned through the cells.
 TEST(NextBestViews, DepthViewsIn3DOnTum) {
-  const image::DepthSequence seq = image::readTumSequence(RTOG_TEST_TUM_DIR);
   MapParams p;
   p.resolution = 0.1;
-  OccupancyMap map(p);
-  InsertParams ip;
-  ip.max_range = 4.0;
-  for (std::size_t i = 0; i < seq.frames.size(); i += 3) {
-    const image::WorldScan s = image::loadDepthScan(seq.frames[i], seq.intrinsics, 4);
-    map.insertPointCloud(s.origin, s.points, ip);
-  }
+  const OccupancyMap map = test::tumMap(RTOG_TEST_TUM_DIR, p, 3, 4);
+  const image::DepthSequence seq = image::readTumSequence(RTOG_TEST_TUM_DIR);
   const image::WorldScan first = image::loadDepthScan(seq.frames[0], seq.intrinsics, 8);
   ViewOptions o;
   o.sensor.kind = ViewSensor::Kind::Depth;

@@ -160,13 +160,7 @@ UpdateSet PoseBlurIntegrator::trace(const WeightedScan* scans, std::size_t n, co
   ip.validate();
   const MapStore& store = ctx_.store;
   if (n == 0) return UpdateSet::nothing(UpdateSet::Kind::Graded, {});
-  double total = 0.0;
-  for (std::size_t i = 0; i < n; ++i) {
-    if (!(std::isfinite(scans[i].weight) && scans[i].weight > 0.0))
-      throw std::invalid_argument("insertBlurred: weight " + std::to_string(i) + " is not positive and finite");
-    total += scans[i].weight;
-  }
-  if (!std::isfinite(total)) throw std::invalid_argument("insertBlurred: the weights' sum is not finite");
+  const double total = weightSum(n, [&](std::size_t i) { return scans[i].weight; });
   if (n == 1) return integrateScan(ctx_, scans[0].origin, scans[0].points, scans[0].count, ip, scans[0].is_hit);
   for (std::size_t i = 0; i < n; ++i) (void)store.lattice.key(scans[i].origin);  // throws before any change
   InsertScratch& scratch = ctx_.scratch;

@@ -3,7 +3,10 @@
 // mixed (mixture.hpp), the mixture one graded scan (UpdateSet::Kind::Graded).
 #pragma once
 
+#include <cmath>
 #include <cstddef>
+#include <stdexcept>
+#include <string>
 #include <cstdint>
 
 #include "integrate/update_set.hpp"
@@ -11,6 +14,21 @@
 #include "rtog/core/pose_blur.hpp"
 
 namespace rtog {
+
+/// The sum of a blur's n weights, weight(i) each; throws std::invalid_argument naming the first
+/// that is not positive and finite, or if the sum is not finite.
+template <class Weight>
+double weightSum(std::size_t n, Weight&& weight) {
+  double total = 0.0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const double w = weight(i);
+    if (!(std::isfinite(w) && w > 0.0))
+      throw std::invalid_argument("insertBlurred: weight " + std::to_string(i) + " is not positive and finite");
+    total += w;
+  }
+  if (!std::isfinite(total)) throw std::invalid_argument("insertBlurred: the weights' sum is not finite");
+  return total;
+}
 
 class PoseBlurIntegrator {
  public:

@@ -249,15 +249,10 @@ UpdateSet PoseBlurIntegrator::resample(const Eigen::Vector3d& origin, const Eige
   ip.validate();
   const MapStore& store = ctx_.store;
   if (n == 0) return UpdateSet::nothing(UpdateSet::Kind::Graded, {});
-  double total = 0.0;
-  for (std::size_t i = 0; i < n; ++i) {
-    if (!(std::isfinite(moves[i].weight) && moves[i].weight > 0.0))
-      throw std::invalid_argument("insertBlurred: weight " + std::to_string(i) + " is not positive and finite");
+  const double total = weightSum(n, [&](std::size_t i) { return moves[i].weight; });
+  for (std::size_t i = 0; i < n; ++i)
     if (!moves[i].move.matrix().allFinite())
       throw std::invalid_argument("insertBlurred: move " + std::to_string(i) + " is not finite");
-    total += moves[i].weight;
-  }
-  if (!std::isfinite(total)) throw std::invalid_argument("insertBlurred: the weights' sum is not finite");
   // Throws before any change for an origin some pose carries beyond the keys.
   (void)store.lattice.key(origin);
   for (std::size_t i = 0; i < n; ++i) (void)store.lattice.key(moves[i].move * origin);
