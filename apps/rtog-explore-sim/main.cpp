@@ -15,6 +15,7 @@ int main(int argc, char** argv) {
       ->check(rtog::app::checks::integer(1, 100));
   app.add_option("--json", c.json_path, "Every step of every run")->required()->check(rtog::app::checks::path());
   app.add_option("--png", c.png_path, "Coverage against path length, a panel a world")->check(rtog::app::checks::path());
+  app.add_option("--views-png", c.views_png_path, "Coverage against the views driven to")->check(rtog::app::checks::path());
   CLI11_PARSE(app, argc, argv);
   try {
     return rtog::explore_sim::run(c, std::cout);

@@ -9,7 +9,7 @@ namespace rtog::explore_sim {
 
 struct Config {
   std::uint32_t first_seed = 1, worlds = 6;
-  std::string json_path, png_path;
+  std::string json_path, png_path, views_png_path;
 };
 
 /// Runs and writes the files (all or none); a table to `out`. Returns the exit code.

@@ -2,6 +2,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cmath>
 #include <iostream>
 #include <tuple>
 #include <vector>
@@ -170,8 +171,15 @@ int main(int argc, char** argv) {
   xp->add_option("--max-range", xo.views.sensor.max_range, "Sensor range [m]")->capture_default_str()->check(number(Sign::Positive, 1000.0));
   xp->add_option("--aperture", xo.views.sensor.aperture, "laser2d: aperture [rad]")->capture_default_str()->check(within(1e-3, 6.2832));
   xp->add_option("--beams", xo.views.sensor.beams, "laser2d: beams")->capture_default_str()->check(rtog::app::checks::integer(1, 100000));
-  xp->add_option("--stride", xo.views.sensor.stride, "depth: a ray every N-th pixel (640 x 480, Kinect intrinsics)")
-      ->capture_default_str()->check(rtog::app::checks::integer(1, 640));
+  xp->add_option("--stride", xo.views.sensor.stride, "depth: a ray every N-th pixel")
+      ->capture_default_str()->check(rtog::app::checks::integer(1, 100000));
+  std::vector<double> x_intrinsics;
+  xp->add_option("--intrinsics", x_intrinsics, "depth: FX FY CX CY WIDTH HEIGHT [px] (Default: a Kinect's 525 525 319.5 239.5 640 480)")
+      ->expected(6);
+  xp->add_option("--Te", xo.views.plan.te, "Path cost: weight of the summed risk")->capture_default_str()->check(number(Sign::NonNegative));
+  xp->add_option("--Ta", xo.views.plan.ta, "Path cost: weight of the length, per metre")->capture_default_str()->check(number(Sign::NonNegative));
+  xp->add_option("--unknown-cost", xo.views.plan.unknown_risk, "Path cost: risk of an unknown cell, in [0, 1]")
+      ->capture_default_str()->check(within(0.0, 1.0));
   xp->add_option("--band", x_band, "2D: the height band ZMIN ZMAX [m] of the frontiers and plans")->expected(2);
   xp->add_option("--sensor-z", xo.views.sensor_z, "2D: the sensor's height [m]")->capture_default_str()->check(number(Sign::Any));
   xp->add_option("--standoff", xo.views.standoff, "Candidates this far from a region's centroid [m]")->capture_default_str()->check(number(Sign::Positive, 1000.0));
@@ -274,6 +282,14 @@ int main(int argc, char** argv) {
       xo.from = Eigen::Vector3d(x_from[0], x_from[1], xo.three_d ? x_from[2] : xo.views.sensor_z);
       if (!x_band.empty()) xo.views.frontiers.min_z = x_band[0], xo.views.frontiers.max_z = x_band[1];
       xo.views.sensor.kind = x_sensor == "depth" ? rtog::ViewSensor::Kind::Depth : rtog::ViewSensor::Kind::Laser2D;
+      if (!x_intrinsics.empty()) {
+        auto& s = xo.views.sensor;
+        s.fx = x_intrinsics[0], s.fy = x_intrinsics[1], s.cx = x_intrinsics[2], s.cy = x_intrinsics[3];
+        if (x_intrinsics[4] != std::floor(x_intrinsics[4]) || x_intrinsics[5] != std::floor(x_intrinsics[5]) ||
+            !(x_intrinsics[4] >= 1 && x_intrinsics[4] <= 100000 && x_intrinsics[5] >= 1 && x_intrinsics[5] <= 100000))
+          throw std::invalid_argument("explore: --intrinsics WIDTH and HEIGHT must be whole numbers in [1, 100000]");
+        s.width = static_cast<int>(x_intrinsics[4]), s.height = static_cast<int>(x_intrinsics[5]);
+      }
       return rtog::cli::explore(xo, std::cout);
     }
     if (pn->parsed()) {
