@@ -1,8 +1,8 @@
 // Closed-loop exploration in simulated worlds with known truth (rtog/sim/exploration.hpp): both
 // strategies explore the free space reachable from the start; the coverage never falls and the
 // path never shrinks; information-gain views reach 90 % coverage in fewer metres than the nearest
-// frontier on at least two of six worlds (seeds 1 to 6, not those the loop was debugged on; the figures printed
-// go to doc/exploration.md).
+// frontier on at least two of six worlds (seeds 1 to 6, not those the loop was debugged on; the
+// figures printed go to doc/exploration.md).
 #include <gtest/gtest.h>
 
 #include <cstdio>
