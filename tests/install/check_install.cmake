@@ -24,3 +24,13 @@ execute_process(COMMAND "${WORK_DIR}/consumer/consumer" RESULT_VARIABLE rc)
 if(rc)
   message(FATAL_ERROR "the consumer ran but failed: ${rc}")
 endif()
+# The installed launcher finds the installed plugin (apps/rtog-mrpt), and refuses a missing one.
+execute_process(COMMAND "${prefix}/bin/rtog-mrpt" --which OUTPUT_VARIABLE plugin RESULT_VARIABLE rc OUTPUT_STRIP_TRAILING_WHITESPACE)
+if(rc OR NOT EXISTS "${plugin}" OR NOT plugin MATCHES "librtog_mrpt")
+  message(FATAL_ERROR "rtog-mrpt --which: exit ${rc}, '${plugin}' is not the installed plugin")
+endif()
+execute_process(COMMAND ${CMAKE_COMMAND} -E env RTOG_MRPT_PLUGIN=${WORK_DIR}/none.so "${prefix}/bin/rtog-mrpt" icp-slam
+                RESULT_VARIABLE rc ERROR_VARIABLE err)
+if(NOT rc EQUAL 1 OR NOT err MATCHES "does not exist")
+  message(FATAL_ERROR "rtog-mrpt with a missing plugin: exit ${rc}, '${err}'")
+endif()

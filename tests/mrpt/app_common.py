@@ -37,18 +37,22 @@ class Runner:
         return d
 
     def app(self, args, cwd, preload=True, timeout=280, seed=1):
-        """Runs an unmodified MRPT app; the seed shim pins MRPT's clock-seeded generator."""
+        """Runs an unmodified MRPT app; the seed shim pins MRPT's clock-seeded generator. With the
+        plugin (`preload`), through the rtog-mrpt launcher, as a user runs it: it preloads the plugin
+        after what LD_PRELOAD holds (the sanitizer runtime first, the seed shim)."""
         env = dict(os.environ)
-        env["LD_PRELOAD"] = " ".join(self.a.preload_first + [self.a.seed_shim] + ([self.a.plugin] if preload else []))
+        env["LD_PRELOAD"] = " ".join(self.a.preload_first + [self.a.seed_shim])
+        if preload:
+            args = [self.a.launcher] + list(args)
         env["RTOG_TEST_SEED"] = str(seed)
         env.pop("DISPLAY", None)
         t0 = time.time()
         p = subprocess.run(args, cwd=cwd, env=env, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
                            stderr=subprocess.STDOUT, timeout=timeout)
         out = p.stdout.decode(errors="replace")
-        with open(os.path.join(cwd, os.path.basename(args[0]) + ".log"), "a") as f:
+        with open(os.path.join(cwd, os.path.basename(args[1] if preload else args[0]) + ".log"), "a") as f:
             f.write(out)
-        print("$ %sRTOG_TEST_SEED=%d %s  -> exit %d in %.1f s" % ("LD_PRELOAD=... " if preload else "", seed,
+        print("$ RTOG_TEST_SEED=%d %s  -> exit %d in %.1f s" % (seed,
                                                                 " ".join(args), p.returncode, time.time() - t0))
         return p.returncode, out
 

@@ -287,6 +287,7 @@ def main():
     p.add_argument("--seed-shim", required=True)
     p.add_argument("--mapcheck", required=True)
     p.add_argument("--rtog", required=True)
+    p.add_argument("--launcher", required=True)
     p.add_argument("--config-dir", required=True)
     p.add_argument("--datasets", required=True)
     p.add_argument("--work-dir", required=True)
