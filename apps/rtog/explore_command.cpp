@@ -70,7 +70,7 @@ int explore(const ExploreCommandOptions& o, std::ostream& out) {
   ViewOptions vo = o.views;
   vo.frontiers.planar = !o.three_d;
   const std::vector<FrontierRegion> regions = frontierRegions(map, vo.frontiers);
-  const std::vector<View> views = nextBestViews(map, o.from, vo);
+  const std::vector<View> views = nextBestViews(map, regions, o.from, vo);
   nlohmann::json j;
   j["resolution"] = map.resolution();
   j["from"] = vec(o.from);

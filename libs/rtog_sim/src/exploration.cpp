@@ -95,12 +95,13 @@ std::vector<ExplorationStep> explore(const World& world, ExploreStrategy strateg
     const Eigen::Vector3d here(pose.position.x(), pose.position.y(), height);
     // A robot that finds itself within its radius of an obstacle (seen only now) plans this step
     // without the radius, to get away.
-    std::vector<View> views = nextBestViews(map, here, vo);
+    const std::vector<FrontierRegion> regions = frontierRegions(map, vo.frontiers);
+    std::vector<View> views = nextBestViews(map, regions, here, vo);
     PlanOptions step_plan = po;
     if (std::none_of(views.begin(), views.end(), [](const View& v) { return v.reachable; })) {
       ViewOptions loose = vo;
       loose.plan.radius = step_plan.radius = 0.0;
-      views = nextBestViews(map, here, loose);
+      views = nextBestViews(map, regions, here, loose);
     }
     const View* pick = nullptr;
     for (const View& v : views) {

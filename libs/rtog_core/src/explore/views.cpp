@@ -56,7 +56,12 @@ Eigen::Isometry3d facing(const Eigen::Vector3d& p, double yaw, ViewSensor::Kind 
 
 std::vector<View> nextBestViews(const OccupancyMap& map, const Eigen::Vector3d& from, const ViewOptions& o) {
   validate(o);
-  const std::vector<FrontierRegion> regions = frontierRegions(map, o.frontiers);
+  return nextBestViews(map, frontierRegions(map, o.frontiers), from, o);
+}
+
+std::vector<View> nextBestViews(const OccupancyMap& map, const std::vector<FrontierRegion>& regions,
+                                const Eigen::Vector3d& from, const ViewOptions& o) {
+  validate(o);
   const std::vector<Eigen::Vector3d> rays = o.sensor.rays();
   explore_detail::CellReader cells(map);
   std::vector<View> candidates;

@@ -127,5 +127,9 @@ struct View {
 /// to an occupied one) around the largest frontier regions, their gains, paths for the `planned`
 /// of highest gain; those ranked by score, best first. Throws std::invalid_argument for bad options.
 std::vector<View> nextBestViews(const OccupancyMap& map, const Eigen::Vector3d& from, const ViewOptions& options);
+/// The same around `regions`, frontierRegions(map, options.frontiers) found by the caller (who
+/// also shows them): the regions are not found twice.
+std::vector<View> nextBestViews(const OccupancyMap& map, const std::vector<FrontierRegion>& regions,
+                                const Eigen::Vector3d& from, const ViewOptions& options);
 
 }  // namespace rtog
