@@ -9,10 +9,7 @@
 #include <stdexcept>
 #include <string>
 
-#include <mrpt/config/CConfigFile.h>
-#include <mrpt/maps/CMultiMetricMap.h>
 #include <mrpt/maps/CSimpleMap.h>
-#include <mrpt/maps/TMetricMapInitializer.h>
 #include <mrpt/obs/CRawlog.h>
 #include <mrpt/obs/CSensoryFrame.h>
 
@@ -21,6 +18,7 @@
 #include "rtog/image/tum_dataset.hpp"
 #include "rtog/mrpt/CRTreeOccupancyGridMap.h"
 #include "rtog/mrpt/ini_checks.h"
+#include "rtog/mrpt/map_file.h"
 #include "rtog/mrpt/rawlog_poses.h"
 
 namespace rtog::cli {
@@ -75,41 +73,13 @@ void loadQuietly(const std::string& what, const std::string& path, Load&& load) 
 std::shared_ptr<CRTreeOccupancyGridMap> makeMap(const BuildOptions& o) {
   if (o.ini_path.empty()) {
     // The command-line options, in the map's MRPT terms.
-    // rtog's own flags state OctoMap's rule (hit/miss probabilities, clamping); an .ini states MRPT's.
-    CRTreeOccupancyGridMap::TInsertionOptions io;
-    io.sensorModelPreset = "octomap";
-    const LogOddsParams& lp = o.map.log_odds;
-    io.sensorModel = toString(o.insert.model);
-    io.rangeNoiseStd = float(o.insert.range_noise_std);
-    io.rangeNoiseStdPerMeter = float(o.insert.range_noise_std_per_meter);
-    io.rangeNoiseCutoff = float(o.insert.range_noise_cutoff);
-    io.mergePolicy = toString(o.map.merge);
-    io.discretize = o.insert.discretize;
-    io.threads = o.insert.threads;
-    io.maxDistanceInsertion = o.insert.max_range > 0 ? float(o.insert.max_range) : 0.0f;
-    io.maxOccupancyUpdateCertainty = float(lp.prob_hit);
-    io.maxFreenessUpdateCertainty = float(1.0 - lp.prob_miss);
-    io.clampingMin = float(lp.clamp_min);
-    io.clampingMax = float(lp.clamp_max);
-    io.occupiedThreshold = float(lp.occupied_threshold);
+    CRTreeOccupancyGridMap::TInsertionOptions io = CRTreeOccupancyGridMap::TInsertionOptions::fromCore(o.map, o.insert);
     io.poseUncertainty = o.pose_uncertainty;
     io.sonarConeWeighting = o.sonar_cone_weighting;
     io.validate();
     return std::make_shared<CRTreeOccupancyGridMap>(o.map.resolution, io);
   }
-  mrpt::config::CConfigFile cfg(o.ini_path);
-  if (!cfg.sectionExists(o.ini_section))
-    throw std::invalid_argument("'" + o.ini_path + "' has no section [" + o.ini_section + "]");
-  checkMapCounts(cfg, o.ini_section);
-  mrpt::maps::TSetOfMetricMapInitializers inits;
-  inits.loadFromConfigFile(cfg, o.ini_section);
-  mrpt::maps::CMultiMetricMap multi;
-  multi.setListOfMaps(inits);
-  auto m = multi.mapByClass<CRTreeOccupancyGridMap>();
-  if (!m)
-    throw std::invalid_argument("section [" + o.ini_section + "] of '" + o.ini_path +
-                                "' defines no rtreeOccupancyGrid map (add rtreeOccupancyGrid_count=1)");
-  return m;
+  return mapFromIni(o.ini_path, o.ini_section);
 }
 
 }  // namespace

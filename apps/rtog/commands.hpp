@@ -169,11 +169,8 @@ struct ExploreCommandOptions {
 /// Throws std::invalid_argument for bad options, std::runtime_error for unreadable maps or failed writes.
 int explore(const ExploreCommandOptions& opts, std::ostream& out);
 
-/// What `e` says in one line a person reads: MRPT's exceptions (a header, the message cut at its
-/// first ']', a location, a call stack) give the message they were made of, without MRPT's
-/// "file:line: [function]"; any other exception its first line. kNoReason if nothing is left.
+/// What `e` says in one line a person reads (rtog::errorLine, rtog/mrpt/error_line.h).
 std::string oneLine(const std::exception& e);
-inline constexpr const char* kNoReason = "unknown error (the exception said nothing)";
 
 /// Loads a map file (the core format or the MRPT map's gzip archive), from a file or a pipe;
 /// throws std::runtime_error naming the file on failure, including bytes after the map.

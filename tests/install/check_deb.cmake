@@ -48,4 +48,13 @@ if(rc OR NOT maps)
   string(SUBSTRING "${out}" ${from} -1 tail)
   message(FATAL_ERROR "icp-slam through the packaged launcher: exit ${rc}, no rtog map saved\n${tail}")
 endif()
-message(STATUS "package ${debs}: tools, headers, config and plugin in place; icp-slam ran with the packaged plugin")
+if(PYTHON)
+  # The module from the package's dist-packages, its library from the package's lib.
+  execute_process(COMMAND ${CMAKE_COMMAND} -E env PYTHONPATH=${root}/usr/lib/python3/dist-packages LD_LIBRARY_PATH=${root}/usr/lib
+                          ${PYTHON} -c "import rtog, numpy as np; m = rtog.Map(0.05); m.insert_point_cloud(np.ones((1, 3), np.float32), (0, 0, 0)); assert len(m) > 0; print(rtog.__file__)"
+                  RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE out)
+  if(rc OR NOT out MATCHES "${root}/usr/lib/python3/dist-packages/rtog/__init__.py")
+    message(FATAL_ERROR "import rtog from the package: exit ${rc}\n${out}")
+  endif()
+endif()
+message(STATUS "package ${debs}: tools, headers, config, plugin and Python module in place; icp-slam ran with the packaged plugin")

@@ -1,5 +1,6 @@
 #include "rtog/image/tum_dataset.hpp"
 
+#include <cmath>
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
@@ -35,29 +36,52 @@ DepthSequence readTumSequence(const std::string& dir, const DepthIntrinsics& int
   return seq;
 }
 
+namespace {
+
+/// `scale` pixel values per metre.
+template <class Pixel>
+void backProject(const cv::Mat& depth, const Eigen::Isometry3d& camera_to_world, const DepthIntrinsics& k,
+                 double scale, int stride, WorldScan& scan) {
+  scan.origin = camera_to_world.translation();
+  scan.points.reserve(static_cast<std::size_t>(depth.rows / stride + 1) * (depth.cols / stride + 1));
+  const Eigen::Matrix3f r = camera_to_world.linear().cast<float>();
+  const Eigen::Vector3f t = camera_to_world.translation().cast<float>();
+  for (int v = 0; v < depth.rows; v += stride) {
+    const auto* row = depth.ptr<Pixel>(v);
+    for (int u = 0; u < depth.cols; u += stride) {
+      if (!(row[u] > 0) || !std::isfinite(double(row[u]))) {
+        ++scan.pixels_without_depth;
+        continue;
+      }
+      const double z = row[u] / scale;
+      const Eigen::Vector3f pc(float((u - k.cx) * z / k.fx), float((v - k.cy) * z / k.fy), float(z));
+      scan.points.push_back(r * pc + t);
+    }
+  }
+}
+
+}  // namespace
+
+WorldScan depthScan(const cv::Mat& depth, const Eigen::Isometry3d& camera_to_world, const DepthIntrinsics& k,
+                    int stride) {
+  if (stride < 1) throw std::invalid_argument("depthScan: stride must be >= 1");
+  WorldScan scan;
+  if (depth.type() == CV_16UC1)
+    backProject<std::uint16_t>(depth, camera_to_world, k, k.depth_scale, stride, scan);
+  else if (depth.type() == CV_32FC1)
+    backProject<float>(depth, camera_to_world, k, 1.0, stride, scan);
+  else
+    throw std::invalid_argument("depthScan: expected a 16-bit (depth_scale per metre) or 32-bit float (metres) "
+                                "single-channel image");
+  return scan;
+}
+
 WorldScan loadDepthScan(const DepthFrame& frame, const DepthIntrinsics& k, int stride) {
   if (stride < 1) throw std::invalid_argument("loadDepthScan: stride must be >= 1");
   const cv::Mat depth = cv::imread(frame.depth_path, cv::IMREAD_ANYDEPTH);
   if (depth.empty()) throw std::runtime_error("cannot read depth image " + frame.depth_path);
   if (depth.type() != CV_16UC1) throw std::runtime_error(frame.depth_path + ": expected a 16-bit single-channel PNG");
-  WorldScan scan;
-  scan.origin = frame.camera_to_world.translation();
-  scan.points.reserve(static_cast<std::size_t>(depth.rows / stride + 1) * (depth.cols / stride + 1));
-  const Eigen::Matrix3f r = frame.camera_to_world.linear().cast<float>();
-  const Eigen::Vector3f t = frame.camera_to_world.translation().cast<float>();
-  for (int v = 0; v < depth.rows; v += stride) {
-    const auto* row = depth.ptr<std::uint16_t>(v);
-    for (int u = 0; u < depth.cols; u += stride) {
-      if (row[u] == 0) {
-        ++scan.pixels_without_depth;
-        continue;
-      }
-      const double z = row[u] / k.depth_scale;
-      const Eigen::Vector3f pc(float((u - k.cx) * z / k.fx), float((v - k.cy) * z / k.fy), float(z));
-      scan.points.push_back(r * pc + t);
-    }
-  }
-  return scan;
+  return depthScan(depth, frame.camera_to_world, k, stride);
 }
 
 }  // namespace rtog::image

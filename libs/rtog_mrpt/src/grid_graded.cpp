@@ -224,18 +224,23 @@ bool insertGradedScan(OccupancyMap& map, TGridFrame2D& frame, const mrpt::obs::C
   // then traced on the grown grid.
   TGridFrame2D grown = frame;
   std::vector<std::optional<ScanPlan>> plans(poses.size());
-  double mean_z = 0.0;
+  double mean_z = 0.0, min_z = std::numeric_limits<double>::infinity(), max_z = -min_z;
   for (std::size_t i = 0; i < poses.size(); ++i) {
     ScanPlan plan;
     if (!planScan(scan, poses[i].pose, io, grown, plan)) continue;  // this pose says nothing of any cell
     resize(grown, plan.grow[0], plan.grow[1], plan.grow[2], plan.grow[3]);
     plans[i] = std::move(plan);
-    mean_z += poses[i].weight * (poses[i].pose + scan.sensorPose).z();
+    const double z = (poses[i].pose + scan.sensorPose).z();
+    mean_z += poses[i].weight * z;
+    min_z = std::min(min_z, z), max_z = std::max(max_z, z);
   }
   if (std::none_of(plans.begin(), plans.end(), [](const auto& p) { return p.has_value(); })) return false;
   if (!grown.has_layer) {
     Key k;
-    const double z = poses.size() == 1 ? (poses[0].pose + scan.sensorPose).z() : mean_z;
+    // Poses at one height (a planar covariance) take that height itself: the weighted sum of equal
+    // heights may round to the layer below when the sensor sits on a cell face, and the plain
+    // scan's layer is the height's.
+    const double z = min_z == max_z ? min_z : mean_z;
     if (!map.lattice().tryKey(Eigen::Vector3d(0, 0, z), k))
       throw std::out_of_range("rtog::CRTreeOccupancyGridMap: a 2D scan's height has no key");
     grown.has_layer = true;

@@ -7,6 +7,7 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <opencv2/core/mat.hpp>
 
 namespace rtog::image {
 
@@ -43,5 +44,11 @@ DepthSequence readTumSequence(const std::string& dir, const DepthIntrinsics& int
 /// Loads one depth PNG and back-projects every `stride`-th pixel in each direction into the
 /// world frame. Throws std::runtime_error if the image is missing or not 16-bit single channel.
 WorldScan loadDepthScan(const DepthFrame& frame, const DepthIntrinsics& intrinsics, int stride = 1);
+
+/// The same from a depth image in memory: CV_16UC1 (pixel values, intrinsics.depth_scale per
+/// metre) or CV_32FC1 (metres); a zero or non-finite pixel has no depth. Throws
+/// std::invalid_argument for another type or stride < 1.
+WorldScan depthScan(const cv::Mat& depth, const Eigen::Isometry3d& camera_to_world, const DepthIntrinsics& intrinsics,
+                    int stride = 1);
 
 }  // namespace rtog::image

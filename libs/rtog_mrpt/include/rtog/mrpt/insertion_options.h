@@ -112,6 +112,10 @@ struct RTreeInsertionOptions : public mrpt::config::CLoadableOptions {
   /// preset only). (Default: uniform)
   std::string sonarConeWeighting{"uniform"};
 
+  /// The octomap preset stating a core map's rule and one insertion's settings (OctoMap's
+  /// probabilities and clamping, the sensor model, range cut, merging, threads): what `rtog build`
+  /// and the Python module make of their own options, so that both build the core call's map.
+  static RTreeInsertionOptions fromCore(const MapParams& map, const InsertParams& ip);
   MapParams toMapParams(double resolution) const;
   /// The core's per-insertion settings these options give (sensor model, range cut, threads...).
   InsertParams toInsertParams() const;
