@@ -349,7 +349,10 @@ void CRTreeOccupancyGridMap::followGridScan(const GridScanUpdate& upd) {
   if (!tiles->frame().sameGeometry(frame_)) tiles->setFrame(frame_);
   const float* after = upd.after.data();
   for (const auto& run : upd.runs)
-    OccupancyMap::forEachRunCell(run, [&](std::int32_t x, std::int32_t y, StepKind) { tiles->setCell(x, y, toMrptCell(*after++)); });
+    OccupancyMap::forEachRunCell(run, [&](std::int32_t x, std::int32_t y, StepKind) {
+      const float v = *after++;
+      if (!std::isnan(v)) tiles->setCell(x, y, toMrptCell(v));  // NaN: a cell outside the map's region
+    });
   const FieldConstants f(caches_->tiles_likelihood, frame_.resolution);
   tiles->dropStaleTerms(f.window);
 }

@@ -21,6 +21,10 @@ void applyAssigned(MapStore& store, const std::vector<AssignedPiece>& pieces, In
   for (std::size_t first = 0; first < pieces.size();) {
     std::size_t last = first;
     while (last < pieces.size() && pieces[last].brick == pieces[first].brick) ++last;
+    if (!store.ownsBrick(pieces[first].brick)) {  // outside the map's region: passed over
+      first = last;
+      continue;
+    }
     const std::uint32_t slot = index.brickSlot(pieces[first].brick);
     std::vector<LeafEntry>& leaves = index.mutableBrick(slot).leaves;
     for (std::size_t i = first; i < last; ++i)

@@ -46,8 +46,10 @@ namespace {
 // source(update) for every batch holding it, then group(brick). Codes and keys come from the
 // batches' lists: reading them through the pointers would miss the cache once per brick, on
 // data another thread wrote.
+// Bricks the map does not own (MapStore::ownsBrick) are passed over.
 template <class Source, class Group>
-void mergeBrickLists(const std::vector<const UpdateBatch*>& batches, Source&& source, Group&& group) {
+void mergeBrickLists(const MapStore& store, const std::vector<const UpdateBatch*>& batches, Source&& source,
+                     Group&& group) {
   std::vector<std::size_t> pos(batches.size(), 0);
   for (;;) {
     std::size_t from = batches.size();
@@ -58,10 +60,13 @@ void mergeBrickLists(const std::vector<const UpdateBatch*>& batches, Source&& so
     if (from == batches.size()) return;
     const std::uint64_t code = batches[from]->brickCodes()[pos[from]];
     const Key brick = batches[from]->brickKeys()[pos[from]];
+    const bool owned = store.ownsBrick(brick);
     for (std::size_t b = 0; b < batches.size(); ++b)
-      if (pos[b] < batches[b]->brickCodes().size() && batches[b]->brickCodes()[pos[b]] == code)
-        source(batches[b]->bricks()[pos[b]++]);
-    group(brick);
+      if (pos[b] < batches[b]->brickCodes().size() && batches[b]->brickCodes()[pos[b]] == code) {
+        if (owned) source(batches[b]->bricks()[pos[b]]);
+        ++pos[b];
+      }
+    if (owned) group(brick);
   }
 }
 
@@ -69,11 +74,12 @@ void mergeBrickLists(const std::vector<const UpdateBatch*>& batches, Source&& so
 
 // Fills `groups` in brick order, each group's brick found or made (its slot), publishing the
 // groups done every few: appliers take them while the rest are grouped.
-void groupByBrick(LeafIndex& index, const std::vector<const UpdateBatch*>& batches, BrickGroups& groups) {
+void groupByBrick(const MapStore& store, LeafIndex& index, const std::vector<const UpdateBatch*>& batches,
+                  BrickGroups& groups) {
   std::uint32_t taken = 0;
   try {
     mergeBrickLists(
-        batches, [&](const UpdateBatch::BrickUpdates* u) { groups.sources[taken++] = u; },
+        store, batches, [&](const UpdateBatch::BrickUpdates* u) { groups.sources[taken++] = u; },
         [&](const Key& brick) {
           // Slots in brick order, whoever applies the groups: the map does not depend on the threads.
           groups.slots[groups.count] = index.brickSlot(brick);
@@ -118,10 +124,10 @@ void applyBatches(MapStore& store, const std::vector<const UpdateBatch*>& batche
     updates += b->bricks().size();
     largest = std::max(largest, b->bricks().size());
   }
-  if (batches.size() == 1) {
+  if (batches.size() == 1 && !store.restricted) {
     distinct = updates;
   } else {
-    mergeBrickLists(batches, [](const UpdateBatch::BrickUpdates*) {}, [&](const Key&) { ++distinct; });
+    mergeBrickLists(store, batches, [](const UpdateBatch::BrickUpdates*) {}, [&](const Key&) { ++distinct; });
   }
   BrickGroups groups(distinct, updates);
   index.reserveBricks(distinct);  // room for every brick being new (a first scan)
@@ -148,7 +154,7 @@ void applyBatches(MapStore& store, const std::vector<const UpdateBatch*>& batche
     }
   };
   parallel::run(n, [&](std::size_t t) {
-    if (t == 0) groupByBrick(index, batches, groups);  // appliers finish what it published if it throws
+    if (t == 0) groupByBrick(store, index, batches, groups);  // appliers finish what it published if it throws
     work(t);
   });
   refreshFromContexts(index, contexts, n, stats);
@@ -191,7 +197,13 @@ void applyGraded(MapStore& store, const std::vector<const GradedScan*>& scans, I
           from = s;
       if (from == scans.size()) break;
       const std::uint64_t code = scans[from]->brickCode(pos[from]);
-      keys.push_back(scans[from]->brick(pos[from]));
+      const Key brick = scans[from]->brick(pos[from]);
+      if (!store.ownsBrick(brick)) {  // outside the map's region: passed over
+        for (std::size_t s = 0; s < scans.size(); ++s)
+          if (pos[s] < scans[s]->brickCount() && scans[s]->brickCode(pos[s]) == code) ++pos[s];
+        continue;
+      }
+      keys.push_back(brick);
       for (std::size_t s = 0; s < scans.size(); ++s)
         if (pos[s] < scans[s]->brickCount() && scans[s]->brickCode(pos[s]) == code)
           parts.emplace_back(static_cast<std::uint32_t>(s), static_cast<std::uint32_t>(pos[s]++));

@@ -1,6 +1,9 @@
 #include "map/map_engine.hpp"
 
+#include <limits>
+
 #include "integrate/batch_apply.hpp"
+#include "integrate/planar/step_clip.hpp"
 
 namespace rtog {
 
@@ -10,6 +13,26 @@ InsertStats MapEngine::flush() {
   if (!planar.empty()) store.index.unshareBricks();  // before the appliers write bricks
   const InsertStats stats = planar.cover(store);
   cover_pending.store(false, std::memory_order_release);
+  return stats;
+}
+
+InsertStats MapEngine::applyClippedStepRuns(const UpdateSet& set) {
+  std::vector<StepRun> runs;
+  std::vector<std::uint8_t> kept;
+  clipStepRuns(store, set.z, set.runs, set.run_count, runs, kept);
+  if (runs.empty()) {
+    if (set.after) set.after->assign(kept.size(), std::numeric_limits<float>::quiet_NaN());
+    return {};
+  }
+  std::vector<float> applied;
+  const InsertStats stats = planar.applyStepRuns(store, set.z, runs.data(), runs.size(), *set.rule, set.after ? &applied : nullptr);
+  if (set.after) {
+    // Every step of the caller's runs has its entry: the value after it, NaN where the map does not hold the cell.
+    set.after->resize(kept.size());
+    std::size_t j = 0;
+    for (std::size_t i = 0; i < kept.size(); ++i)
+      (*set.after)[i] = kept[i] ? applied[j++] : std::numeric_limits<float>::quiet_NaN();
+  }
   return stats;
 }
 
@@ -30,7 +53,11 @@ InsertStats MapEngine::apply(UpdateSet&& set) {
     case UpdateSet::Kind::StepRuns:
       if (set.after) set.after->clear();
       if (set.run_count == 0) return {};
-      stats = planar.applyStepRuns(store, set.z, set.runs, set.run_count, *set.rule, set.after);
+      if (store.restricted) {
+        stats = applyClippedStepRuns(set);
+      } else {
+        stats = planar.applyStepRuns(store, set.z, set.runs, set.run_count, *set.rule, set.after);
+      }
       cover_pending.store(true, std::memory_order_release);
       return stats;
     case UpdateSet::Kind::Graded: {

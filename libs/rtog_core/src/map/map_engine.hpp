@@ -31,6 +31,8 @@ class MapEngine {
   /// pending after), every other kind after covering the cache. The set's buffers are those of
   /// this map's scratch (held by the caller's ScratchScope, or by apply's own).
   InsertStats apply(UpdateSet&& set);
+  /// A map restricted to a region: the set's step runs clipped to its bricks (step_clip.hpp).
+  InsertStats applyClippedStepRuns(const UpdateSet& set);
 
   /// Runs produce(IntegrationContext) -> UpdateSet with this map's scratch, then apply().
   template <class Produce>

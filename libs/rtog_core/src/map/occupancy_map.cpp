@@ -6,6 +6,7 @@
 #include "integrate/cone_integrator.hpp"
 #include "integrate/pose_blur.hpp"
 #include "map/map_engine.hpp"
+#include "storage/brick.hpp"
 
 namespace rtog {
 
@@ -47,6 +48,41 @@ const Lattice& OccupancyMap::lattice() const { return engine_->store.lattice; }
 const LogOddsModel& OccupancyMap::logOddsModel() const { return engine_->store.model; }
 
 void OccupancyMap::clear() { engine_->clear(); }
+
+void OccupancyMap::setRegion(const Box& region) {
+  MapStore& store = engine_->store;
+  if (region.isEmpty()) {
+    store.restricted = false;
+    store.region = Box::empty();
+    return;
+  }
+  const auto onBorders = [](const Key& k, int add) {
+    for (int a = 0; a < 3; ++a)
+      if (((k[a] + add) & (kBrickSize - 1)) != 0) return false;
+    return true;
+  };
+  if (!keyInRange(region.min) || !keyInRange(region.max) || !onBorders(region.min, 0) || !onBorders(region.max, 1))
+    throw std::invalid_argument("rtog::OccupancyMap::setRegion: the region must be whole bricks (faces on multiples of " +
+                                std::to_string(kBrickSize) + " cells) within the key range");
+  const Box bricks{brickOf(region.min), brickOf(region.max)};
+  const Box bounds = keyBounds();
+  if (!bounds.isEmpty() && !region.contains(bounds)) {
+    bool outside = false;
+    forEachLeaf([&](const Box& b, float) { outside = outside || !region.contains(b); });
+    if (outside) throw std::logic_error("rtog::OccupancyMap::setRegion: the map holds cells outside the region");
+  }
+  store.restricted = true;
+  store.region = bricks;
+}
+
+Box OccupancyMap::region() const {
+  const MapStore& store = engine_->store;
+  if (!store.restricted) return Box::empty();
+  const Key lo = store.region.min, hi = store.region.max;
+  const auto cells = [](std::int32_t b, int add) { return b * kBrickSize + add; };
+  return Box{Key{cells(lo.x, 0), cells(lo.y, 0), cells(lo.z, 0)},
+             Key{cells(hi.x, kBrickSize - 1), cells(hi.y, kBrickSize - 1), cells(hi.z, kBrickSize - 1)}};
+}
 InsertStats OccupancyMap::flush() { return engine_->flush(); }
 bool OccupancyMap::hasPendingCover() const { return engine_->cover_pending.load(std::memory_order_acquire); }
 

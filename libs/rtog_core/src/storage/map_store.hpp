@@ -22,11 +22,17 @@ struct MapStore {
     }
   }
   void clear() { index.clear(); }
+  /// True if the map holds the cells of brick `b` (brick coordinates): every brick, unless the
+  /// map is restricted to a region (OccupancyMap::setRegion).
+  bool ownsBrick(const Key& b) const { return !restricted || region.contains(b); }
   std::string checkInvariants() const {
     return index.checkInvariants(model, [this](float v) { return mergeable(v); });
   }
 
   MapParams params;
+  /// OccupancyMap::setRegion: the bricks (brick coordinates) whose cells the map holds.
+  bool restricted = false;
+  Box region = Box::empty();
   Lattice lattice;
   LogOddsModel model;
   LeafIndex index;

@@ -47,6 +47,19 @@ class OccupancyMap {
   /// Removes every leaf; parameters stay.
   void clear();
 
+  /// Restricts the map to the cells of `region` (inclusive keys, whole bricks: its faces on
+  /// multiples of 2^kBrickBits = 16 cells), for a map split by space (a tile of a larger map). Every
+  /// later insertion, fusion and assignment changes those cells only, each exactly as it changes
+  /// them in a map without the restriction: the same updates in the same order (a cell depends
+  /// on its own updates only, and leaves never cross a brick border), so the maps of the tiles of
+  /// a partition of space together hold, leaf for leaf, the one map built from the same scans.
+  /// The insertion figures count the region's cells (and every beam). Box::empty() lifts the
+  /// restriction. Not written to map files. Throws std::invalid_argument for a region not on brick
+  /// borders or beyond the key range, std::logic_error if the map holds cells outside it.
+  void setRegion(const Box& region);
+  /// The region set by setRegion(); Box::empty() if the map is not restricted.
+  Box region() const;
+
   /// Covers the cells held in the planar cache (see InsertParams::planar_cache) with leaves and
   /// returns the leaf figures of that. Every reading call does this first by itself (safely from
   /// concurrent readers); calling it moves the cost to a time of your choosing.

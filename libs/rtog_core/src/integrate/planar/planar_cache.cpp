@@ -143,6 +143,7 @@ void PlanarCache::apply(MapStore& store, const std::vector<PlanarBatch>& planar_
     const auto width = static_cast<std::size_t>(b0.width());
     const Key brick{b0.brickX0() + static_cast<int>(t % width), b0.brickY0() + static_cast<int>(t / width),
                     z >> kBrickBits};
+    if (!store.ownsBrick(brick)) continue;
     // Most of a scan's tiles were layers of the scans before: recent ones skip the brick and
     // layer hash lookups.
     PlanarLayer& layer = layerAt(store, brick, z);

@@ -54,6 +54,10 @@ void PlanarCache::applyGradedLayer(MapStore& store, const std::vector<const Grad
     const GradedScan& s0 = *scans[parts[p].second.first];
     const Key brick = s0.brick(parts[p].second.second);
     const std::uint64_t code = parts[p].first;
+    if (!store.ownsBrick(brick)) {  // outside the map's region: passed over
+      while (p < parts.size() && parts[p].first == code) ++p;
+      continue;
+    }
     for (; p < parts.size() && parts[p].first == code; ++p) {
       const GradedScan& s = *scans[parts[p].second.first];
       const std::uint32_t b = parts[p].second.second;
