@@ -13,7 +13,7 @@
 #include <mrpt/obs/CRawlog.h>
 #include <mrpt/obs/CSensoryFrame.h>
 
-#include "commands.hpp"
+#include "build_log.hpp"
 #include "rtog/app/output_files.hpp"
 #include "rtog/image/tum_dataset.hpp"
 #include "rtog/mrpt/CRTreeOccupancyGridMap.h"
@@ -24,23 +24,26 @@
 namespace rtog::cli {
 namespace {
 
-/// One redrawn line on a terminal, a plain line per 10 % otherwise.
+/// One redrawn line on a terminal, a plain line per 10 % otherwise; each when the percentage
+/// moves. The leaf count is asked for only then: reading a map covers its planar cache, which a
+/// 2D scan a time would otherwise pay at every scan.
 class Progress {
  public:
   Progress(std::ostream& out, std::size_t total, bool bar, std::string unit = "scans")
       : out_(out), total_(total), bar_(bar), unit_(std::move(unit)) {}
-  void update(std::size_t done, std::size_t leaves) {
+  template <class Leaves>
+  void update(std::size_t done, Leaves&& leaves) {
     if (done == done_) return;
     done_ = done;
     const int pct = total_ ? int(100 * done / total_) : 100;
-    if (bar_) {
+    if (bar_ && (pct != last_ || done == total_)) {
       const int filled = pct * 30 / 100;
       out_ << "\r[" << std::string(std::size_t(filled), '#') << std::string(std::size_t(30 - filled), ' ') << "] "
-           << std::setw(3) << pct << "% " << done << "/" << total_ << " " << unit_ << ", " << leaves << " leaves"
+           << std::setw(3) << pct << "% " << done << "/" << total_ << " " << unit_ << ", " << leaves() << " leaves"
            << std::flush;
       if (done == total_) out_ << "\n";
-    } else if (pct / 10 != last_ / 10 || done == total_) {
-      out_ << "progress " << pct << "% (" << done << "/" << total_ << " " << unit_ << ", " << leaves << " leaves)\n";
+    } else if (!bar_ && (pct / 10 != last_ / 10 || done == total_)) {
+      out_ << "progress " << pct << "% (" << done << "/" << total_ << " " << unit_ << ", " << leaves() << " leaves)\n";
     }
     last_ = pct;
   }
@@ -70,7 +73,9 @@ void loadQuietly(const std::string& what, const std::string& path, Load&& load) 
   if (!ok) throw std::runtime_error("cannot read " + what + " '" + path + "' (not a valid " + what + " file?)");
 }
 
-std::shared_ptr<CRTreeOccupancyGridMap> makeMap(const BuildOptions& o) {
+}  // namespace
+
+std::shared_ptr<CRTreeOccupancyGridMap> makeBuildMap(const BuildOptions& o) {
   if (o.ini_path.empty()) {
     // The command-line options, in the map's MRPT terms.
     CRTreeOccupancyGridMap::TInsertionOptions io = CRTreeOccupancyGridMap::TInsertionOptions::fromCore(o.map, o.insert);
@@ -82,22 +87,133 @@ std::shared_ptr<CRTreeOccupancyGridMap> makeMap(const BuildOptions& o) {
   return mapFromIni(o.ini_path, o.ini_section);
 }
 
-}  // namespace
-
-int build(const BuildOptions& o, std::ostream& out) {
+void checkBuildOptions(const BuildOptions& o) {
   const int sources = !o.tum_dir.empty() + !o.rawlog_path.empty() + !o.simplemap_path.empty();
   if (sources != 1) throw std::invalid_argument("give exactly one of --tum, --rawlog, --simplemap");
   if (o.pose_uncertainty && o.simplemap_path.empty())
     throw std::invalid_argument("--pose-uncertainty needs --simplemap (the only source with pose covariances)");
   if (o.pose_uncertainty && !o.ini_path.empty())
     throw std::invalid_argument("--pose-uncertainty is for the command-line options; with --ini set poseUncertainty = on in its _insertOpts");
-  auto map = makeMap(o);
+}
+
+BuildLog readBuildLog(const BuildOptions& o, std::ostream& out) {
+  BuildLog log;
+  if (!o.tum_dir.empty()) log.seq = image::readTumSequence(o.tum_dir);
+  if (!o.simplemap_path.empty()) {
+    // Checked first, as rawlogs are: MRPT's loader sizes buffers from the counts the file states.
+    checkSimplemap(o.simplemap_path);
+    loadQuietly("simplemap", o.simplemap_path,
+                [&] { return log.simplemap.loadFromFile(o.simplemap_path) && !log.simplemap.empty(); });
+  }
+  // Entry by entry, checked first: a truncated, corrupt or hostile log is an error (or, truncated
+  // and --allow-truncated, read up to the cut with a warning), never a shorter log.
+  if (!o.rawlog_path.empty()) readRawlog(o.rawlog_path, o.allow_truncated, log.rawlog, out);
+  return log;
+}
+
+FeedFigures feedMap(const BuildOptions& o, const BuildLog& log, CRTreeOccupancyGridMap& map, std::ostream* progress_out) {
+  FeedFigures f;
+  std::ostringstream quiet;
+  std::ostream& pout = progress_out ? *progress_out : quiet;
+  const auto timed = [&](auto&& insert) {
+    const auto t0 = std::chrono::steady_clock::now();
+    insert();
+    f.seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  };
+  const auto inRange = [&](std::size_t i) { return i >= o.scans_from && i < o.scans_to; };
+  const auto leaves = [&map] { return map.map().leafCount(); };
+  if (!o.tum_dir.empty()) {
+    Progress progress(pout, log.seq.frames.size(), o.progress_bar);
+    const InsertParams ip = map.insertionOptions.toInsertParams();
+    for (std::size_t i = 0; i < log.seq.frames.size(); ++i) {
+      if (!inRange(i)) continue;
+      const image::WorldScan scan = image::loadDepthScan(log.seq.frames[i], log.seq.intrinsics, o.stride);
+      timed([&] { map.lastInsertStats = map.map().insertPointCloud(scan.origin, scan.points, ip); });
+      // The core map is fed directly here: the figures the summary prints are kept by hand.
+      map.totalInsertStats += map.lastInsertStats;
+      map.invalidRangesSkipped += scan.pixels_without_depth;
+      map.notifyMapChanged();
+      ++f.scans;
+      f.points += scan.points.size();
+      progress.update(i + 1, leaves);
+    }
+  } else if (!o.simplemap_path.empty()) {
+    Progress progress(pout, log.simplemap.size(), o.progress_bar);
+    for (std::size_t i = 0; i < log.simplemap.size(); ++i) {
+      if (!inRange(i)) continue;
+      const auto [pose, sf] = log.simplemap.get(i);
+      // The frame's pose PDF as a Gaussian: with poseUncertainty on, its covariance blurs the
+      // frame; else it is inserted at the mean.
+      mrpt::poses::CPose3DPDFGaussian robot;
+      robot.copyFrom(*pose);
+      f.uncertain_frames += robot.cov.trace() > 0.0;
+      for (const auto& obs : *sf) {
+        const std::size_t before = map.totalInsertStats.raysTotal();
+        timed([&] { map.insertObservation(*obs, robot); });
+        f.points += map.totalInsertStats.raysTotal() - before;
+      }
+      ++f.scans;
+      progress.update(i + 1, leaves);
+    }
+  } else {
+    Progress progress(pout, log.rawlog.size(), o.progress_bar, "rawlog entries");
+    std::size_t index = 0;  // of the observation, for --scans
+    forEachOdometryObservation(log.rawlog, [&](const mrpt::obs::CObservation::Ptr& obs, const mrpt::poses::CPose3D& robot,
+                                               std::size_t entry) {
+      if (!inRange(index++)) return;
+      const std::size_t before = map.totalInsertStats.raysTotal();
+      bool used = false;
+      timed([&] { used = map.insertObservation(*obs, robot); });
+      f.points += map.totalInsertStats.raysTotal() - before;
+      f.scans += used;
+      progress.update(entry + 1, leaves);
+    });
+    progress.update(log.rawlog.size(), leaves);
+  }
+  return f;
+}
+
+std::size_t logSize(const BuildLog& log) {
+  return log.seq.frames.size() + log.simplemap.size() + log.rawlog.size();
+}
+
+void forEachBeams(const BuildOptions& o, const BuildLog& log, const CRTreeOccupancyGridMap& map, std::size_t every,
+                  const std::function<void(const Eigen::Vector3d&, const std::vector<Eigen::Vector3f>&)>& fn) {
+  const auto inRange = [&](std::size_t i) { return i >= o.scans_from && i < o.scans_to && i % every == 0; };
+  ObservationBeams beams;
+  if (!o.tum_dir.empty()) {
+    for (std::size_t i = 0; i < log.seq.frames.size(); ++i)
+      if (inRange(i)) {
+        const image::WorldScan scan = image::loadDepthScan(log.seq.frames[i], log.seq.intrinsics, o.stride);
+        fn(scan.origin, scan.points);
+      }
+  } else if (!o.simplemap_path.empty()) {
+    for (std::size_t i = 0; i < log.simplemap.size(); ++i) {
+      if (!inRange(i)) continue;
+      const auto [pose, sf] = log.simplemap.get(i);
+      mrpt::poses::CPose3DPDFGaussian robot;
+      robot.copyFrom(*pose);
+      for (const auto& obs : *sf)
+        if (map.extractBeams(*obs, robot.mean, beams, true)) fn(beams.origin, beams.points);
+    }
+  } else {
+    std::size_t index = 0;
+    forEachOdometryObservation(log.rawlog, [&](const mrpt::obs::CObservation::Ptr& obs, const mrpt::poses::CPose3D& robot,
+                                               std::size_t) {
+      if (inRange(index++) && map.extractBeams(*obs, robot, beams, true)) fn(beams.origin, beams.points);
+    });
+  }
+}
+
+int build(const BuildOptions& o, std::ostream& out) {
+  checkBuildOptions(o);
+  if (!o.tiles.empty()) return buildTiles(o, out);
+  auto map = makeBuildMap(o);
   // The output is checked and opened before the work: an unwritable path, or one that names an
   // input (which the save would destroy), fails now and not after the last scan.
   std::vector<app::InputFile> inputs;
-  image::DepthSequence seq;
   if (!o.tum_dir.empty()) {
-    seq = image::readTumSequence(o.tum_dir);
+    const image::DepthSequence seq = image::readTumSequence(o.tum_dir);
     inputs.push_back({"--tum", o.tum_dir + "/groundtruth_poses.txt"});
     for (const auto& f : seq.frames) inputs.push_back({"--tum", f.depth_path});
   }
@@ -106,94 +222,33 @@ int build(const BuildOptions& o, std::ostream& out) {
   if (!o.ini_path.empty()) inputs.push_back({"--ini", o.ini_path});
   app::OutputSet files(std::move(inputs));
   std::ostream* saved = o.out_path.empty() ? nullptr : &files.add("--out", o.out_path);
-  std::size_t scans = 0, points = 0, uncertain_frames = 0;
-  double seconds = 0.0;
-  const auto timed = [&](auto&& insert) {
-    const auto t0 = std::chrono::steady_clock::now();
-    insert();
-    seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  };
-
-  if (!o.tum_dir.empty()) {
-    Progress progress(out, seq.frames.size(), o.progress_bar);
-    const auto& io = map->insertionOptions;
-    const InsertParams ip = io.toInsertParams();
-    for (std::size_t i = 0; i < seq.frames.size(); ++i) {
-      if (i < o.scans_from || i >= o.scans_to) continue;
-      const image::WorldScan scan = image::loadDepthScan(seq.frames[i], seq.intrinsics, o.stride);
-      timed([&] { map->lastInsertStats = map->map().insertPointCloud(scan.origin, scan.points, ip); });
-      // The core map is fed directly here: the figures the summary prints are kept by hand.
-      map->totalInsertStats += map->lastInsertStats;
-      map->invalidRangesSkipped += scan.pixels_without_depth;
-      map->notifyMapChanged();
-      ++scans;
-      points += scan.points.size();
-      progress.update(i + 1, map->map().leafCount());
-    }
-  } else if (!o.simplemap_path.empty()) {
-    mrpt::maps::CSimpleMap sm;
-    // Checked first, as rawlogs are: MRPT's loader sizes buffers from the counts the file states.
-    checkSimplemap(o.simplemap_path);
-    loadQuietly("simplemap", o.simplemap_path, [&] { return sm.loadFromFile(o.simplemap_path) && !sm.empty(); });
-    Progress progress(out, sm.size(), o.progress_bar);
-    for (std::size_t i = 0; i < sm.size(); ++i) {
-      if (i < o.scans_from || i >= o.scans_to) continue;
-      const auto [pose, sf] = sm.get(i);
-      // The frame's pose PDF as a Gaussian: with poseUncertainty on, its covariance blurs the
-      // frame; else it is inserted at the mean.
-      mrpt::poses::CPose3DPDFGaussian robot;
-      robot.copyFrom(*pose);
-      uncertain_frames += robot.cov.trace() > 0.0;
-      for (const auto& obs : *sf) {
-        const std::size_t before = map->totalInsertStats.raysTotal();
-        timed([&] { map->insertObservation(*obs, robot); });
-        points += map->totalInsertStats.raysTotal() - before;
-      }
-      ++scans;
-      progress.update(i + 1, map->map().leafCount());
-    }
-  } else {
-    mrpt::obs::CRawlog log;
-    // Entry by entry, checked first: a truncated, corrupt or hostile log is an error (or, truncated
-    // and --allow-truncated, read up to the cut with a warning), never a shorter log.
-    readRawlog(o.rawlog_path, o.allow_truncated, log, out);
-    Progress progress(out, log.size(), o.progress_bar, "rawlog entries");
-    std::size_t index = 0;  // of the observation, for --scans
-    forEachOdometryObservation(log, [&](const mrpt::obs::CObservation::Ptr& obs, const mrpt::poses::CPose3D& robot,
-                                        std::size_t entry) {
-      const std::size_t i = index++;
-      if (i < o.scans_from || i >= o.scans_to) return;
-      const std::size_t before = map->totalInsertStats.raysTotal();
-      bool used = false;
-      timed([&] { used = map->insertObservation(*obs, robot); });
-      points += map->totalInsertStats.raysTotal() - before;
-      scans += used;
-      progress.update(entry + 1, map->map().leafCount());
-    });
-    progress.update(log.size(), map->map().leafCount());
-  }
-
-  if (!o.simplemap_path.empty())
-    out << "pose covariance:  " << uncertain_frames << " of " << scans << " frames have one ("
-        << (map->insertionOptions.poseUncertainty ? "blurred in: poseUncertainty on" : "not used: poseUncertainty off")
-        << ")\n";
-  const InsertStats& st = map->totalInsertStats;
-  out << "inserted " << points << " beams from " << scans << " scans in " << std::fixed << std::setprecision(3)
-      << seconds << " s (" << std::setprecision(2) << (seconds > 0 ? points / seconds / 1e6 : 0.0)
-      << " M beams/s), sensor model " << map->insertionOptions.sensorModel << "\n";
-  out.unsetf(std::ios::floatfield);
-  out << "skipped: " << st.skipped_non_finite << " non-finite, " << st.skipped_zero_length << " zero-length, "
-      << st.skipped_out_of_range << " out of range, " << map->invalidRangesSkipped << " invalid ranges, "
-      << st.skipped_too_long << " too long (over " << InsertParams{}.max_ray_cells << " cells), "
-      << st.skipped_over_budget << " in scans over the cell budget (" << map->insertionOptions.toInsertParams().max_scan_cells
-      << " cells); " << st.rays_truncated << " cut at the range limit or without a return\n";
-  printStatistics(map->map(), out);
+  const BuildLog log = readBuildLog(o, out);
+  const FeedFigures f = feedMap(o, log, *map, &out);
+  printBuildSummary(o, *map, f, out);
   if (saved) {
     map->map().write(*saved);
     files.commit();
     out << "saved             " << o.out_path << "\n";
   }
   return 0;
+}
+
+void printBuildSummary(const BuildOptions& o, const CRTreeOccupancyGridMap& map, const FeedFigures& f, std::ostream& out) {
+  if (!o.simplemap_path.empty())
+    out << "pose covariance:  " << f.uncertain_frames << " of " << f.scans << " frames have one ("
+        << (map.insertionOptions.poseUncertainty ? "blurred in: poseUncertainty on" : "not used: poseUncertainty off")
+        << ")\n";
+  const InsertStats& st = map.totalInsertStats;
+  out << "inserted " << f.points << " beams from " << f.scans << " scans in " << std::fixed << std::setprecision(3)
+      << f.seconds << " s (" << std::setprecision(2) << (f.seconds > 0 ? f.points / f.seconds / 1e6 : 0.0)
+      << " M beams/s), sensor model " << map.insertionOptions.sensorModel << "\n";
+  out.unsetf(std::ios::floatfield);
+  out << "skipped: " << st.skipped_non_finite << " non-finite, " << st.skipped_zero_length << " zero-length, "
+      << st.skipped_out_of_range << " out of range, " << map.invalidRangesSkipped << " invalid ranges, "
+      << st.skipped_too_long << " too long (over " << InsertParams{}.max_ray_cells << " cells), "
+      << st.skipped_over_budget << " in scans over the cell budget (" << map.insertionOptions.toInsertParams().max_scan_cells
+      << " cells); " << st.rays_truncated << " cut at the range limit or without a return\n";
+  printStatistics(map.map(), out);
 }
 
 }  // namespace rtog::cli

@@ -48,6 +48,10 @@ struct BuildOptions {
   /// --rawlog: a log whose file ends inside an entry is read up to it, with a warning that
   /// counts what was dropped, instead of refused. (Default: false)
   bool allow_truncated = false;
+  /// Build the map as tiles of space, each a region of whole bricks holding exactly the single
+  /// build's cells there, into the directory --out: a count, or "auto" (one a rank under mpirun,
+  /// else one). Empty: one map file. (Default: empty)
+  std::string tiles;
 };
 
 /// "A:B" (either may be empty: from the start, to the end) as [A, B); throws

@@ -3,6 +3,7 @@
 // and bit for bit, in both presets, with clamping on, for every kind of update (planar scans, the
 // grid's step runs, graded scans, marks, the 3D grid's assigned cells) and 1 or 2 threads.
 #include <algorithm>
+#include <cstdlib>
 #include <cstring>
 #include <functional>
 #include <random>
@@ -14,6 +15,8 @@
 #include <mrpt/obs/CSensoryFrame.h>
 
 #include "rtog/image/tum_dataset.hpp"
+#include "rtog/mrpt/map_file.h"
+#include "rtog/mrpt/tiled_map.h"
 #include "test_helpers.hpp"
 
 namespace {
@@ -168,6 +171,57 @@ TEST(Regions, VelodyneIn3DGridSection) {
   // COccupancyGridMap3D's rule (a 3D section: its cells written back as assigned values).
   expectTilesEqualWhole("sensorModelPreset=mrpt_grid", velodyneFeed(), 33,
                         "resolution=0.1\nmin_x=-30\nmax_x=30\nmin_y=-30\nmax_y=30\nmin_z=-3\nmax_z=5");
+}
+
+}  // namespace
+
+namespace {
+
+TEST(Regions, TiledMapOnDiskAndItsNeighbourhood) {
+  // The TUM frames as four tiles on disk: read whole they are the single build; a robot's
+  // neighbourhood loads the tiles meeting its box, and only those.
+  auto whole = rtog_test::mapFromSections("resolution=0.05", "sensorModelPreset=octomap");
+  tumFeed()(*whole);
+  const std::string dir = ::testing::TempDir() + "rtog_tiles_test";
+  std::system(("rm -rf '" + dir + "' && mkdir -p '" + dir + "'").c_str());
+  std::mt19937 rng(41);
+  std::vector<Box> tiles;
+  do tiles = randomTiling(whole->map().keyBounds(), rng);
+  while (tiles.size() < 4);
+  rtog::TiledMapIndex idx;
+  idx.resolution = 0.05;
+  for (std::size_t i = 0; i < tiles.size(); ++i) {
+    auto part = rtog_test::mapFromSections("resolution=0.05", "sensorModelPreset=octomap");
+    part->map().setRegion(tiles[i]);
+    tumFeed()(*part);
+    idx.tiles.push_back(rtog::writeTile(part->map(), dir, "t" + std::to_string(i) + ".rtog"));
+  }
+  EXPECT_FALSE(rtog::isTiledMap(dir));  // no index yet: not a map
+  idx.write(dir);
+  ASSERT_TRUE(rtog::isTiledMap(dir));
+  EXPECT_TRUE(leavesOf(rtog::loadMapFile(dir)->map()) == leavesOf(whole->map()));
+  // A box around the first camera: the tiles it meets, no others.
+  const Eigen::Vector3d lo(-2.6, -2.6, 0.0), hi(-2.0, -2.0, 1.0);
+  const auto near = rtog::loadTiledMap(dir, lo, hi);
+  Key a, b;
+  ASSERT_TRUE(whole->map().lattice().tryKey(lo, a) && whole->map().lattice().tryKey(hi, b));
+  const Box box{a, b};
+  std::vector<Leaf> want;
+  for (const Box& t : tiles)
+    if (t.intersects(box))
+      whole->map().forEachLeafIn(t, [&](const Box& l, float v) {
+        if (!t.contains(l)) return;
+        std::uint32_t bits;
+        std::memcpy(&bits, &v, sizeof bits);
+        want.emplace_back(l.min.x, l.min.y, l.min.z, l.max.x, l.max.y, l.max.z, bits);
+      });
+  std::sort(want.begin(), want.end());
+  EXPECT_FALSE(want.empty());
+  EXPECT_TRUE(leavesOf(near->map()) == want);
+  EXPECT_LT(near->map().leafCount(), whole->map().leafCount());
+  // A damaged index is an error naming it, not a smaller map.
+  std::system(("echo 'tile t0.rtog 1 2 3' >> '" + dir + "/tiles.index'").c_str());
+  EXPECT_THROW(rtog::loadMapFile(dir), std::runtime_error);
 }
 
 }  // namespace

@@ -17,6 +17,7 @@
 
 #include "gzip.hpp"
 #include "rtog/mrpt/ini_checks.h"
+#include "rtog/mrpt/tiled_map.h"
 #include "rtog/mrpt/error_line.h"
 
 namespace rtog {
@@ -79,7 +80,11 @@ std::shared_ptr<CRTreeOccupancyGridMap> loadMapFile(const std::string& path) {
   struct stat st {};
   if (::stat(path.c_str(), &st) != 0)
     throw std::runtime_error("cannot open map file '" + path + "': " + std::strerror(errno));
-  if (S_ISDIR(st.st_mode)) throw std::runtime_error("cannot open map file '" + path + "': it is a directory");
+  if (S_ISDIR(st.st_mode)) {
+    if (isTiledMap(path)) return wrapCoreMap(loadTiles(path));
+    throw std::runtime_error("cannot open map file '" + path + "': it is a directory (a tiled map holds " +
+                             TiledMapIndex::kFile + ")");
+  }
   std::ifstream in(path, std::ios::binary);
   if (!in) throw std::runtime_error("cannot open map file '" + path + "': " + std::strerror(errno));
   try {

@@ -113,13 +113,18 @@ struct StepRun {
   StepKind kind;
   bool end;
   std::int32_t end_x, end_y;
+  /// The run's cells are those of steps [skip, skip + count) of the raster from cell (x, y) (its
+  /// corner, in 2^-kStepRunFracBits cells) by (dx, dy): a run cut at a region's border keeps the
+  /// raster it was cut from. (Default: 0)
+  std::uint32_t skip = 0;
 };
 constexpr int kStepRunFracBits = 9;
 
 /// Calls fn(x, y, kind) for every cell of a run, in its order.
 template <class Fn>
 void forEachRunCell(const StepRun& r, Fn&& fn) {
-  std::int32_t fx = r.x * (1 << kStepRunFracBits), fy = r.y * (1 << kStepRunFracBits);
+  std::int32_t fx = r.x * (1 << kStepRunFracBits) + static_cast<std::int32_t>(r.skip) * r.dx;
+  std::int32_t fy = r.y * (1 << kStepRunFracBits) + static_cast<std::int32_t>(r.skip) * r.dy;
   for (std::uint32_t k = 0; k < r.count; ++k, fx += r.dx, fy += r.dy)
     fn(fx >> kStepRunFracBits, fy >> kStepRunFracBits, r.kind);
   if (r.end) fn(r.end_x, r.end_y, StepKind::Occupied);

@@ -11,8 +11,9 @@
 namespace rtog {
 
 /// The steps of runs[0, n) on z-layer `z` whose cells lie in bricks the map owns, in their order:
-/// a run wholly inside is kept, one wholly outside dropped, one across the border given as runs of
-/// one cell (a run starts on a cell corner, so its inside part is not a run of its own). kept[i]
+/// a run wholly inside is kept, one wholly outside dropped, one across the border cut to the
+/// steps inside (an interval: the raster is monotone on each axis), the same raster from a later
+/// step (StepRun::skip). kept[i]
 /// says whether step i of forEachRunCell's order was kept. Throws std::out_of_range, as
 /// OccupancyMap::applyStepRuns does, for a cell outside the key range, kept or not.
 void clipStepRuns(const MapStore& store, std::int32_t z, const StepRun* runs, std::size_t n, std::vector<StepRun>& out,

@@ -141,8 +141,8 @@ struct LayerGrid {
 template <Axis A, bool After, class Make, class Floats>
 [[gnu::noinline]] std::size_t walkRun(const StepRun& r, const LayerGrid grid, Make& make, Floats& floats,
                                       const std::uint32_t* table, const float* values, std::vector<float>* after) {
-  std::int32_t fx = r.x * kCell, fy = r.y * kCell;
   const std::int32_t dx = r.dx, dy = r.dy;
+  std::int32_t fx = r.x * kCell + static_cast<std::int32_t>(r.skip) * dx, fy = r.y * kCell + static_cast<std::int32_t>(r.skip) * dy;
   std::size_t same = 0;
   std::uint32_t left = r.count, sx = stepsToEdge(fx, dx), sy = stepsToEdge(fy, dy);
   const auto slotOf = [&] {
@@ -202,11 +202,12 @@ InsertStats PlanarCache::applyStepRuns(MapStore& store, std::int32_t z, const St
   };
   for (std::size_t i = 0; i < n; ++i) {
     const StepRun& r = runs[i];
-    extend(r.x, r.y);
+    // Scaled by multiplying: a left shift of a negative start cell is undefined before C++20.
+    constexpr std::int64_t kOne = std::int64_t{1} << kStepRunFracBits;
+    const std::int64_t k0 = r.skip;
+    extend((r.x * kOne + k0 * r.dx) >> kStepRunFracBits, (r.y * kOne + k0 * r.dy) >> kStepRunFracBits);
     if (r.count > 0) {
-      // Scaled by multiplying: a left shift of a negative start cell is undefined before C++20.
-      constexpr std::int64_t kOne = std::int64_t{1} << kStepRunFracBits;
-      const std::int64_t k = r.count - 1;
+      const std::int64_t k = k0 + r.count - 1;
       extend((r.x * kOne + k * r.dx) >> kStepRunFracBits, (r.y * kOne + k * r.dy) >> kStepRunFracBits);
     }
     if (r.end) extend(r.end_x, r.end_y);

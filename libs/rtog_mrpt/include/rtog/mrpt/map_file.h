@@ -10,7 +10,8 @@
 namespace rtog {
 
 /// Reads a map file of either format, told apart by its first byte (peeked: a pipe works),
-/// whole: trailing bytes after the map are an error. An MRPT file gives the map with its options;
+/// whole: trailing bytes after the map are an error; or a tiled map's directory (tiled_map.h),
+/// every tile. An MRPT file gives the map with its options;
 /// a core file the map wrapped as wrapCoreMap() does. Throws std::runtime_error naming the file,
 /// with one line saying what is wrong (missing, a directory, empty, truncated, corrupt).
 std::shared_ptr<CRTreeOccupancyGridMap> loadMapFile(const std::string& path);
