@@ -10,6 +10,7 @@
 
 #include "py_map.hpp"
 #include "rtog/mrpt/map_file.h"
+#include "rtog/mrpt/tiled_map.h"
 
 namespace rtog::python {
 namespace {
@@ -112,6 +113,14 @@ Insertions and queries release the GIL; one map may be queried from several Pyth
           "load", [](const std::string& path) { return std::make_shared<PyMap>(loadMapFile(path)); }, pyb::arg("path"),
           "Reads a map file of either format: the MRPT map's (.rtog as MRPT's apps and save() write it) or the "
           "core's (rtog build --out, save(format='core')). Raises RuntimeError naming the file and what is wrong.")
+      .def_static(
+          "load_tiles",
+          [](const std::string& dir, const DoubleArray& lo, const DoubleArray& hi) {
+            return std::make_shared<PyMap>(loadTiledMap(dir, point3(lo, "lo"), point3(hi, "hi")));
+          },
+          pyb::arg("dir"), pyb::arg("lo"), pyb::arg("hi"),
+          "The tiles of a tiled map (rtog build --tiles) that meet the box [lo, hi] (metres) as one map: a robot's "
+          "neighbourhood in a map too large to load whole.")
       .def(
           "save",
           [](const PyMap& self, const std::string& path, const std::string& format) {

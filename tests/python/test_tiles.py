@@ -86,3 +86,14 @@ def test_a_failed_rank_leaves_no_map(tmp_path):
     assert not (out / "tiles.index").exists()
     with pytest.raises(RuntimeError, match="directory"):
         rtog.Map.load(str(out))
+
+
+def test_python_loads_the_tiles_around_a_point(tmp_path):
+    out, _ = build(sources(tmp_path)["tum-octomap"] + ["--tiles", "4"], tmp_path, "tiles")
+    whole = rtog.Map.load(str(out))
+    near = rtog.Map.load_tiles(str(out), (-2.6, -2.6, 0.0), (-2.2, -2.2, 1.0))
+    assert 0 < len(near) < len(whole)
+    # What it holds, it holds as the whole map does.
+    lo, hi, v = near.leaves()
+    pts = (lo + 0.5) * near.resolution
+    assert np.array_equal(whole.log_odds(pts).view(np.uint32), v.view(np.uint32))
