@@ -35,7 +35,7 @@ class Progress {
   void update(std::size_t done, Leaves&& leaves) {
     if (done == done_) return;
     done_ = done;
-    const int pct = total_ ? int(100 * done / total_) : 100;
+    const int pct = total_ ? int(std::min<std::size_t>(100, 100 * done / total_)) : 100;
     if (bar_ && (pct != last_ || done == total_)) {
       const int filled = pct * 30 / 100;
       out_ << "\r[" << std::string(std::size_t(filled), '#') << std::string(std::size_t(30 - filled), ' ') << "] "
@@ -107,7 +107,7 @@ BuildLog readBuildLog(const BuildOptions& o, std::ostream& out) {
   }
   // Entry by entry, checked first: a truncated, corrupt or hostile log is an error (or, truncated
   // and --allow-truncated, read up to the cut with a warning), never a shorter log.
-  if (!o.rawlog_path.empty()) readRawlog(o.rawlog_path, o.allow_truncated, log.rawlog, out);
+  if (!o.rawlog_path.empty()) log.rawlog_entries = checkRawlog(o.rawlog_path, o.allow_truncated, out);
   return log;
 }
 
@@ -156,10 +156,11 @@ FeedFigures feedMap(const BuildOptions& o, const BuildLog& log, CRTreeOccupancyG
       progress.update(i + 1, leaves);
     }
   } else {
-    Progress progress(pout, log.rawlog.size(), o.progress_bar, "rawlog entries");
+    Progress progress(pout, log.rawlog_entries, o.progress_bar, "rawlog entries");
     std::size_t index = 0;  // of the observation, for --scans
-    forEachOdometryObservation(log.rawlog, [&](const mrpt::obs::CObservation::Ptr& obs, const mrpt::poses::CPose3D& robot,
-                                               std::size_t entry) {
+    OdometryWalk walk;
+    const OdometryVisit visit = [&](const mrpt::obs::CObservation::Ptr& obs, const mrpt::poses::CPose3D& robot,
+                                    std::size_t entry) {
       if (!inRange(index++)) return;
       const std::size_t before = map.totalInsertStats.raysTotal();
       bool used = false;
@@ -167,14 +168,16 @@ FeedFigures feedMap(const BuildOptions& o, const BuildLog& log, CRTreeOccupancyG
       f.points += map.totalInsertStats.raysTotal() - before;
       f.scans += used;
       progress.update(entry + 1, leaves);
-    });
-    progress.update(log.rawlog.size(), leaves);
+    };
+    forEachRawlogEntry(o.rawlog_path, log.rawlog_entries,
+                       [&](const mrpt::serialization::CSerializable::Ptr& e, std::size_t i) { walk.feed(e, i, visit); });
+    progress.update(log.rawlog_entries, leaves);
   }
   return f;
 }
 
 std::size_t logSize(const BuildLog& log) {
-  return log.seq.frames.size() + log.simplemap.size() + log.rawlog.size();
+  return log.seq.frames.size() + log.simplemap.size() + log.rawlog_entries;
 }
 
 void forEachBeams(const BuildOptions& o, const BuildLog& log, const CRTreeOccupancyGridMap& map, std::size_t every,
@@ -198,10 +201,13 @@ void forEachBeams(const BuildOptions& o, const BuildLog& log, const CRTreeOccupa
     }
   } else {
     std::size_t index = 0;
-    forEachOdometryObservation(log.rawlog, [&](const mrpt::obs::CObservation::Ptr& obs, const mrpt::poses::CPose3D& robot,
-                                               std::size_t) {
+    OdometryWalk walk;
+    const OdometryVisit visit = [&](const mrpt::obs::CObservation::Ptr& obs, const mrpt::poses::CPose3D& robot,
+                                    std::size_t) {
       if (inRange(index++) && map.extractBeams(*obs, robot, beams, true)) fn(beams.origin, beams.points);
-    });
+    };
+    forEachRawlogEntry(o.rawlog_path, log.rawlog_entries,
+                       [&](const mrpt::serialization::CSerializable::Ptr& e, std::size_t i) { walk.feed(e, i, visit); });
   }
 }
 

@@ -9,7 +9,7 @@
 
 #include <Eigen/Core>
 #include <mrpt/maps/CSimpleMap.h>
-#include <mrpt/obs/CRawlog.h>
+#include <mrpt/serialization/CSerializable.h>
 
 #include "commands.hpp"
 #include "rtog/image/tum_dataset.hpp"
@@ -17,13 +17,25 @@
 
 namespace rtog::cli {
 
-/// The source of a build, read once: TUM frames (their list; images are read as fed), or an MRPT
-/// simplemap or rawlog (whole).
+/// The source of a build: TUM frames (their list; images are read as fed), an MRPT simplemap
+/// (whole), or a rawlog (checked once, then read as a stream at every feeding: never whole).
 struct BuildLog {
   image::DepthSequence seq;
   mrpt::maps::CSimpleMap simplemap;
-  mrpt::obs::CRawlog rawlog;
+  std::size_t rawlog_entries = 0;
 };
+
+/// Checks a rawlog (checkArchive): a truncated, corrupt or hostile one (or one with bytes after its
+/// last entry) throws std::runtime_error with checkArchive's line, unless it is truncated and
+/// `allow_truncated` (then a warning to `out`, and only the entries before the cut are read).
+/// Returns the number of entries to read.
+std::size_t checkRawlog(const std::string& path, bool allow_truncated, std::ostream& out);
+/// Reads the first `entries` entries of a checked rawlog one at a time, fn(entry, index) each, as
+/// CRawlog::loadFromRawLogFile takes them (a whole CRawlog gives its own entries; comments are
+/// skipped): the log is never held whole. Throws std::runtime_error naming an entry that is not an
+/// action, a sensory frame or an observation.
+void forEachRawlogEntry(const std::string& path, std::size_t entries,
+                        const std::function<void(const mrpt::serialization::CSerializable::Ptr&, std::size_t)>& fn);
 
 /// The options' checks of every build (one source, --pose-uncertainty's conditions).
 void checkBuildOptions(const BuildOptions& o);

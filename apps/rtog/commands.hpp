@@ -5,6 +5,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <exception>
+#include <functional>
 #include <iosfwd>
 #include <memory>
 #include <optional>
@@ -14,10 +15,6 @@
 #include "rtog/core/explore.hpp"
 #include "rtog/core/occupancy_map.hpp"
 #include "rtog/core/plan.hpp"
-
-namespace mrpt::obs {
-class CRawlog;
-}
 
 namespace rtog::cli {
 
@@ -197,11 +194,6 @@ struct ArchiveCheck {
 /// process, each under an address-space bound of twice the bytes left in the file (plus 64 MiB):
 /// a length field that the file cannot hold fails there, not in this process.
 ArchiveCheck checkArchive(const std::string& path, const char* what);
-/// Reads a rawlog checked by checkArchive into `log`: a truncated, corrupt or hostile one (or one
-/// with bytes after its last entry) throws std::runtime_error with checkArchive's line, unless it
-/// is truncated and `allow_truncated` (then the entries before the cut, and a warning to `out`).
-/// Returns the number of entries.
-std::size_t readRawlog(const std::string& path, bool allow_truncated, mrpt::obs::CRawlog& log, std::ostream& out);
 /// Checks a simplemap file by checkArchive before MRPT's loader reads it: a truncated, corrupt or
 /// hostile one, or one of other than one object, throws std::runtime_error with one line.
 void checkSimplemap(const std::string& path);

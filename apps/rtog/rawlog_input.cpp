@@ -25,11 +25,13 @@
 #include <vector>
 
 #include <mrpt/io/CFileGZInputStream.h>
+#include <mrpt/obs/CActionCollection.h>
 #include <mrpt/obs/CObservationComment.h>
 #include <mrpt/obs/CRawlog.h>
+#include <mrpt/obs/CSensoryFrame.h>
 #include <mrpt/serialization/CArchive.h>
 
-#include "commands.hpp"
+#include "build_log.hpp"
 #include "gzip.hpp"
 
 namespace rtog::cli {
@@ -201,7 +203,7 @@ ArchiveCheck checkArchive(const std::string& path, const char* what) {
   return r;
 }
 
-std::size_t readRawlog(const std::string& path, bool allow_truncated, mrpt::obs::CRawlog& log, std::ostream& out) {
+std::size_t checkRawlog(const std::string& path, bool allow_truncated, std::ostream& out) {
   const ArchiveCheck c = checkArchive(path, "rawlog");
   if (!c.problem.empty() && !(c.truncated && allow_truncated))
     throw std::runtime_error("cannot read rawlog '" + path + "': " + c.problem);
@@ -209,29 +211,32 @@ std::size_t readRawlog(const std::string& path, bool allow_truncated, mrpt::obs:
   if (c.truncated)
     out << "warning: rawlog '" << path << "' " << c.problem << "; --allow-truncated: reading its first " << c.entries
         << " entries, " << (c.bytes - c.offset) << " bytes dropped\n";
+  return c.entries;
+}
+
+void forEachRawlogEntry(const std::string& path, std::size_t entries,
+                        const std::function<void(const mrpt::serialization::CSerializable::Ptr&, std::size_t)>& fn) {
   // The same bytes again, now known to be readable (they were, in the child).
   mrpt::io::CFileGZInputStream f(path);
   auto ar = mrpt::serialization::archiveFrom(f);
-  log.clear();
-  for (std::size_t i = 0; i < c.entries; ++i) {
+  for (std::size_t i = 0; i < entries; ++i) {
     const auto obj = ar.ReadObject();
     // As CRawlog::loadFromRawLogFile takes them: a whole CRawlog, comments, actions, frames and
     // observations (CRawlog::insert refuses anything else, as that reader stops at it).
     if (const auto whole = std::dynamic_pointer_cast<mrpt::obs::CRawlog>(obj)) {
-      log.swap(*whole);
-    } else if (const auto comment = std::dynamic_pointer_cast<mrpt::obs::CObservationComment>(obj)) {
-      log.setCommentText(comment->text);
+      for (std::size_t k = 0; k < whole->size(); ++k) fn(whole->getAsGeneric(k), k);
+    } else if (std::dynamic_pointer_cast<mrpt::obs::CObservationComment>(obj)) {
+      continue;
+    } else if (std::dynamic_pointer_cast<mrpt::obs::CActionCollection>(obj) ||
+               std::dynamic_pointer_cast<mrpt::obs::CSensoryFrame>(obj) ||
+               std::dynamic_pointer_cast<mrpt::obs::CObservation>(obj)) {
+      fn(obj, i);
     } else {
-      try {
-        log.insert(obj);
-      } catch (const std::exception&) {
-        throw std::runtime_error("cannot read rawlog '" + path + "': entry " + std::to_string(i) + " is a " +
-                                 (obj ? obj->GetRuntimeClass()->className : "null object") +
-                                 ", not an action, a sensory frame or an observation");
-      }
+      throw std::runtime_error("cannot read rawlog '" + path + "': entry " + std::to_string(i) + " is a " +
+                               (obj ? obj->GetRuntimeClass()->className : "null object") +
+                               ", not an action, a sensory frame or an observation");
     }
   }
-  return log.size();
 }
 
 void checkSimplemap(const std::string& path) {

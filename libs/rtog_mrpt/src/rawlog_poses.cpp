@@ -7,32 +7,23 @@
 
 namespace rtog {
 
-void forEachOdometryObservation(
-    const mrpt::obs::CRawlog& log,
-    const std::function<void(const mrpt::obs::CObservation::Ptr&, const mrpt::poses::CPose3D&, std::size_t)>& visit) {
-  mrpt::poses::CPose2D odometry;
-  for (std::size_t i = 0; i < log.size(); ++i) {
-    switch (log.getType(i)) {
-      case mrpt::obs::CRawlog::etActionCollection:
-        if (const auto mv = log.getAsAction(i)->getBestMovementEstimation())
-          odometry = odometry + mv->poseChange->getMeanVal();
-        break;
-      case mrpt::obs::CRawlog::etSensoryFrame:
-        for (const auto& obs : *log.getAsObservations(i)) visit(obs, mrpt::poses::CPose3D(odometry), i);
-        break;
-      case mrpt::obs::CRawlog::etObservation: {
-        const auto obs = log.getAsObservation(i);
-        if (const auto odo = std::dynamic_pointer_cast<mrpt::obs::CObservationOdometry>(obs)) {
-          odometry = odo->odometry;
-        } else {
-          visit(obs, mrpt::poses::CPose3D(odometry), i);
-        }
-        break;
-      }
-      default:
-        break;
-    }
+void OdometryWalk::feed(const mrpt::serialization::CSerializable::Ptr& entry, std::size_t index,
+                        const OdometryVisit& visit) {
+  if (const auto acts = std::dynamic_pointer_cast<mrpt::obs::CActionCollection>(entry)) {
+    if (const auto mv = acts->getBestMovementEstimation()) odometry_ = odometry_ + mv->poseChange->getMeanVal();
+  } else if (const auto sf = std::dynamic_pointer_cast<mrpt::obs::CSensoryFrame>(entry)) {
+    for (const auto& obs : *sf) visit(obs, mrpt::poses::CPose3D(odometry_), index);
+  } else if (const auto obs = std::dynamic_pointer_cast<mrpt::obs::CObservation>(entry)) {
+    if (const auto odo = std::dynamic_pointer_cast<mrpt::obs::CObservationOdometry>(obs))
+      odometry_ = odo->odometry;
+    else
+      visit(obs, mrpt::poses::CPose3D(odometry_), index);
   }
+}
+
+void forEachOdometryObservation(const mrpt::obs::CRawlog& log, const OdometryVisit& visit) {
+  OdometryWalk walk;
+  for (std::size_t i = 0; i < log.size(); ++i) walk.feed(log.getAsGeneric(i), i, visit);
 }
 
 }  // namespace rtog
