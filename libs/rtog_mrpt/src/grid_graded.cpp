@@ -251,7 +251,7 @@ bool insertGradedScan(OccupancyMap& map, TGridFrame2D& frame, const mrpt::obs::C
   if (poses.size() == 1) {  // the grid's own store: its planar cache
     std::vector<OccupancyMap::StepRun> runs;
     std::vector<float> ranges;
-    traceScan(scan, *plans[0], io, grown, runs, stats, &ranges);
+    traceScan(scan, *plans[0], io, grown, runs, stats, &ranges, map.region());
     stats += stepThroughCache(map, runs, ranges, rule, whole, grown, update);
     if (update) std::copy(std::begin(plans[0]->grow), std::end(plans[0]->grow), update->grow);
   } else {  // several poses: their mixture, each cell one graded step
@@ -263,7 +263,7 @@ bool insertGradedScan(OccupancyMap& map, TGridFrame2D& frame, const mrpt::obs::C
     for (std::size_t i = 0; i < poses.size(); ++i) {
       if (!plans[i]) continue;
       InsertStats pose_stats;
-      traceScan(scan, *plans[i], io, grown, runs, pose_stats, &ranges);
+      traceScan(scan, *plans[i], io, grown, runs, pose_stats, &ranges, map.region());
       if (!counted) stats = pose_stats, counted = true;
       steps.clear();
       poseSteps(runs, ranges, rule, whole, grown, steps);

@@ -239,8 +239,19 @@ std::size_t invalidNotFree(const mrpt::obs::CObservation2DRangeScan& o, const CR
 
 void traceScan(const mrpt::obs::CObservation2DRangeScan& o, const ScanPlan& plan,
                const CRTreeOccupancyGridMap::TInsertionOptions& opts, const TGridFrame2D& f,
-               std::vector<OccupancyMap::StepRun>& runs, InsertStats& stats, std::vector<float>* ranges) {
+               std::vector<OccupancyMap::StepRun>& runs, InsertStats& stats, std::vector<float>* ranges,
+               const Box& clip) {
   constexpr int kFrBits = OccupancyMap::kRunFracBits;  // the grid's raster: 1/512 cell
+  // The raster's cells stay within a cell and the rounding of the step, times the steps, of the
+  // segment from the start cell to the end cell: with that margin, a box that misses the clip
+  // box holds every cell of the beam.
+  const auto missesClip = [&clip](const OccupancyMap::StepRun& r, int nsteps) {
+    if (clip.isEmpty()) return false;
+    const std::int64_t m = nsteps / 1024 + 2;
+    const std::int64_t x0 = std::min(r.x, r.end_x) - m, x1 = std::max(r.x, r.end_x) + m;
+    const std::int64_t y0 = std::min(r.y, r.end_y) - m, y1 = std::max(r.y, r.end_y) + m;
+    return x1 < clip.min.x || x0 > clip.max.x || y1 < clip.min.y || y0 > clip.max.y;
+  };
   const std::size_t n = o.getScanSize();
   const auto K = static_cast<std::size_t>(opts.decimation);
   const bool trace_free = opts.sensorModel != "endpoint";
@@ -277,7 +288,7 @@ void traceScan(const mrpt::obs::CObservation2DRangeScan& o, const ScanPlan& plan
     r.end = valid && o.getScanRange(i) < maxd;
     r.end_x = tx + ox, r.end_y = ty + oy;
     ++(r.end ? stats.rays_hit : stats.rays_truncated);
-    if (r.count > 0 || r.end) {
+    if ((r.count > 0 || r.end) && !missesClip(r, nsteps)) {
       runs.push_back(r);
       if (ranges) ranges->push_back(r.end ? o.getScanRange(i) : 0.0f);
     }

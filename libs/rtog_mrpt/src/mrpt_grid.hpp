@@ -102,9 +102,12 @@ bool planScan(const mrpt::obs::CObservation2DRangeScan& o, const mrpt::poses::CP
 /// in lattice keys. Counts beams into `stats` as the core does.
 /// The invalid ranges of `o` (every decimation-th) that the grid does not take as free space.
 std::size_t invalidNotFree(const mrpt::obs::CObservation2DRangeScan& o, const CRTreeOccupancyGridMap::TInsertionOptions& opts);
-/// `ranges`, if given, gets each run's reading (0 for a run without an end cell).
+/// `ranges`, if given, gets each run's reading (0 for a run without an end cell). A beam whose
+/// cells surely miss `clip` (a restricted map's region, OccupancyMap::region(); empty: none) gives
+/// no run, as the map would pass over every step of it; it is counted all the same.
 void traceScan(const mrpt::obs::CObservation2DRangeScan& o, const ScanPlan& plan,
                const CRTreeOccupancyGridMap::TInsertionOptions& opts, const TGridFrame2D& f,
-               std::vector<OccupancyMap::StepRun>& runs, InsertStats& stats, std::vector<float>* ranges = nullptr);
+               std::vector<OccupancyMap::StepRun>& runs, InsertStats& stats, std::vector<float>* ranges = nullptr,
+               const Box& clip = Box::empty());
 
 }  // namespace rtog::mrpt_grid
