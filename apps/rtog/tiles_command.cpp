@@ -66,6 +66,35 @@ void makeDirectory(const std::string& dir) {
     throw std::runtime_error("'" + dir + "' is not a directory (--tiles writes a directory of tiles)");
 }
 
+/// This rank's tiles: read the log, measure the work, cut the slabs, build and write the tiles
+/// i = rank, rank + size, ...; one report line a tile.
+std::string buildOwnTiles(const BuildOptions& o, const Ranks& ranks, int n,
+                          std::chrono::steady_clock::time_point t0, std::ostream& say) {
+  std::ostringstream mine;
+  const BuildLog log = readBuildLog(o, say);
+  const auto probe = makeBuildMap(o);
+  std::vector<std::pair<std::int32_t, double>> wx, wy;
+  firstPass(o, log, *probe, wx, wy);
+  const std::vector<Box> slabs = balancedSlabs(wx, wy, n);
+  const double first_pass = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  say << "tiles: " << slabs.size() << " slabs of about equal work (first pass " << std::fixed << std::setprecision(3)
+      << first_pass << " s), " << ranks.size() << " rank" << (ranks.size() == 1 ? "" : "s") << "\n";
+  say.unsetf(std::ios::floatfield);
+  for (std::size_t i = std::size_t(ranks.rank()); i < slabs.size(); i += std::size_t(ranks.size())) {
+    auto map = makeBuildMap(o);
+    map->map().setRegion(slabs[i]);
+    const FeedFigures f = feedMap(o, log, *map, nullptr);
+    map->map().flush();
+    char name[32];
+    std::snprintf(name, sizeof name, "tile_%04zu.rtog", i);
+    const TileInfo t = writeTile(map->map(), o.out_path, name);
+    const Box& r = t.region;
+    mine << "tile " << t.file << " " << r.min.x << " " << r.min.y << " " << r.min.z << " " << r.max.x << " " << r.max.y
+         << " " << r.max.z << " " << t.leaves << " " << t.cells << " " << f.seconds << " " << f.points << "\n";
+  }
+  return mine.str();
+}
+
 }  // namespace
 
 int buildTiles(const BuildOptions& o, std::ostream& out) {
@@ -88,36 +117,22 @@ int buildTiles(const BuildOptions& o, std::ostream& out) {
   std::string error;
   std::ostringstream mine;  // this rank's tiles: "tile FILE region leaves cells seconds beams"
   const auto t0 = std::chrono::steady_clock::now();
-  double first_pass = 0.0;
   try {
     if (ranks.rank() == 0) {
       makeDirectory(o.out_path);
       std::remove((o.out_path + "/" + TiledMapIndex::kFile).c_str());  // the old map is gone until the new one is whole
     }
-    ranks.barrier();
-    const BuildLog log = readBuildLog(o, say);
-    const auto probe = makeBuildMap(o);
-    std::vector<std::pair<std::int32_t, double>> wx, wy;
-    firstPass(o, log, *probe, wx, wy);
-    const std::vector<Box> slabs = balancedSlabs(wx, wy, n);
-    first_pass = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    say << "tiles: " << slabs.size() << " slabs of about equal work (first pass " << std::fixed << std::setprecision(3)
-        << first_pass << " s), " << ranks.size() << " rank" << (ranks.size() == 1 ? "" : "s") << "\n";
-    say.unsetf(std::ios::floatfield);
-    for (std::size_t i = std::size_t(ranks.rank()); i < slabs.size(); i += std::size_t(ranks.size())) {
-      auto map = makeBuildMap(o);
-      map->map().setRegion(slabs[i]);
-      const FeedFigures f = feedMap(o, log, *map, nullptr);
-      map->map().flush();
-      char name[32];
-      std::snprintf(name, sizeof name, "tile_%04zu.rtog", i);
-      const TileInfo t = writeTile(map->map(), o.out_path, name);
-      const Box& r = t.region;
-      mine << "tile " << t.file << " " << r.min.x << " " << r.min.y << " " << r.min.z << " " << r.max.x << " " << r.max.y
-           << " " << r.max.z << " " << t.leaves << " " << t.cells << " " << f.seconds << " " << f.points << "\n";
-    }
   } catch (const std::exception& e) {
-    error = "rank " + std::to_string(ranks.rank()) + ": " + errorLine(e);
+    error = "rank 0: " + errorLine(e);
+  }
+  // Every rank reaches this, whatever rank 0 met: after it the directory exists, or no rank builds.
+  const bool directory_ok = ranks.all(error.empty());
+  if (directory_ok) {
+    try {
+      mine << buildOwnTiles(o, ranks, n, t0, say);
+    } catch (const std::exception& e) {
+      error = "rank " + std::to_string(ranks.rank()) + ": " + errorLine(e);
+    }
   }
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   mine << "rank " << ranks.rank() << " " << seconds << " " << peakRssMb() << "\n";

@@ -97,3 +97,13 @@ def test_python_loads_the_tiles_around_a_point(tmp_path):
     lo, hi, v = near.leaves()
     pts = (lo + 0.5) * near.resolution
     assert np.array_equal(whole.log_odds(pts).view(np.uint32), v.view(np.uint32))
+
+
+def test_an_output_that_is_not_a_directory_fails_every_rank(tmp_path):
+    out = tmp_path / "a_file"
+    out.write_text("not a directory")
+    launcher = mpi(2) if MPIRUN else ()
+    r = subprocess.run([*launcher, RTOG_EXE, "build", *sources(tmp_path)["tum-octomap"], "--tiles", "auto",
+                        "--out", str(out)], capture_output=True, text=True, timeout=120)
+    assert r.returncode != 0 and "is not a directory" in r.stdout + r.stderr
+    assert out.read_text() == "not a directory"
