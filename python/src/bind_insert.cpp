@@ -32,8 +32,9 @@ void requireBlurOption(const CRTreeOccupancyGridMap& map, const pyb::object& cov
     throw pyb::value_error("pose_cov given, but the map was made with poseUncertainty off (Map(..., poseUncertainty='on'))");
 }
 
-}  // namespace
-
+/// Points given in the map frame from `origin`: the core's call with the map's options (what
+/// `rtog build` makes of a depth frame), or, with a pose covariance or in a 3D section of the
+/// mrpt_grid preset, a point cloud observed at `origin`, through the MRPT map.
 InsertStats insertWorldPoints(CRTreeOccupancyGridMap& map, const Eigen::Vector3d& origin, const Eigen::Vector3f* points,
                               std::size_t n, const std::uint8_t* is_hit,
                               const mrpt::poses::CPose3DPDFGaussian* pose_pdf) {
@@ -59,6 +60,8 @@ InsertStats insertWorldPoints(CRTreeOccupancyGridMap& map, const Eigen::Vector3d
   pdf.mean = mrpt::poses::CPose3D(origin.x(), origin.y(), origin.z(), 0, 0, 0);
   return insertObservation(map, *obs, pdf, pose_pdf != nullptr);
 }
+
+}  // namespace
 
 void bindInsert(pyb::module_& m) {
   auto cls = pyb::class_<PyMap, std::shared_ptr<PyMap>>(m.attr("Map"));

@@ -72,13 +72,6 @@ pyb::array matArray(const cv::Mat& mat);
 /// An insertion's figures as a dict (InsertStats' field names).
 pyb::dict statsDict(const InsertStats& s);
 
-/// Inserts points given in the map frame from `origin`: the core's call with the map's
-/// options (what `rtog build` makes of a depth frame), or, with a pose covariance or in a 3D
-/// section of the mrpt_grid preset, as a point cloud observed at `origin`, through the MRPT map.
-InsertStats insertWorldPoints(CRTreeOccupancyGridMap& map, const Eigen::Vector3d& origin, const Eigen::Vector3f* points,
-                              std::size_t n, const std::uint8_t* is_hit,
-                              const mrpt::poses::CPose3DPDFGaussian* pose_pdf);
-
 void bindMap(pyb::module_& m);
 void bindInsert(pyb::module_& m);
 void bindQuery(pyb::module_& m);

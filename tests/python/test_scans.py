@@ -47,8 +47,9 @@ def test_scan_marks_end_cells_and_clears_the_beams(ranges, preset):
     assert (m.state(mid) == rtog.FREE).mean() > 0.95
     _, _, v = m.leaves()
     if preset == "mrpt_grid":
-        # COccupancyGridMap2D's int8 lattice: values are whole steps of the grid's log-odds unit.
-        assert len(np.unique(v)) <= 40
+        # COccupancyGridMap2D's int8 lattice: every value a whole multiple of the grid's unit (1/16),
+        # within the int8 range.
+        assert np.array_equal(v * 16, np.round(v * 16)) and np.abs(v * 16).max() <= 127
     else:
         free, occ = math.log(0.4 / 0.6), math.log(0.7 / 0.3)
         assert np.allclose(np.unique(v), [free, occ], atol=1e-6)
@@ -71,6 +72,9 @@ def test_pose_covariance_blurs(ranges, preset):
     # Evidence spreads: more cells, and the end cells less certain than without blur.
     assert blurred.cell_count > plain.cell_count
     assert np.nanmean(blurred.log_odds(ends)) < np.nanmean(plain.log_odds(ends))
+    if preset == "mrpt_grid":  # graded changes land on the grid's int8 lattice too (rounded to 1/16)
+        v = blurred.leaves()[2]
+        assert np.array_equal(v * 16, np.round(v * 16)) and len(np.unique(v)) > len(np.unique(plain.leaves()[2]))
 
 
 @pytest.mark.parametrize("preset", ["octomap", "mrpt_grid"])

@@ -25,6 +25,14 @@ std::string joined(const std::string& dir, const std::string& name) { return dir
   throw std::runtime_error("tile index '" + path + "', line " + std::to_string(line) + ": " + why);
 }
 
+/// Tiles of one map: the same log-odds rule and merging (the resolution is the index's).
+bool sameRule(const MapParams& a, const MapParams& b) {
+  const LogOddsParams &x = a.log_odds, &y = b.log_odds;
+  return x.prob_hit == y.prob_hit && x.prob_miss == y.prob_miss && x.clamp_min == y.clamp_min &&
+         x.clamp_max == y.clamp_max && x.occupied_threshold == y.occupied_threshold && x.prior == y.prior &&
+         a.merge == b.merge;
+}
+
 }  // namespace
 
 TiledMapIndex TiledMapIndex::read(const std::string& dir) {
@@ -101,9 +109,7 @@ OccupancyMap loadTiles(const std::string& dir, const Box& region) {
     const OccupancyMap tile = std::move(loadMapFile(path)->map());
     const MapParams& p = tile.params();
     if (p.resolution != idx.resolution) throw std::runtime_error("tile '" + path + "': its resolution is not the index's");
-    if (params && (p.log_odds.prob_hit != params->log_odds.prob_hit || p.log_odds.prob_miss != params->log_odds.prob_miss ||
-                   p.log_odds.clamp_min != params->log_odds.clamp_min || p.log_odds.clamp_max != params->log_odds.clamp_max ||
-                   p.merge != params->merge))
+    if (params && !sameRule(p, *params))
       throw std::runtime_error("tile '" + path + "': its rule is not the other tiles'");
     if (!params) params = p;
     tile.forEachLeaf([&](const Box& b, float v) {
