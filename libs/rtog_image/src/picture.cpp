@@ -64,10 +64,22 @@ Picture::Picture(const cv::Mat& cells, double x0, double y0, double resolution, 
   const int legend_h = 40 + 24 * int(o_.legend.size()) + (o_.probability_ramp ? 64 : 0) + 150;
   canvas_ = cv::Mat(kTop + std::max(plot_.height, legend_h) + kBottom, kLeft + plot_.width + kGap + kPanel, CV_8UC3,
                     kWhite);
-  cv::Mat bgr;
-  if (cells.channels() == 1) cv::cvtColor(cells, bgr, cv::COLOR_GRAY2BGR);
-  else bgr = cells;
-  cv::resize(bgr, canvas_(plot_), plot_.size(), 0, 0, cv::INTER_NEAREST);
+  if (cells.type() == CV_8UC3) {
+    cv::Mat plot = canvas_(plot_);
+    cv::resize(cells, plot, plot_.size(), 0, 0, cv::INTER_NEAREST);
+    return;
+  }
+  // Grey cells painted straight into the canvas: a colour copy of them would be a third image
+  // beside the cells and the canvas.
+  if (cells.type() != CV_8UC1) throw std::invalid_argument("picture: cells must be 8-bit grey or colour");
+  for (int r = 0; r < rows_; ++r) {
+    const std::uint8_t* in = cells.ptr<std::uint8_t>(r);
+    for (int dy = 0; dy < scale_; ++dy) {
+      auto* out = canvas_.ptr<cv::Vec3b>(plot_.y + r * scale_ + dy) + plot_.x;
+      for (int c = 0; c < cols_; ++c)
+        for (int dx = 0; dx < scale_; ++dx) *out++ = cv::Vec3b(in[c], in[c], in[c]);
+    }
+  }
 }
 
 cv::Point Picture::toPixel(const Eigen::Vector2d& p) const {

@@ -78,7 +78,7 @@ cv::Mat slicePicture(const OccupancyMap& map, double z, bool probability) {
     o.legend = {{grey(kSliceOccupied), "occupied"}, {grey(kSliceFree), "free"}, {grey(kSliceUnknown), "unknown"}};
   }
   Picture pic(cells, lo.x(), lo.y(), map.resolution(), o);
-  return pic.finish().clone();
+  return pic.finish();  // shares the canvas, which outlives the picture
 }
 
 }  // namespace rtog::image

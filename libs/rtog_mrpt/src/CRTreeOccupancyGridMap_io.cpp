@@ -200,14 +200,17 @@ std::shared_ptr<CRTreeOccupancyGridMap> CRTreeOccupancyGridMap::loadFromStream(s
 }
 
 // <prefix>.rtog (gzip CArchive), <prefix>.3Dscene (SceneViewer3D) and <prefix>_slice.png (the
-// horizontal layer through the middle of the map's height range, as a picture to look at).
+// horizontal layer through the middle of the map's height range, as a picture to look at). One
+// at a time: apps save when they hold the most (rbpf-slam, every particle's map).
 void CRTreeOccupancyGridMap::saveMetricMapRepresentationToFile(const std::string& prefix) const {
   saveToFile(prefix + ".rtog");
-  mrpt::opengl::COpenGLScene scene;
-  auto obj = mrpt::opengl::CSetOfObjects::Create();
-  getVisualizationInto(*obj);
-  scene.insert(obj);
-  scene.saveToFile(prefix + ".3Dscene");
+  {
+    mrpt::opengl::COpenGLScene scene;
+    auto obj = mrpt::opengl::CSetOfObjects::Create();
+    getVisualizationInto(*obj);
+    scene.insert(obj);
+    scene.saveToFile(prefix + ".3Dscene");
+  }
   if (!isEmpty()) {
     const Box b = map_.keyBounds();
     const double z = (0.5 * (double(b.min.z) + double(b.max.z)) + 0.5) * map_.resolution();

@@ -368,6 +368,14 @@ class CRTreeOccupancyGridMap : public mrpt::maps::CMetricMap {
     std::unique_ptr<Caches> p_;
   };
 
+  /// Counts the process's maps; the last one destroyed hands the heap it freed back to the
+  /// system. Declared first, so destroyed last, after the cells.
+  struct LiveMaps {
+    LiveMaps();
+    LiveMaps(const LiveMaps&);
+    LiveMaps& operator=(const LiveMaps&) { return *this; }
+    ~LiveMaps();
+  } live_;
   OccupancyMap map_;
   TGridFrame2D frame_;
   TGridFrame3D frame3d_;
