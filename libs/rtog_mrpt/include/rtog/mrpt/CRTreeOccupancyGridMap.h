@@ -356,6 +356,7 @@ class CRTreeOccupancyGridMap : public mrpt::maps::CMetricMap {
   /// cos/sin of the beam angles of the last 2D scan geometry (defined with Caches).
   struct ScanAngles;
   /// Owns the caches; copies and assignments share the tiles and drop the rest (see Caches).
+  /// Declared before the cells, so destroyed after them (the last map trims the heap: src/).
   class CachesHolder {
    public:
     CachesHolder();
@@ -363,19 +364,11 @@ class CRTreeOccupancyGridMap : public mrpt::maps::CMetricMap {
     CachesHolder(const CachesHolder&);
     CachesHolder& operator=(const CachesHolder&);
     Caches* operator->() const { return p_.get(); }
-
    private:
     std::unique_ptr<Caches> p_;
   };
 
-  /// Counts the process's maps; the last one destroyed hands the heap it freed back to the
-  /// system. Declared first, so destroyed last, after the cells.
-  struct LiveMaps {
-    LiveMaps();
-    LiveMaps(const LiveMaps&);
-    LiveMaps& operator=(const LiveMaps&) { return *this; }
-    ~LiveMaps();
-  } live_;
+  mutable CachesHolder caches_;
   OccupancyMap map_;
   TGridFrame2D frame_;
   TGridFrame3D frame3d_;
@@ -383,7 +376,6 @@ class CRTreeOccupancyGridMap : public mrpt::maps::CMetricMap {
   /// loadPrior() made, shared by copies; none otherwise. Not serialized.
   struct Prior;
   std::shared_ptr<const Prior> prior_;
-  mutable CachesHolder caches_;
 
   /// cos/sin of the scan's beam angles, from the cache when the geometry is the last one's.
   std::shared_ptr<const ScanAngles> scanAngles(const mrpt::obs::CObservation2DRangeScan& scan) const;
