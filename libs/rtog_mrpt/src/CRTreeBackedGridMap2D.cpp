@@ -308,9 +308,12 @@ void CRTreeBackedGridMap2D::refreshGrid() {
   m_is_empty = false;
 }
 
+// What the stock grid writes, and the map itself: the R-tree map's scene and slice picture would
+// draw again what the grid's picture shows, at the cost of the save (apps save last, holding the
+// most). `rtog export --scene` draws the cuboids from the .rtog.
 void CRTreeBackedGridMap2D::saveMetricMapRepresentationToFile(const std::string& prefix) const {
   COccupancyGridMap2D::saveMetricMapRepresentationToFile(prefix);
-  rtree_.saveMetricMapRepresentationToFile(prefix);
+  rtree_.saveToFile(prefix + ".rtog");
 }
 
 std::string CRTreeBackedGridMap2D::asString() const {

@@ -64,24 +64,19 @@ void CRTreeOccupancyGridMap::serializeTo(mrpt::serialization::CArchive& out) con
   if (frame3d_.defined)
     out << frame3d_.x_min << frame3d_.y_min << frame3d_.z_min << frame3d_.resolution << frame3d_.size_x
         << frame3d_.size_y << frame3d_.size_z;
-  // The map's bytes, preceded by their count, go straight into the archive: counted by a first
-  // write that stores nothing, then written (a copy in memory would hold up to three times the
-  // map while an app saves it, when it holds the most).
-  detail::SinkBuf count([](const char*, std::size_t) {});
-  {
-    std::ostream os(&count);
-    map_.write(os);
-  }
-  out.WriteAs<uint64_t>(count.bytes());
+  // The map's bytes, preceded by their count, go straight into the archive (a copy in memory
+  // would hold up to three times the map while an app saves it, when it holds the most).
+  const std::uint64_t bytes = map_.writtenSize();
+  out.WriteAs<uint64_t>(bytes);
   detail::SinkBuf sink([&out](const char* p, std::size_t n) { out.WriteBuffer(p, n); });
   std::ostream os(&sink);
   map_.write(os);
   os.flush();
   // The stream catches what the archive throws (a full disk) and fails: said here, not dropped.
   if (!os) throw std::runtime_error("rtog::CRTreeOccupancyGridMap: the archive refused the map's bytes");
-  if (sink.bytes() != count.bytes())
+  if (sink.bytes() != bytes)
     throw std::logic_error("rtog::CRTreeOccupancyGridMap: the map wrote " + std::to_string(sink.bytes()) +
-                           " bytes after counting " + std::to_string(count.bytes()));
+                           " bytes, not the " + std::to_string(bytes) + " it said");
 }
 
 // Everything is read into locals, checked as an .ini's values are (the same validate()s), and

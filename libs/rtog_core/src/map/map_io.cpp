@@ -1,5 +1,6 @@
 // Binary serialization of the map: header, parameters, leaves, checksum (doc/format.md).
 #include <algorithm>
+#include <array>
 #include <cstring>
 #include <type_traits>
 #include <istream>
@@ -13,7 +14,9 @@ namespace rtog {
 namespace {
 
 constexpr char kMagic[8] = {'R', 'T', 'O', 'G', 'M', 'A', 'P', '\0'};
-constexpr std::uint32_t kFormatVersion = 1;
+// Version 2 stores leaves brick by brick in brick-local bytes (10 bytes a leaf, 28 in version 1,
+// which is still read).
+constexpr std::uint32_t kFormatVersion = 2;
 
 // FNV-1a over everything written after the magic, so a flipped bit anywhere is caught.
 class Fnv1a {
@@ -28,20 +31,31 @@ class Fnv1a {
   std::uint64_t h_ = 0xcbf29ce484222325ull;
 };
 
+// Bytes gathered in a block and handed to the stream a block at a time: a map is millions of
+// four-byte fields, and a stream call each costs more than the field.
 class Writer {
  public:
   explicit Writer(std::ostream& os) : os_(os) {}
+  ~Writer() { flush(); }
   template <class T>
   void put(const T& v) {
-    static_assert(std::is_trivially_copyable_v<T>);
-    os_.write(reinterpret_cast<const char*>(&v), sizeof(T));
+    static_assert(std::is_trivially_copyable_v<T> && sizeof(T) <= 64);
+    if (used_ + sizeof(T) > sizeof(buf_)) flush();
+    std::memcpy(buf_ + used_, &v, sizeof(T));
     sum_.add(&v, sizeof(T));
+    used_ += sizeof(T);
   }
   std::uint64_t checksum() const { return sum_.value(); }
+  void flush() {
+    if (used_ > 0) os_.write(buf_, static_cast<std::streamsize>(used_));
+    used_ = 0;
+  }
 
  private:
   std::ostream& os_;
   Fnv1a sum_;
+  char buf_[1 << 16];
+  std::size_t used_ = 0;
 };
 
 class Reader {
@@ -79,6 +93,21 @@ std::int64_t bytesLeft(std::istream& is) {
 
 }  // namespace
 
+// The header (magic, version, seven doubles, merge policy, two R-tree parameters, leaf count);
+// a brick's key and leaf count; a leaf (local corners, log-odds); the checksum.
+constexpr std::uint64_t kHeaderBytes = sizeof(kMagic) + 4 + 7 * 8 + 1 + 2 * 4 + 8;
+constexpr std::uint64_t kBrickBytes = 3 * 4 + 4;
+constexpr std::uint64_t kLeafBytes = 6 + 4;
+constexpr std::uint64_t kLeafBytesV1 = 6 * 4 + 4;
+
+std::uint64_t OccupancyMap::writtenSize() const {
+  engine_->ensureCovered();
+  const LeafIndex& index = engine_->store.index;
+  std::uint64_t bricks = 0;
+  index.forEachBrick([&](const Brick& b) { bricks += b.leaves.empty() ? 0 : 1; });
+  return kHeaderBytes + kBrickBytes * bricks + kLeafBytes * static_cast<std::uint64_t>(index.leafCount()) + 8;
+}
+
 void OccupancyMap::write(std::ostream& os) const {
   engine_->ensureCovered();
   const MapStore& store = engine_->store;
@@ -94,25 +123,36 @@ void OccupancyMap::write(std::ostream& os) const {
   w.put(params.rtree.max_entries);
   w.put(params.rtree.min_entries);
   w.put(static_cast<std::uint64_t>(store.index.leafCount()));
-  // Bricks in key order so equal maps give equal files.
+  // Bricks in key order, a brick's leaves by their (lo, hi) bytes, so equal maps give equal files.
   std::vector<const Brick*> order;
   order.reserve(store.index.brickCount());
-  store.index.forEachBrick([&](const Brick& b) { order.push_back(&b); });
+  store.index.forEachBrick([&](const Brick& b) {
+    if (!b.leaves.empty()) order.push_back(&b);
+  });
   std::sort(order.begin(), order.end(), [](const Brick* a, const Brick* b) { return a->brick < b->brick; });
+  const auto boxKey = [](const LeafEntry& l) {
+    std::uint64_t k = 0;
+    for (int a = 0; a < 3; ++a) k = k << 8 | l.lo[a];
+    for (int a = 0; a < 3; ++a) k = k << 8 | l.hi[a];
+    return k;
+  };
+  std::vector<std::pair<std::uint64_t, const LeafEntry*>> leaves;
   for (const Brick* b : order) {
-    std::vector<LeafEntry> leaves = b->leaves;
-    std::sort(leaves.begin(), leaves.end(), [](const LeafEntry& x, const LeafEntry& y) {
-      return std::memcmp(x.lo, y.lo, 3) < 0 || (std::memcmp(x.lo, y.lo, 3) == 0 && std::memcmp(x.hi, y.hi, 3) < 0);
-    });
-    const Key o = brickOrigin(b->brick);
-    for (const LeafEntry& l : leaves) {
-      const Box gb = l.global(o);
-      for (int a = 0; a < 3; ++a) w.put(gb.min[a]);
-      for (int a = 0; a < 3; ++a) w.put(gb.max[a]);
-      w.put(l.value);
+    leaves.clear();
+    for (const LeafEntry& l : b->leaves) leaves.emplace_back(boxKey(l), &l);
+    std::sort(leaves.begin(), leaves.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
+    for (int a = 0; a < 3; ++a) w.put(b->brick[a]);
+    w.put(static_cast<std::uint32_t>(leaves.size()));
+    for (const auto& kl : leaves) {
+      std::uint8_t box[6];
+      std::memcpy(box, kl.second->lo, 3);
+      std::memcpy(box + 3, kl.second->hi, 3);
+      w.put(box);
+      w.put(kl.second->value);
     }
   }
   const std::uint64_t sum = w.checksum();
+  w.flush();
   os.write(reinterpret_cast<const char*>(&sum), sizeof(sum));
   if (!os) throw std::runtime_error("rtog map: write failed");
 }
@@ -123,7 +163,7 @@ OccupancyMap OccupancyMap::read(std::istream& is) {
     throw std::runtime_error("rtog map: not an rtog map (bad magic)");
   Reader r(is);
   const auto version = r.get<std::uint32_t>("version");
-  if (version != kFormatVersion)
+  if (version != 1 && version != kFormatVersion)
     throw std::runtime_error("rtog map: unsupported format version " + std::to_string(version));
   MapParams p;
   p.resolution = r.get<double>("resolution");
@@ -145,11 +185,40 @@ OccupancyMap OccupancyMap::read(std::istream& is) {
   // Leaves are stored as they are read, so memory follows the bytes present whatever the count
   // says; a stream that knows its size (a file, a block in memory; not a pipe) refuses a count
   // it cannot hold before reading any.
-  constexpr std::uint64_t kLeafBytes = 6 * sizeof(std::int32_t) + sizeof(float);
-  if (const std::int64_t left = bytesLeft(is); left >= 0 && count > std::uint64_t(left) / kLeafBytes)
+  const std::uint64_t leaf_bytes = version == 1 ? kLeafBytesV1 : kLeafBytes;
+  if (const std::int64_t left = bytesLeft(is); left >= 0 && count > std::uint64_t(left) / leaf_bytes)
     throw std::runtime_error("rtog map: the leaf count " + std::to_string(count) + " needs " +
-                             std::to_string(count * kLeafBytes + 8) + " more bytes, the stream holds " +
+                             std::to_string(count * leaf_bytes + 8) + " more bytes, the stream holds " +
                              std::to_string(left) + " (truncated or corrupt)");
+  // Version 2: the leaves a brick at a time, each brick's key and count first.
+  Key brick;
+  std::uint32_t in_brick = 0;
+  const auto nextLeaf = [&]() {
+    Box b;
+    if (version == 1) {
+      for (int a = 0; a < 3; ++a) b.min[a] = r.get<std::int32_t>("leaf");
+      for (int a = 0; a < 3; ++a) b.max[a] = r.get<std::int32_t>("leaf");
+      return b;
+    }
+    while (in_brick == 0) {
+      for (int a = 0; a < 3; ++a) brick[a] = r.get<std::int32_t>("brick");
+      in_brick = r.get<std::uint32_t>("brick");
+      const auto inRange = [](std::int32_t c) {
+        return c >= (kKeyMin >> kBrickBits) && c <= (kKeyMax >> kBrickBits);  // before c * kBrickSize
+      };
+      if (!inRange(brick.x) || !inRange(brick.y) || !inRange(brick.z) || in_brick > std::uint32_t{kBrickCells})
+        throw std::runtime_error("rtog map: malformed brick " + toString(Box::cell(brick)) + " of " +
+                                 std::to_string(in_brick) + " leaves");
+    }
+    --in_brick;
+    const auto box = r.get<std::array<std::uint8_t, 6>>("leaf");
+    const Key o = brickOrigin(brick);
+    for (int a = 0; a < 3; ++a) {
+      b.min[a] = o[a] + box[static_cast<std::size_t>(a)];
+      b.max[a] = o[a] + box[static_cast<std::size_t>(a + 3)];
+    }
+    return b;
+  };
 
   OccupancyMap map(p);
   // The leaves go in as pieces of a cell assignment into a map without leaves: they become its
@@ -160,9 +229,7 @@ OccupancyMap OccupancyMap::read(std::istream& is) {
       pieces.clear();
       if (bytesLeft(is) >= 0) pieces.reserve(static_cast<std::size_t>(count));  // the count was checked
       for (std::uint64_t i = 0; i < count; ++i) {
-        Box b;
-        for (int a = 0; a < 3; ++a) b.min[a] = r.get<std::int32_t>("leaf");
-        for (int a = 0; a < 3; ++a) b.max[a] = r.get<std::int32_t>("leaf");
+        const Box b = nextLeaf();
         const auto v = r.get<float>("leaf");
         if (!keyInRange(b.min) || !keyInRange(b.max) || b.isEmpty() || brickOf(b.min) != brickOf(b.max))
           throw std::runtime_error("rtog map: malformed leaf box " + toString(b));
@@ -179,6 +246,7 @@ OccupancyMap OccupancyMap::read(std::istream& is) {
         piece.leaf.value = v;
         pieces.push_back(piece);
       }
+      if (in_brick != 0) throw std::runtime_error("rtog map: a brick holds more leaves than the map's count");
       std::uint64_t stored_sum;
       const std::uint64_t sum = r.checksum();
       if (!is.read(reinterpret_cast<char*>(&stored_sum), sizeof(stored_sum)))

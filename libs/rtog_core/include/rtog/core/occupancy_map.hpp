@@ -234,6 +234,8 @@ class OccupancyMap {
 
   // ---- serialization (binary, little-endian, versioned; see doc/format.md) -------------
   void write(std::ostream& os) const;
+  /// The bytes write() produces.
+  std::uint64_t writtenSize() const;
   /// Throws std::runtime_error on a corrupt or truncated stream.
   static OccupancyMap read(std::istream& is);
 

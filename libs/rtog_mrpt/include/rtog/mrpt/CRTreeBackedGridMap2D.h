@@ -30,8 +30,8 @@ class CRTreeBackedGridMap2D : public mrpt::maps::COccupancyGridMap2D {
   /// Rebuilds every 2D cell from the R-tree map (e.g. after deserialization or direct edits).
   void refreshGrid();
 
-  /// Writes the COccupancyGridMap2D outputs (<prefix>.png, ...) and the R-tree map's
-  /// (<prefix>.rtog, <prefix>.3Dscene, <prefix>_slice.png).
+  /// Writes the COccupancyGridMap2D outputs (<prefix>.png, <prefix>_limits.txt) and the R-tree
+  /// map (<prefix>.rtog).
   void saveMetricMapRepresentationToFile(const std::string& filNamePrefix) const override;
   std::string asString() const override;
 
