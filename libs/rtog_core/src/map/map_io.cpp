@@ -36,7 +36,6 @@ class Fnv1a {
 class Writer {
  public:
   explicit Writer(std::ostream& os) : os_(os) {}
-  ~Writer() { flush(); }
   template <class T>
   void put(const T& v) {
     static_assert(std::is_trivially_copyable_v<T> && sizeof(T) <= 64);
@@ -46,9 +45,11 @@ class Writer {
     used_ += sizeof(T);
   }
   std::uint64_t checksum() const { return sum_.value(); }
+  /// Hands the gathered bytes to the stream (which may throw: a stream with exceptions on).
   void flush() {
-    if (used_ > 0) os_.write(buf_, static_cast<std::streamsize>(used_));
+    const std::size_t n = used_;
     used_ = 0;
+    if (n > 0) os_.write(buf_, static_cast<std::streamsize>(n));
   }
 
  private:
