@@ -69,6 +69,31 @@ TEST(MapSerialization, MemoryRoundTrip) {
   }
 }
 
+// A map being built holds its last scans in the planar cache: written, the cache's coded layers
+// are read as cover() would make them (without covering); in the octomap preset, whose cached
+// layers are floats, the map is covered first. Either way the bytes are the covered map's.
+TEST(MapSerialization, AMapBeingBuiltIsWrittenAsItsCoveredSelf) {
+  for (const char* preset : {"mrpt_grid", "octomap"}) {
+    SCOPED_TRACE(preset);
+    CRTreeOccupancyGridMap m(0.05);
+    m.insertionOptions.sensorModelPreset = preset;
+    for (const auto& f : loadOdometryFrames(dataset(kSena), 30)) f.sf->insertObservationsInto(m, f.pose);
+    std::ostringstream uncovered;
+    const std::uint64_t size = m.map().writtenSize();
+    m.map().write(uncovered);
+    const rtog::InsertStats covering = m.map().flush();
+    if (std::string(preset) == "mrpt_grid") {
+      EXPECT_GT(covering.leaves_created, 0u);  // it was written uncovered
+    }
+    std::ostringstream covered;
+    m.map().write(covered);
+    EXPECT_EQ(uncovered.str().size(), size);
+    EXPECT_TRUE(uncovered.str() == covered.str());
+    std::istringstream in(uncovered.str());
+    EXPECT_TRUE(leaves(rtog::OccupancyMap::read(in)) == leaves(m.map()));
+  }
+}
+
 TEST(MapSerialization, FileRoundTripAndRepresentation) {
   const auto m = senaMap(40);
   const auto dir = std::filesystem::temp_directory_path() / "rtog_mrpt_test_io";

@@ -24,6 +24,18 @@ class MapEngine {
   void ensureCovered() {
     if (cover_pending.load(std::memory_order_acquire)) flush();
   }
+  /// For readers that read the planar cache as it is (OccupancyMap::write): the lock covers
+  /// take, held after covering unless every cached layer is a lone coded one, which
+  /// PlanarCache::coveredLeaves reads without covering.
+  std::unique_lock<std::mutex> lockReadableCache() {
+    std::unique_lock<std::mutex> lock(cover_mutex);
+    if (cover_pending.load(std::memory_order_acquire) && !planar.lonesInCodes()) {
+      lock.unlock();
+      flush();
+      lock.lock();
+    }
+    return lock;
+  }
   // The only mutators of the store: flush(), clear() and apply().
   InsertStats flush();
   void clear();

@@ -101,18 +101,44 @@ constexpr std::uint64_t kBrickBytes = 3 * 4 + 4;
 constexpr std::uint64_t kLeafBytes = 6 + 4;
 constexpr std::uint64_t kLeafBytesV1 = 6 * 4 + 4;
 
+namespace {
+
+/// Calls fn(brick key, its leaves) for every brick holding leaves, in key order, with the leaves
+/// the covered map would hold: a brick's own, or for a brick with a cached layer those cover()
+/// would make, read from the cache (a save of a map being built neither rebuilds its tree nor
+/// clones shared bricks). The caller holds MapEngine::lockReadableCache().
+template <class Fn>
+void forEachCoveredBrick(const MapEngine& engine, Fn&& fn) {
+  const LeafIndex& index = engine.store.index;
+  std::vector<std::pair<Key, std::uint32_t>> order;
+  order.reserve(index.brickCount());
+  for (std::uint32_t slot = 0; slot < index.brickCount(); ++slot) order.emplace_back(index.brick(slot).brick, slot);
+  std::sort(order.begin(), order.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  std::vector<LeafEntry> covered;
+  for (const auto& [key, slot] : order) {
+    const bool cached = engine.planar.coveredLeaves(engine.store, slot, covered);
+    const std::vector<LeafEntry>& leaves = cached ? covered : index.brick(slot).leaves;
+    if (!leaves.empty()) fn(key, leaves);
+  }
+}
+
+}  // namespace
+
 std::uint64_t OccupancyMap::writtenSize() const {
-  engine_->ensureCovered();
-  const LeafIndex& index = engine_->store.index;
-  std::uint64_t bricks = 0;
-  index.forEachBrick([&](const Brick& b) { bricks += b.leaves.empty() ? 0 : 1; });
-  return kHeaderBytes + kBrickBytes * bricks + kLeafBytes * static_cast<std::uint64_t>(index.leafCount()) + 8;
+  const auto lock = engine_->lockReadableCache();
+  std::uint64_t bytes = kHeaderBytes + 8;
+  forEachCoveredBrick(*engine_, [&](const Key&, const std::vector<LeafEntry>& leaves) {
+    bytes += kBrickBytes + kLeafBytes * leaves.size();
+  });
+  return bytes;
 }
 
 void OccupancyMap::write(std::ostream& os) const {
-  engine_->ensureCovered();
+  const auto lock = engine_->lockReadableCache();
   const MapStore& store = engine_->store;
   const MapParams& params = store.params;
+  std::uint64_t count = 0;
+  forEachCoveredBrick(*engine_, [&](const Key&, const std::vector<LeafEntry>& leaves) { count += leaves.size(); });
   os.write(kMagic, sizeof(kMagic));
   Writer w(os);
   w.put(kFormatVersion);
@@ -123,35 +149,29 @@ void OccupancyMap::write(std::ostream& os) const {
   w.put(static_cast<std::uint8_t>(params.merge));
   w.put(params.rtree.max_entries);
   w.put(params.rtree.min_entries);
-  w.put(static_cast<std::uint64_t>(store.index.leafCount()));
+  w.put(count);
   // Bricks in key order, a brick's leaves by their (lo, hi) bytes, so equal maps give equal files.
-  std::vector<const Brick*> order;
-  order.reserve(store.index.brickCount());
-  store.index.forEachBrick([&](const Brick& b) {
-    if (!b.leaves.empty()) order.push_back(&b);
-  });
-  std::sort(order.begin(), order.end(), [](const Brick* a, const Brick* b) { return a->brick < b->brick; });
   const auto boxKey = [](const LeafEntry& l) {
     std::uint64_t k = 0;
     for (int a = 0; a < 3; ++a) k = k << 8 | l.lo[a];
     for (int a = 0; a < 3; ++a) k = k << 8 | l.hi[a];
     return k;
   };
-  std::vector<std::pair<std::uint64_t, const LeafEntry*>> leaves;
-  for (const Brick* b : order) {
-    leaves.clear();
-    for (const LeafEntry& l : b->leaves) leaves.emplace_back(boxKey(l), &l);
-    std::sort(leaves.begin(), leaves.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
-    for (int a = 0; a < 3; ++a) w.put(b->brick[a]);
-    w.put(static_cast<std::uint32_t>(leaves.size()));
-    for (const auto& kl : leaves) {
+  std::vector<std::pair<std::uint64_t, const LeafEntry*>> sorted;
+  forEachCoveredBrick(*engine_, [&](const Key& brick, const std::vector<LeafEntry>& leaves) {
+    sorted.clear();
+    for (const LeafEntry& l : leaves) sorted.emplace_back(boxKey(l), &l);
+    std::sort(sorted.begin(), sorted.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
+    for (int a = 0; a < 3; ++a) w.put(brick[a]);
+    w.put(static_cast<std::uint32_t>(sorted.size()));
+    for (const auto& kl : sorted) {
       std::uint8_t box[6];
       std::memcpy(box, kl.second->lo, 3);
       std::memcpy(box + 3, kl.second->hi, 3);
       w.put(box);
       w.put(kl.second->value);
     }
-  }
+  });
   const std::uint64_t sum = w.checksum();
   w.flush();
   os.write(reinterpret_cast<const char*>(&sum), sizeof(sum));

@@ -155,6 +155,82 @@ void PlanarCache::apply(MapStore& store, const std::vector<PlanarBatch>& planar_
   stats.cells_occupied += counts.occupied;
 }
 
+namespace {
+
+/// The known cells of a coded layer (every code but kUnknown).
+LayerMask knownOfCodes(const std::array<std::int8_t, kLayerCells>& code) {
+  LayerMask known{};
+  for (int y = 0; y < kBrickSize; ++y) {
+    const std::uint64_t row = ~detail::equalMask16(code.data() + y * kBrickSize, StepCodec::kUnknown) & 0xFFFFu;
+    known[static_cast<std::size_t>(y / 4)] |= row << ((y % 4) * kBrickSize);
+  }
+  return known;
+}
+
+/// The brick's leaves that lie outside its cached layers, whole or in parts (those crossing a
+/// cached layer keep their parts outside it), appended to `out`; returns the leaves cut.
+std::size_t leavesOutside(const std::vector<LeafEntry>& leaves, const PlanarLayer* const (&layer_at)[kBrickSize],
+                          std::vector<LeafEntry>& out, InsertStats* stats) {
+  std::size_t cut = 0;
+  for (const LeafEntry& e : leaves) {
+    bool crosses = false;
+    for (int z = e.lo[2]; z <= e.hi[2] && !crosses; ++z) crosses = layer_at[z] != nullptr;
+    if (!crosses) {
+      out.push_back(e);
+      continue;
+    }
+    for (int z = e.lo[2]; z <= e.hi[2]; ++z) {
+      if (layer_at[z]) continue;
+      int z1 = z;
+      while (z1 + 1 <= e.hi[2] && !layer_at[z1 + 1]) ++z1;
+      LeafEntry piece = e;
+      piece.lo[2] = static_cast<std::uint8_t>(z);
+      piece.hi[2] = static_cast<std::uint8_t>(z1);
+      out.push_back(piece);
+      if (stats) ++stats->leaves_created;
+      z = z1;
+    }
+    ++cut;
+  }
+  return cut;
+}
+
+/// The leaves of a lone coded layer whose known cells are `known`, appended to `out`.
+void coverCodes(const MapStore& store, const StepCodec& codec, const PlanarLayer& layer, const LayerMask& known,
+                std::vector<LeafEntry>& out) {
+  coverLayer(
+      known, layer.code.data(), layer.z, [&](std::int8_t c) { return store.mergeable(codec.value(c)); },
+      [&](const std::uint8_t lo[3], const std::uint8_t hi[3], std::int8_t c) {
+        out.push_back(makeLeaf(lo, hi, codec.value(c)));
+      });
+}
+
+}  // namespace
+
+bool PlanarCache::lonesInCodes() const {
+  std::vector<std::uint32_t> slots(layers_.size());
+  for (std::size_t i = 0; i < layers_.size(); ++i) {
+    if (layers_[i].form != LayerForm::Codes) return false;
+    slots[i] = layers_[i].slot;
+  }
+  std::sort(slots.begin(), slots.end());
+  return std::adjacent_find(slots.begin(), slots.end()) == slots.end();
+}
+
+bool PlanarCache::coveredLeaves(const MapStore& store, std::uint32_t slot, std::vector<LeafEntry>& out) const {
+  out.clear();
+  const PlanarLayer* layer_at[kBrickSize] = {};
+  const PlanarLayer* layer = nullptr;
+  for (int z = 0; z < kBrickSize && !layer; ++z) {
+    const std::uint32_t i = index_.find(std::uint64_t{slot} * kBrickSize + static_cast<std::uint64_t>(z));
+    if (i != detail::FlatHashMap64::kAbsent) layer = layer_at[z] = &layers_[i];
+  }
+  if (!layer) return false;
+  leavesOutside(store.index.brick(slot).leaves, layer_at, out, nullptr);
+  coverCodes(store, codec_, *layer, knownOfCodes(layer->code), out);
+  return true;
+}
+
 InsertStats PlanarCache::cover(MapStore& store) {
   LeafIndex& index = store.index;
   InsertStats stats;
@@ -178,11 +254,7 @@ InsertStats PlanarCache::cover(MapStore& store) {
     const bool lone_codes = end == i + 1 && layers_[order[i]].form == LayerForm::Codes;
     if (lone_codes) {
       PlanarLayer& layer = layers_[order[i]];
-      for (int y = 0; y < kBrickSize; ++y) {
-        const std::uint64_t row = ~detail::equalMask16(layer.code.data() + y * kBrickSize, StepCodec::kUnknown) & 0xFFFFu;
-        if (y % 4 == 0) layer.known[static_cast<std::size_t>(y / 4)] = 0;
-        layer.known[static_cast<std::size_t>(y / 4)] |= row << ((y % 4) * kBrickSize);
-      }
+      layer.known = knownOfCodes(layer.code);
     } else {
       for (std::size_t k = i; k < end; ++k)
         if (layers_[order[k]].form == LayerForm::Codes) decode(layers_[order[k]]);
@@ -196,35 +268,12 @@ InsertStats PlanarCache::cover(MapStore& store) {
     // Leaves outside the cached layers stay; those crossing them keep their parts outside.
     std::vector<LeafEntry>& leaves = index.mutableBrick(slot).leaves;
     out.clear();
-    for (const LeafEntry& e : leaves) {
-      bool crosses = false;
-      for (int z = e.lo[2]; z <= e.hi[2] && !crosses; ++z) crosses = layer_at[z] != nullptr;
-      if (!crosses) {
-        out.push_back(e);
-        continue;
-      }
-      for (int z = e.lo[2]; z <= e.hi[2]; ++z) {
-        if (layer_at[z]) continue;
-        int z1 = z;
-        while (z1 + 1 <= e.hi[2] && !layer_at[z1 + 1]) ++z1;
-        LeafEntry piece = e;
-        piece.lo[2] = static_cast<std::uint8_t>(z);
-        piece.hi[2] = static_cast<std::uint8_t>(z1);
-        out.push_back(piece);
-        ++stats.leaves_created;
-        z = z1;
-      }
-      ++stats.leaves_merged;
-    }
+    stats.leaves_merged += leavesOutside(leaves, layer_at, out, &stats);
     const auto valueAt = [&](int cell) { return values(*layer_at[cell / kLayerCells])[cell % kLayerCells]; };
     const std::size_t kept = out.size();
     if (lone_codes) {
       const PlanarLayer& layer = layers_[order[i - 1]];
-      coverLayer(
-          layer.known, layer.code.data(), layer.z, [&](std::int8_t c) { return store.mergeable(codec_.value(c)); },
-          [&](const std::uint8_t lo[3], const std::uint8_t hi[3], std::int8_t c) {
-            out.push_back(makeLeaf(lo, hi, codec_.value(c)));
-          });
+      coverCodes(store, codec_, layer, layer.known, out);
     } else if (layers == 1) {
       const PlanarLayer& layer = layers_[order[i - 1]];
       coverLayer(

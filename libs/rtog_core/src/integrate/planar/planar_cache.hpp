@@ -59,6 +59,13 @@ class PlanarCache {
   /// Covers the cached layers with leaves, brick by brick in slot order, and empties the cache.
   InsertStats cover(MapStore& store);
 
+  /// Whether every cached layer is its brick's only one and in codes (a 2D map's usual state):
+  /// then coveredLeaves() reads what cover() would make, without covering.
+  bool lonesInCodes() const;
+  /// If brick `slot` has a cached layer: its leaves as cover() would leave them (in another
+  /// order), into `out`, the cache and the map unchanged; false if it has none. Needs lonesInCodes().
+  bool coveredLeaves(const MapStore& store, std::uint32_t slot, std::vector<LeafEntry>& out) const;
+
  private:
   /// The layer of brick `brick` (brick coordinates) at global z, made from its leaves if new;
   /// recent ones skip the brick and layer hash lookups. In floats unless `codes` (then in codes
