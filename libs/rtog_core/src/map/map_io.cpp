@@ -115,8 +115,9 @@ void forEachCoveredBrick(const MapEngine& engine, Fn&& fn) {
   for (std::uint32_t slot = 0; slot < index.brickCount(); ++slot) order.emplace_back(index.brick(slot).brick, slot);
   std::sort(order.begin(), order.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
   std::vector<LeafEntry> covered;
+  const bool any_cached = !engine.planar.empty();
   for (const auto& [key, slot] : order) {
-    const bool cached = engine.planar.coveredLeaves(engine.store, slot, covered);
+    const bool cached = any_cached && engine.planar.coveredLeaves(engine.store, slot, covered);
     const std::vector<LeafEntry>& leaves = cached ? covered : index.brick(slot).leaves;
     if (!leaves.empty()) fn(key, leaves);
   }
