@@ -25,31 +25,32 @@ namespace rtog::cli {
 namespace {
 
 /// One redrawn line on a terminal, a plain line per 10 % otherwise; each when the percentage
-/// moves. The leaf count is asked for only then: reading a map covers its planar cache, which a
-/// 2D scan a time would otherwise pay at every scan.
+/// moves; nothing without a stream. The leaf count is asked for only then: reading a map covers
+/// its planar cache, which a 2D scan a time would otherwise pay at every scan (and a tile's
+/// build, whose progress nobody reads, would pay at every per cent under mpirun's terminal).
 class Progress {
  public:
-  Progress(std::ostream& out, std::size_t total, bool bar, std::string unit = "scans")
+  Progress(std::ostream* out, std::size_t total, bool bar, std::string unit = "scans")
       : out_(out), total_(total), bar_(bar), unit_(std::move(unit)) {}
   template <class Leaves>
   void update(std::size_t done, Leaves&& leaves) {
-    if (done == done_) return;
+    if (!out_ || done == done_) return;
     done_ = done;
     const int pct = total_ ? int(std::min<std::size_t>(100, 100 * done / total_)) : 100;
     if (bar_ && (pct != last_ || done == total_)) {
       const int filled = pct * 30 / 100;
-      out_ << "\r[" << std::string(std::size_t(filled), '#') << std::string(std::size_t(30 - filled), ' ') << "] "
+      *out_ << "\r[" << std::string(std::size_t(filled), '#') << std::string(std::size_t(30 - filled), ' ') << "] "
            << std::setw(3) << pct << "% " << done << "/" << total_ << " " << unit_ << ", " << leaves() << " leaves"
            << std::flush;
-      if (done == total_) out_ << "\n";
+      if (done == total_) *out_ << "\n";
     } else if (!bar_ && (pct / 10 != last_ / 10 || done == total_)) {
-      out_ << "progress " << pct << "% (" << done << "/" << total_ << " " << unit_ << ", " << leaves() << " leaves)\n";
+      *out_ << "progress " << pct << "% (" << done << "/" << total_ << " " << unit_ << ", " << leaves() << " leaves)\n";
     }
     last_ = pct;
   }
 
  private:
-  std::ostream& out_;
+  std::ostream* out_;
   std::size_t total_;
   bool bar_;
   std::string unit_;
@@ -113,8 +114,7 @@ BuildLog readBuildLog(const BuildOptions& o, std::ostream& out) {
 
 FeedFigures feedMap(const BuildOptions& o, const BuildLog& log, CRTreeOccupancyGridMap& map, std::ostream* progress_out) {
   FeedFigures f;
-  std::ostringstream quiet;
-  std::ostream& pout = progress_out ? *progress_out : quiet;
+  std::ostream* pout = progress_out;
   const auto timed = [&](auto&& insert) {
     const auto t0 = std::chrono::steady_clock::now();
     insert();
