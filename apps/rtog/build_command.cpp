@@ -158,9 +158,8 @@ FeedFigures feedMap(const BuildOptions& o, const BuildLog& log, CRTreeOccupancyG
   } else {
     Progress progress(pout, log.rawlog_entries, o.progress_bar, "rawlog entries");
     std::size_t index = 0;  // of the observation, for --scans
-    OdometryWalk walk;
-    const OdometryVisit visit = [&](const mrpt::obs::CObservation::Ptr& obs, const mrpt::poses::CPose3D& robot,
-                                    std::size_t entry) {
+    forEachRawlogObservation(o.rawlog_path, log.rawlog_entries, [&](const mrpt::obs::CObservation::Ptr& obs,
+                                                                     const mrpt::poses::CPose3D& robot, std::size_t entry) {
       if (!inRange(index++)) return;
       const std::size_t before = map.totalInsertStats.raysTotal();
       bool used = false;
@@ -168,9 +167,7 @@ FeedFigures feedMap(const BuildOptions& o, const BuildLog& log, CRTreeOccupancyG
       f.points += map.totalInsertStats.raysTotal() - before;
       f.scans += used;
       progress.update(entry + 1, leaves);
-    };
-    forEachRawlogEntry(o.rawlog_path, log.rawlog_entries,
-                       [&](const mrpt::serialization::CSerializable::Ptr& e, std::size_t i) { walk.feed(e, i, visit); });
+    });
     progress.update(log.rawlog_entries, leaves);
   }
   return f;
@@ -201,13 +198,10 @@ void forEachBeams(const BuildOptions& o, const BuildLog& log, const CRTreeOccupa
     }
   } else {
     std::size_t index = 0;
-    OdometryWalk walk;
-    const OdometryVisit visit = [&](const mrpt::obs::CObservation::Ptr& obs, const mrpt::poses::CPose3D& robot,
-                                    std::size_t) {
+    forEachRawlogObservation(o.rawlog_path, log.rawlog_entries, [&](const mrpt::obs::CObservation::Ptr& obs,
+                                                                     const mrpt::poses::CPose3D& robot, std::size_t) {
       if (inRange(index++) && map.extractBeams(*obs, robot, beams, true)) fn(beams.origin, beams.points);
-    };
-    forEachRawlogEntry(o.rawlog_path, log.rawlog_entries,
-                       [&](const mrpt::serialization::CSerializable::Ptr& e, std::size_t i) { walk.feed(e, i, visit); });
+    });
   }
 }
 

@@ -13,6 +13,7 @@
 
 #include "commands.hpp"
 #include "rtog/image/tum_dataset.hpp"
+#include "rtog/mrpt/rawlog_poses.h"
 #include "rtog/mrpt/CRTreeOccupancyGridMap.h"
 
 namespace rtog::cli {
@@ -30,12 +31,12 @@ struct BuildLog {
 /// `allow_truncated` (then a warning to `out`, and only the entries before the cut are read).
 /// Returns the number of entries to read.
 std::size_t checkRawlog(const std::string& path, bool allow_truncated, std::ostream& out);
-/// Reads the first `entries` entries of a checked rawlog one at a time, fn(entry, index) each, as
+/// Reads the first `entries` entries of a checked rawlog one at a time, as
 /// CRawlog::loadFromRawLogFile takes them (a whole CRawlog gives its own entries; comments are
-/// skipped): the log is never held whole. Throws std::runtime_error naming an entry that is not an
-/// action, a sensory frame or an observation.
-void forEachRawlogEntry(const std::string& path, std::size_t entries,
-                        const std::function<void(const mrpt::serialization::CSerializable::Ptr&, std::size_t)>& fn);
+/// skipped), and visits each observation at its odometry pose (rtog::OdometryWalk): the log is
+/// never held whole. Throws std::runtime_error naming an entry that is not an action, a sensory
+/// frame or an observation.
+void forEachRawlogObservation(const std::string& path, std::size_t entries, const OdometryVisit& visit);
 
 /// The options' checks of every build (one source, --pose-uncertainty's conditions).
 void checkBuildOptions(const BuildOptions& o);

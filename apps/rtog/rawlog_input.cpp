@@ -214,8 +214,9 @@ std::size_t checkRawlog(const std::string& path, bool allow_truncated, std::ostr
   return c.entries;
 }
 
-void forEachRawlogEntry(const std::string& path, std::size_t entries,
-                        const std::function<void(const mrpt::serialization::CSerializable::Ptr&, std::size_t)>& fn) {
+void forEachRawlogObservation(const std::string& path, std::size_t entries, const OdometryVisit& visit) {
+  OdometryWalk walk;
+  const auto fn = [&](const mrpt::serialization::CSerializable::Ptr& e, std::size_t i) { walk.feed(e, i, visit); };
   // The same bytes again, now known to be readable (they were, in the child).
   mrpt::io::CFileGZInputStream f(path);
   auto ar = mrpt::serialization::archiveFrom(f);

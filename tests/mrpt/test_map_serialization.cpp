@@ -108,7 +108,8 @@ TEST(MapSerialization, FileRoundTripAndRepresentation) {
   std::filesystem::remove_all(dir);
 }
 
-TEST(MapSerialization, CloneAndMultiMapCopyAreFastAndEqual) {
+// The copy's time is printed, a figure to read, not a bound (doc/benchmarks.md has the map-copy row).
+TEST(MapSerialization, CloneAndMultiMapCopyAreEqual) {
   const auto m = senaMap(40);
   const auto t0 = std::chrono::steady_clock::now();
   auto c = std::dynamic_pointer_cast<CRTreeOccupancyGridMap>(mrpt::rtti::CObject::Ptr(m.clone()));
@@ -134,9 +135,6 @@ TEST(MapSerialization, CloneAndMultiMapCopyAreFastAndEqual) {
   const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t1).count() / 10;
   std::printf("map with %zu leaves: one serialization copy %.2f ms (clone %.2f ms)\n", m.map().leafCount(), ms,
               std::chrono::duration<double, std::milli>(t1 - t0).count());
-#ifndef RTOG_SANITIZED  // sanitizers slow the copy down several times over: no time bound there
-  EXPECT_LT(ms, 200.0);
-#endif
 }
 
 TEST(MapSerialization, CorruptStreamThrows) {
@@ -164,6 +162,30 @@ TEST(MapSerialization, BackedGridRoundTrip) {
   EXPECT_EQ(g.getSizeX(), back->getSizeX());
   EXPECT_EQ(g.getSizeY(), back->getSizeY());
   EXPECT_TRUE(g.getRawMap() == back->getRawMap());
+}
+
+// rtreeGridMap2D saves what COccupancyGridMap2D saves (its picture and limits, the stock grid's
+// own files, byte for byte) and the R-tree map's .rtog, not the cuboids' scene and slice.
+TEST(MapSerialization, BackedGridSavesTheGridsFilesAndItsMap) {
+  rtog::CRTreeBackedGridMap2D g(0.05);
+  for (const auto& f : loadOdometryFrames(dataset(kSena), 20)) f.sf->insertObservationsInto(g, f.pose);
+  const auto dir = std::filesystem::temp_directory_path() / "rtog_mrpt_test_backed_io";
+  std::filesystem::create_directories(dir);
+  const std::string ours = (dir / "ours").string(), stock = (dir / "stock").string();
+  g.saveMetricMapRepresentationToFile(ours);
+  g.COccupancyGridMap2D::saveMetricMapRepresentationToFile(stock);
+  const auto bytes = [](const std::string& file) {
+    std::ifstream f(file, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(f), {});
+  };
+  for (const char* ext : {".png", "_limits.txt"}) {
+    ASSERT_TRUE(std::filesystem::exists(ours + ext)) << ext;
+    EXPECT_TRUE(bytes(ours + ext) == bytes(stock + ext)) << ext;
+  }
+  EXPECT_FALSE(std::filesystem::exists(ours + ".3Dscene"));
+  EXPECT_FALSE(std::filesystem::exists(ours + "_slice.png"));
+  expectSame(g.rtreeMap(), *CRTreeOccupancyGridMap::loadFromFile(ours + ".rtog"));
+  std::filesystem::remove_all(dir);
 }
 
 TEST(MapSerialization, VisualizationDrawsOccupiedCuboids) {
