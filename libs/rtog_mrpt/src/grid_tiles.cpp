@@ -7,7 +7,7 @@
 
 namespace rtog {
 
-GridTiles::GridTiles(const TGridFrame2D& frame) { setFrame(frame); }
+GridTiles::GridTiles(const TGridFrame2D& frame) : occupied_below_(occupiedBelow()) { setFrame(frame); }
 
 void GridTiles::setFrame(const TGridFrame2D& f) {
   const std::int32_t ox = mrpt_grid::keyOffsetX(f), oy = mrpt_grid::keyOffsetY(f);
@@ -30,12 +30,15 @@ void GridTiles::setFrame(const TGridFrame2D& f) {
 }
 
 void GridTiles::setCell(std::int32_t kx, std::int32_t ky, std::int8_t v) {
-  const std::size_t t = tileOf(kx, ky);
-  const Tile& seen = (*tiles_)[t];
-  const std::size_t i = within(kx, ky);
-  if ((seen.cells ? seen.cells->v[i] : 0) == v) return;
-  Tile& tile = tiles_.write()[t];
-  tile.cells.write().v[i] = v;
+  setOccupied(tileOf(kx, ky), within(kx, ky), static_cast<float>(v) < occupied_below_);
+}
+
+void GridTiles::setOccupied(std::size_t t, std::size_t i, bool occupied) {
+  const std::uint32_t bit = std::uint32_t{1} << (i & kMask);
+  const Occupied* seen = (*tiles_)[t].occupied.get();
+  if (((seen && (seen->rows[i >> kBits] & bit)) != 0) == occupied) return;
+  std::uint32_t& row = tiles_.write()[t].occupied.write().rows[i >> kBits];
+  row = occupied ? row | bit : row & ~bit;
   if (changed_.empty() || changed_.back() != t) changed_.push_back(static_cast<std::uint32_t>(t));
 }
 
@@ -59,12 +62,12 @@ void GridTiles::dropStaleTerms(int window) {
 
 void GridTiles::loadDense(const std::int8_t* dense) {
   const std::int32_t sx = static_cast<std::int32_t>(frame_.size_x), sy = static_cast<std::int32_t>(frame_.size_y);
-  std::vector<Tile>& tiles = tiles_.write();
   for (std::int32_t cy = 0; cy < sy; ++cy)
     for (std::int32_t cx = 0; cx < sx; ++cx)
-      if (const std::int8_t c = dense[static_cast<std::size_t>(cy) * static_cast<std::size_t>(sx) + static_cast<std::size_t>(cx)])
-        tiles[tileAt(cx, cy)].cells.write().v[inTile(cx, cy)] = c;
-  for (Tile& t : tiles) t.terms.drop();
+      if (dense[static_cast<std::size_t>(cy) * static_cast<std::size_t>(sx) + static_cast<std::size_t>(cx)] < occupied_below_)
+        setOccupied(tileAt(cx, cy), inTile(cx, cy), true);
+  changed_.clear();
+  for (Tile& t : tiles_.write()) t.terms.drop();
 }
 
 void GridTiles::useOptions(const FieldConstants& f, bool logs) {
@@ -97,11 +100,13 @@ double GridTiles::scanLogLikelihood(const FieldGrid& g, const mrpt::obs::CObserv
   const auto row = [&](int y, int x0, int x1, auto&& visit) {
     for (int x = x0; x <= x1;) {
       const Tile& t = tiles[tileAt(x, y)];
-      const int n = std::min(x1 - x + 1, kSide - ((x + ux0_) & kMask));
-      if (t.cells) {
-        const std::int8_t* c = t.cells->v.data() + inTile(x, y);
-        for (int i = 0; i < n; ++i) visit(x + i, c[i]);
-      }  // else unknown cells: none occupied
+      const int first = (x + ux0_) & kMask;
+      const int n = std::min(x1 - x + 1, kSide - first);
+      if (t.occupied) {  // else no cell occupied
+        std::uint32_t bits = t.occupied->rows[static_cast<std::size_t>((y + uy0_) & kMask)] >> first;
+        if (n < kSide) bits &= (std::uint32_t{1} << n) - 1;
+        for (; bits; bits &= bits - 1) visit(x + __builtin_ctz(bits));
+      }
       x += n;
     }
   };

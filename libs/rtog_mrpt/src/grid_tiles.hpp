@@ -1,8 +1,10 @@
 // Private to librtog_mrpt: the 2D view of a map in the mrpt_grid preset as copy-on-write tiles
-// of MRPT cells, with the likelihood field's terms beside them. Copies of a map (the particles of
-// rbpf-slam) share their tiles; a scan inserted into one copy clones the tiles it steps and drops
-// the terms near them, so that no operation on the likelihood path costs O(map) per scan, and a
-// copy costs a pointer per tile.
+// of what the likelihood field reads of MRPT's cells, whether each is occupied (one bit), with
+// the field's terms beside them. Copies of a map (the particles of rbpf-slam) share their tiles;
+// a scan inserted into one copy clones only the tiles where it turned a cell occupied or not
+// occupied, and drops the terms near them, so that no operation on the likelihood path costs
+// O(map) per scan, and a copy costs a pointer per tile. A scan's steps change many cells' values
+// but few cells' side of the threshold: the tiles copies clone are few, and 1/8 of the cells'.
 //
 // Tiles are aligned to the lattice (key / 32), not to the grid's cells, so that a grid that grows
 // (MRPT's resizeGrid moves its origin) keeps every tile. The array of tile pointers is shared too:
@@ -31,12 +33,7 @@ class GridTiles {
   /// Moves to the geometry of `frame` (a grown grid), keeping the tiles it still covers.
   void setFrame(const TGridFrame2D& frame);
 
-  /// The cell at grid indices (cx, cy), which must lie in the grid.
-  std::int8_t cell(int cx, int cy) const {
-    const Tile& t = (*tiles_)[tileAt(cx, cy)];
-    return t.cells ? t.cells->v[inTile(cx, cy)] : std::int8_t{0};
-  }
-  /// Sets the cell of lattice column (kx, ky), which must lie in the grid.
+  /// Sets the cell of lattice column (kx, ky), which must lie in the grid, to MRPT cell value v.
   void setCell(std::int32_t kx, std::int32_t ky, std::int8_t v);
   /// Drops the kept terms that the cells set since the last call may have changed.
   void dropStaleTerms(int window);
@@ -51,9 +48,11 @@ class GridTiles {
 
 
  private:
-  struct Cells {
-    std::array<std::int8_t, kCells> v{};
+  /// Per row of the tile, bit x: whether cell x is occupied (occupiedBelow()).
+  struct Occupied {
+    std::array<std::uint32_t, kSide> rows{};
   };
+  static_assert(kSide == 32, "a row of a tile is one word");
   /// Per cell the kept squared distance (FieldConstants units) to the nearest occupied cell.
   struct Terms {
     static constexpr std::uint16_t kNone = 0xFFFF;
@@ -61,7 +60,7 @@ class GridTiles {
     std::array<std::uint16_t, kCells> best;
   };
   struct Tile {
-    detail::CowPtr<Cells> cells{nullptr};
+    detail::CowPtr<Occupied> occupied{nullptr};
     detail::CowPtr<Terms> terms{nullptr};
   };
   static std::int32_t tileCoord(std::int32_t k) { return k >= 0 ? k >> kBits : -((-k + kSide - 1) >> kBits); }
@@ -82,6 +81,8 @@ class GridTiles {
   std::size_t inTile(int cx, int cy) const {
     return static_cast<std::size_t>((((cy + uy0_) & kMask) << kBits) | ((cx + ux0_) & kMask));
   }
+  /// Sets the bit of cell `i` (its index in the tile) of tile `t` to `occupied`.
+  void setOccupied(std::size_t t, std::size_t i, bool occupied);
   /// The kept term of each distance, for the options they were kept with.
   void useOptions(const FieldConstants& f, bool logs);
 
@@ -92,7 +93,8 @@ class GridTiles {
   std::int32_t ux0_ = 0, uy0_ = 0;  // cells of the first tile before the grid's first
   /// The tiles, row by row; the array itself is shared by copies until one changes a tile.
   detail::CowPtr<std::vector<Tile>> tiles_{nullptr};
-  std::vector<std::uint32_t> changed_;  // tiles whose cells were set since dropStaleTerms()
+  std::vector<std::uint32_t> changed_;  // tiles whose bits changed since dropStaleTerms()
+  float occupied_below_;                // occupiedBelow()
   // What the kept distances were computed with, and the term of each distance.
   std::optional<FieldConstants> field_;
   bool logs_ = true;

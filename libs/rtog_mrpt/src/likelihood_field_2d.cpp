@@ -23,7 +23,8 @@ double onDenseGrid(const Grid& g, const mrpt::obs::CObservation2DRangeScan& scan
   const auto& raw = g.getRawMap();
   const auto row = [&](int y, int x0, int x1, auto&& visit) {
     const auto* r = raw.data() + static_cast<std::size_t>(y) * static_cast<std::size_t>(sx);
-    for (int x = x0; x <= x1; ++x) visit(x, r[x]);
+    for (int x = x0; x <= x1; ++x)
+      if (r[x] < f.threshold) visit(x);
   };
   const FieldGrid fg{&g.insertionOptions, &g.likelihoodOptions, g.getResolution(), g.getXMin(), g.getYMin(),
                      g.getSizeX(), g.getSizeY()};
@@ -44,8 +45,10 @@ FieldConstants::FieldConstants(const Grid::TLikelihoodOptions& o, double res) {
   capUnits = static_cast<unsigned>(mrpt::round(maxCorrDistSq * unitsPerSqMetre));
   window = static_cast<int>(std::ceil(o.LF_maxCorrsDistance / res));
   squareDist = o.LF_useSquareDist;
-  threshold = Grid::p2l(0.5f);
+  threshold = occupiedBelow();
 }
+
+float occupiedBelow() { return Grid::p2l(0.5f); }
 
 FieldScan prepareFieldScan(const FieldGrid& g, const FieldConstants& f, const mrpt::obs::CObservation2DRangeScan& scan,
                            const mrpt::poses::CPose3D& pose3d) {

@@ -18,6 +18,9 @@
 
 namespace rtog {
 
+/// The field's occupied cells: those below this (P(occupied) > 0.5), as the stock grid's.
+float occupiedBelow();
+
 /// The field's constants in the precision the stock grid computes them in (floats where its
 /// options are floats), so that every term is the same number.
 struct FieldConstants {
@@ -28,7 +31,7 @@ struct FieldConstants {
   unsigned capUnits;            // the search's cap in those units
   int window;                   // cells searched either side
   bool squareDist;
-  float threshold;              // a cell below it counts as occupied (P(occupied) > 0.5)
+  float threshold;              // occupiedBelow(): a cell below it counts as occupied
   bool operator==(const FieldConstants& o) const {
     return zRandomTerm == o.zRandomTerm && zHit == o.zHit && q == o.q && maxCorrDistSq == o.maxCorrDistSq &&
            unitsPerSqMetre == o.unitsPerSqMetre && capUnits == o.capUnits && window == o.window &&
@@ -41,7 +44,8 @@ struct FieldConstants {
     return zRandomTerm + zHit * std::exp(q * dist);  // in floats, as the stock grid
   }
   /// The squared distance (units, capped) of the nearest occupied cell in the window about
-  /// (cx, cy), clipped to [0, sx) x [0, sy); row(y, x0, x1) gives the cells x0..x1 of row y.
+  /// (cx, cy), clipped to [0, sx) x [0, sy); row(y, x0, x1, visit) calls visit(x) for each
+  /// occupied cell x0..x1 of row y.
   template <class Row>
   unsigned bestAt(int cx, int cy, int sx, int sy, Row&& row) const {
     const int x0 = std::max(0, cx - window), x1 = std::min(sx - 1, cx + window);
@@ -50,11 +54,9 @@ struct FieldConstants {
     for (int y = y0; y <= y1; ++y) {
       const auto dy = static_cast<unsigned>(10 * (y - cy));
       const unsigned dy2 = dy * dy;
-      row(y, x0, x1, [&](int x, std::int8_t c) {
-        if (c < threshold) {
-          const auto dx = static_cast<unsigned>(10 * (x - cx));  // squared modulo 2^32: the same
-          best = std::min(best, dx * dx + dy2);
-        }
+      row(y, x0, x1, [&](int x) {
+        const auto dx = static_cast<unsigned>(10 * (x - cx));  // squared modulo 2^32: the same
+        best = std::min(best, dx * dx + dy2);
       });
     }
     return best;
