@@ -14,7 +14,7 @@ set(CPACK_PACKAGING_INSTALL_PREFIX /usr)
 set(CPACK_DEBIAN_FILE_NAME DEB-DEFAULT)
 set(CPACK_DEBIAN_PACKAGE_SECTION science)
 set(CPACK_DEBIAN_PACKAGE_SHLIBDEPS ON)
-set(CPACK_DEBIAN_PACKAGE_DEPENDS "libeigen3-dev, libmrpt-dev, libopencv-dev")
+set(CPACK_DEBIAN_PACKAGE_DEPENDS "libeigen3-dev, libmrpt-dev, libopencv-dev, libpng-dev")
 if(RTOG_BUILD_PYTHON)
   # The extension's ABI tag (cpython-3XY) is one interpreter's.
   set(py "${Python3_VERSION_MAJOR}.${Python3_VERSION_MINOR}")

@@ -7,11 +7,11 @@
 #include <vector>
 
 #include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "accuracy.hpp"
 #include "plot_common.hpp"
+#include "rtog/image/picture.hpp"
 
 namespace rtog::accuracy {
 
@@ -88,10 +88,7 @@ void writeRocPng(const Report& r, std::ostream& os) {
   std::snprintf(title, sizeof title, "ROC of P(occupied) vs ground truth - synthetic world seed %u, %.2f m cells",
                 r.config.seed, r.config.resolution);
   text(img, title, cv::Point(20, 24), 0.6, {0, 0, 0}, 1);
-  std::vector<unsigned char> bytes;
-  if (!cv::imencode(".png", img, bytes, {cv::IMWRITE_PNG_COMPRESSION, 9}))
-    throw std::runtime_error("cannot encode the ROC plot as PNG");
-  os.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+  os << image::encodePng(img);
 }
 
 }  // namespace rtog::accuracy

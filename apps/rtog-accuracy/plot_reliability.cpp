@@ -10,11 +10,11 @@
 #include <vector>
 
 #include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "accuracy.hpp"
 #include "plot_common.hpp"
+#include "rtog/image/picture.hpp"
 
 namespace rtog::accuracy {
 
@@ -81,10 +81,7 @@ void writeReliabilityPng(const Report& r, std::ostream& os) {
   std::snprintf(title, sizeof title, "Reliability of P(occupied) vs ground truth - synthetic world seed %u, %.2f m cells, %d bins",
                 r.config.seed, r.config.resolution, sim::kCalibrationBins);
   plot::text(img, title, cv::Point(20, 24), 0.6);
-  std::vector<unsigned char> bytes;
-  if (!cv::imencode(".png", img, bytes, {cv::IMWRITE_PNG_COMPRESSION, 9}))
-    throw std::runtime_error("cannot encode the reliability plot as PNG");
-  os.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+  os << image::encodePng(img);
 }
 
 }  // namespace rtog::accuracy

@@ -9,12 +9,12 @@
 #include <stdexcept>
 
 #include <nlohmann/json.hpp>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "bench.hpp"
 #include "first_scan.hpp"
 #include "rtog/app/output_files.hpp"
+#include "rtog/image/picture.hpp"
 
 namespace rtog::bench {
 namespace {
@@ -78,9 +78,7 @@ void barChart(const std::vector<std::pair<std::string, double>>& bars, const std
     v << std::setprecision(3) << bars[i].second;
     cv::putText(img, v.str(), {left + len + 6, y + 17}, cv::FONT_HERSHEY_SIMPLEX, 0.42, {0, 0, 0}, 1, cv::LINE_AA);
   }
-  std::vector<unsigned char> bytes;
-  if (!cv::imencode(".png", img, bytes)) throw std::runtime_error("cannot encode the chart '" + title + "' as PNG");
-  png.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+  png << image::encodePng(img);
 }
 
 /// The dataset and resolution pairs of the bench's own rows (the first-scan rows have their own).

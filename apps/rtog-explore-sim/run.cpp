@@ -8,10 +8,10 @@
 #include <vector>
 
 #include <nlohmann/json.hpp>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "rtog/app/output_files.hpp"
+#include "rtog/image/picture.hpp"
 #include "rtog/sim/exploration.hpp"
 
 namespace rtog::explore_sim {
@@ -94,15 +94,10 @@ int run(const Config& c, std::ostream& out) {
       const std::vector<ExplorationStep> runs[2] = {all[2 * w], all[2 * w + 1]};
       panel(img, a, c.first_seed + w, runs, max_x, by_views);
     }
-    std::vector<unsigned char> bytes;
-    cv::imencode(".png", img, bytes);
-    return bytes;
+    return image::encodePng(img);
   };
   for (const auto& [stream, by_views] : {std::pair{png, false}, std::pair{views_png, true}})
-    if (stream) {
-      const std::vector<unsigned char> bytes = plot(by_views);
-      stream->write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
-    }
+    if (stream) *stream << plot(by_views);
   files.commit();
   return 0;
 }

@@ -21,11 +21,11 @@
 #include <mrpt/serialization/CArchive.h>
 #include <mrpt/serialization/archiveFrom_std_streams.h>
 #include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "rtog/app/output_files.hpp"
 #include "simlog.hpp"
+#include "rtog/image/picture.hpp"
 
 namespace rtog::simlog {
 namespace {
@@ -167,9 +167,7 @@ void writePng(const mrpt::maps::COccupancyGridMap2D& grid, const std::vector<TPo
   for (const TPoint2D& p : loop) pts.emplace_back(grid.x2idx(p.x), sy - 1 - grid.y2idx(p.y));
   cv::polylines(img, pts, true, cv::Scalar(0, 0, 255), 3);
   cv::circle(img, pts.front(), 12, cv::Scalar(0, 160, 0), -1);
-  std::vector<unsigned char> bytes;
-  if (!cv::imencode(".png", img, bytes)) throw std::runtime_error("cannot encode the --png image");
-  out.write(reinterpret_cast<const char*>(bytes.data()), std::streamsize(bytes.size()));
+  out << image::encodePng(img);
 }
 
 }  // namespace

@@ -22,7 +22,6 @@
 #include <sstream>
 #include <vector>
 
-#include <opencv2/imgcodecs.hpp>
 
 #include "rtog/core/mesh_export.hpp"
 #include "rtog/core/octomap_export.hpp"

@@ -10,6 +10,7 @@
 #include <map>
 
 #include <mrpt/io/CMemoryStream.h>
+#include <mrpt/opengl/COpenGLScene.h>
 #include <mrpt/opengl/CSetOfObjects.h>
 #include <mrpt/opengl/CSetOfTriangles.h>
 #include <mrpt/maps/CMultiMetricMap.h>
@@ -203,6 +204,45 @@ TEST(MapSerialization, VisualizationDrawsOccupiedCuboids) {
   mrpt::opengl::CSetOfObjects none;
   m.getVisualizationInto(none);
   EXPECT_TRUE(none.empty());
+}
+
+// The .3Dscene is written set by set (an app saves its map when it holds the most): read back
+// by MRPT, its sets hold exactly getVisualizationInto's triangles, in order.
+TEST(MapSerialization, TheSceneFileHoldsTheDrawnCuboidsSetBySet) {
+  auto m = senaMap(40);
+  mrpt::opengl::CSetOfObjects drawn;
+  m.getVisualizationInto(drawn);
+  const auto all = drawn.getByClass<mrpt::opengl::CSetOfTriangles>();
+  ASSERT_TRUE(all);
+  const std::size_t cuboids = all->getTrianglesCount() / 12;
+  ASSERT_GT(cuboids, 512u) << "the map must fill more than one set of the file";
+  const std::string prefix = (std::filesystem::temp_directory_path() / "rtog_scene_sets").string();
+  m.saveMetricMapRepresentationToFile(prefix);
+  mrpt::opengl::COpenGLScene scene;
+  ASSERT_TRUE(scene.loadFromFile(prefix + ".3Dscene"));
+  const auto obj = scene.getByClass<mrpt::opengl::CSetOfObjects>();
+  ASSERT_TRUE(obj);
+  std::size_t sets = 0, t = 0;
+  for (const auto& o : *obj) {
+    const auto set = std::dynamic_pointer_cast<mrpt::opengl::CSetOfTriangles>(o);
+    ASSERT_TRUE(set);
+    EXPECT_EQ(set->getName(), "rtog_cuboids");
+    ++sets;
+    for (std::size_t i = 0; i < set->getTrianglesCount(); ++i, ++t) {
+      ASSERT_LT(t, all->getTrianglesCount());
+      mrpt::opengl::TTriangle a, b;
+      set->getTriangle(i, a);
+      all->getTriangle(t, b);
+      for (int v = 0; v < 3; ++v) {
+        EXPECT_EQ(a.vertices[v].xyzrgba.pt, b.vertices[v].xyzrgba.pt);
+        EXPECT_EQ(a.vertices[v].xyzrgba.r, b.vertices[v].xyzrgba.r);
+        EXPECT_EQ(a.vertices[v].xyzrgba.a, b.vertices[v].xyzrgba.a);
+      }
+    }
+  }
+  EXPECT_EQ(sets, (cuboids + 511) / 512);
+  EXPECT_EQ(t, all->getTrianglesCount());
+  for (const char* ext : {".rtog", ".3Dscene", "_slice.png"}) std::filesystem::remove(prefix + ext);
 }
 
 // Maps saved by earlier builds (serialization versions 0 and 1; tests/mrpt/data/README.md names

@@ -5,7 +5,6 @@
 #include <cstdio>
 #include <stdexcept>
 
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 namespace rtog::image {
@@ -154,12 +153,6 @@ const cv::Mat& Picture::finish() {
   text(img, std::to_string(scale_) + " px a cell", {x, y + 28});
   axes(img, {x + 10, y + 110}, 50);
   return canvas_;
-}
-
-std::string encodePng(const cv::Mat& image) {
-  std::vector<uchar> bytes;
-  if (!cv::imencode(".png", image, bytes, {cv::IMWRITE_PNG_COMPRESSION, 9})) throw std::runtime_error("cannot encode a PNG");
-  return std::string(bytes.begin(), bytes.end());
 }
 
 }  // namespace rtog::image

@@ -9,14 +9,13 @@
 #include <stdexcept>
 
 #include <mrpt/io/CFileGZOutputStream.h>
-#include <mrpt/opengl/COpenGLScene.h>
-#include <mrpt/opengl/CSetOfObjects.h>
 #include <mrpt/serialization/CArchive.h>
-#include <opencv2/imgcodecs.hpp>
 
+#include "rtog/image/picture.hpp"
 #include "rtog/image/slice.hpp"
 #include "rtog/mrpt/CRTreeOccupancyGridMap.h"
 #include "archive_read.hpp"
+#include "cuboid_scene.hpp"
 #include "mrpt_grid.hpp"
 #include "mrpt_grid3d.hpp"
 #include "stream_input.hpp"
@@ -199,18 +198,12 @@ std::shared_ptr<CRTreeOccupancyGridMap> CRTreeOccupancyGridMap::loadFromStream(s
 // at a time: apps save when they hold the most (rbpf-slam, every particle's map).
 void CRTreeOccupancyGridMap::saveMetricMapRepresentationToFile(const std::string& prefix) const {
   saveToFile(prefix + ".rtog");
-  {
-    mrpt::opengl::COpenGLScene scene;
-    auto obj = mrpt::opengl::CSetOfObjects::Create();
-    getVisualizationInto(*obj);
-    scene.insert(obj);
-    scene.saveToFile(prefix + ".3Dscene");
-  }
+  saveCuboidScene(*this, prefix + ".3Dscene");
   if (!isEmpty()) {
     const Box b = map_.keyBounds();
     const double z = (0.5 * (double(b.min.z) + double(b.max.z)) + 0.5) * map_.resolution();
     try {
-      cv::imwrite(prefix + "_slice.png", image::slicePicture(map_, z, false));
+      image::writePng(prefix + "_slice.png", image::slicePicture(map_, z, false));
     } catch (const std::exception&) {
       // A slice too large for an image is not an error of the map file itself.
     }

@@ -59,7 +59,11 @@ class Picture {
   PictureOptions o_;
 };
 
-/// The PNG bytes of an image (throws std::runtime_error if OpenCV cannot encode it).
+/// The PNG bytes of an 8-bit grey or BGR image (best compression); throws
+/// std::invalid_argument for another image, std::runtime_error if it cannot be encoded.
 std::string encodePng(const cv::Mat& image);
+/// Writes an 8-bit grey or BGR image to `path` as PNG (zlib's default compression); throws as
+/// encodePng, and std::runtime_error if the file cannot be written.
+void writePng(const std::string& path, const cv::Mat& image);
 
 }  // namespace rtog::image
