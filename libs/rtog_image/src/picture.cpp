@@ -53,9 +53,10 @@ void axes(cv::Mat& img, cv::Point o, int len) {
 
 }  // namespace
 
-Picture::Picture(const cv::Mat& cells, double x0, double y0, double resolution, PictureOptions options)
-    : rows_(cells.rows), cols_(cells.cols), x0_(x0), y0_(y0), res_(resolution), o_(std::move(options)) {
-  if (cells.empty()) throw std::invalid_argument("picture: the image has no cells");
+Picture::Picture(int rows, int cols, const cv::Vec3b& background, double x0, double y0, double resolution,
+                 PictureOptions options)
+    : rows_(rows), cols_(cols), x0_(x0), y0_(y0), res_(resolution), o_(std::move(options)) {
+  if (rows <= 0 || cols <= 0) throw std::invalid_argument("picture: the image has no cells");
   if (!(std::isfinite(resolution) && resolution > 0.0)) throw std::invalid_argument("picture: bad resolution");
   const int side = std::max(rows_, cols_);
   scale_ = std::clamp((std::max(1, o_.target_pixels) + side - 1) / side, 1, 16);
@@ -63,6 +64,13 @@ Picture::Picture(const cv::Mat& cells, double x0, double y0, double resolution, 
   const int legend_h = 40 + 24 * int(o_.legend.size()) + (o_.probability_ramp ? 64 : 0) + 150;
   canvas_ = cv::Mat(kTop + std::max(plot_.height, legend_h) + kBottom, kLeft + plot_.width + kGap + kPanel, CV_8UC3,
                     kWhite);
+  canvas_(plot_).setTo(cv::Scalar(background[0], background[1], background[2]));
+}
+
+Picture::Picture(const cv::Mat& cells, double x0, double y0, double resolution, PictureOptions options)
+    : Picture(std::max(cells.rows, 1), std::max(cells.cols, 1), cv::Vec3b(255, 255, 255), x0, y0, resolution,
+              std::move(options)) {
+  if (cells.empty()) throw std::invalid_argument("picture: the image has no cells");
   if (cells.type() == CV_8UC3) {
     cv::Mat plot = canvas_(plot_);
     cv::resize(cells, plot, plot_.size(), 0, 0, cv::INTER_NEAREST);
@@ -73,11 +81,7 @@ Picture::Picture(const cv::Mat& cells, double x0, double y0, double resolution, 
   if (cells.type() != CV_8UC1) throw std::invalid_argument("picture: cells must be 8-bit grey or colour");
   for (int r = 0; r < rows_; ++r) {
     const std::uint8_t* in = cells.ptr<std::uint8_t>(r);
-    for (int dy = 0; dy < scale_; ++dy) {
-      auto* out = canvas_.ptr<cv::Vec3b>(plot_.y + r * scale_ + dy) + plot_.x;
-      for (int c = 0; c < cols_; ++c)
-        for (int dx = 0; dx < scale_; ++dx) *out++ = cv::Vec3b(in[c], in[c], in[c]);
-    }
+    for (int c = 0; c < cols_; ++c) paintCell(c, r, cv::Vec3b(in[c], in[c], in[c]));
   }
 }
 

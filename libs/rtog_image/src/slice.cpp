@@ -33,6 +33,15 @@ void forEachSliceCell(const OccupancyMap& map, const Box& bounds, const Key& zk,
   });
 }
 
+/// A known cell's grey: in the occupancy slice, by its state; in the probability slice, 255 (1 - P).
+std::uint8_t stateGrey(const LogOddsModel& model, float v) {
+  return model.classify(v) == CellState::Occupied ? kSliceOccupied : kSliceFree;
+}
+std::uint8_t probabilityGrey(float v) {
+  const double p = 1.0 / (1.0 + std::exp(-double(v)));
+  return static_cast<std::uint8_t>(std::lround(255.0 * (1.0 - p)));
+}
+
 }  // namespace
 
 cv::Mat rasterizeSliceZ(const OccupancyMap& map, double z) {
@@ -42,7 +51,7 @@ cv::Mat rasterizeSliceZ(const OccupancyMap& map, double z) {
               cv::Scalar(kSliceUnknown));
   const LogOddsModel& model = map.logOddsModel();
   forEachSliceCell(map, bounds, zk, [&](std::int64_t r, std::int64_t c, float v) {
-    img.ptr<std::uint8_t>(static_cast<int>(r))[c] = model.classify(v) == CellState::Occupied ? kSliceOccupied : kSliceFree;
+    img.ptr<std::uint8_t>(static_cast<int>(r))[c] = stateGrey(model, v);
   });
   return img;
 }
@@ -53,18 +62,16 @@ cv::Mat rasterizeSliceProbabilityZ(const OccupancyMap& map, double z) {
   cv::Mat img(static_cast<int>(bounds.extent(1)), static_cast<int>(bounds.extent(0)), CV_8UC3,
               cv::Scalar(kSliceUnknownColour[0], kSliceUnknownColour[1], kSliceUnknownColour[2]));
   forEachSliceCell(map, bounds, zk, [&](std::int64_t r, std::int64_t c, float v) {
-    const double p = 1.0 / (1.0 + std::exp(-double(v)));
-    const auto g = static_cast<std::uint8_t>(std::lround(255.0 * (1.0 - p)));
     std::uint8_t* px = img.ptr<std::uint8_t>(static_cast<int>(r)) + 3 * c;
-    px[0] = px[1] = px[2] = g;
+    px[0] = px[1] = px[2] = probabilityGrey(v);
   });
   return img;
 }
 
 cv::Mat slicePicture(const OccupancyMap& map, double z, bool probability) {
-  const cv::Mat cells = probability ? rasterizeSliceProbabilityZ(map, z) : rasterizeSliceZ(map, z);
-  const Box b = map.keyBounds();
-  const Eigen::Vector3d lo = map.lattice().boxMin(b);
+  Key zk;
+  const Box bounds = sliceGeometry(map, z, zk);
+  const Eigen::Vector3d lo = map.lattice().boxMin(bounds);
   PictureOptions o;
   char title[64];
   std::snprintf(title, sizeof title, "slice at z = %g m", z);
@@ -77,7 +84,14 @@ cv::Mat slicePicture(const OccupancyMap& map, double z, bool probability) {
   } else {
     o.legend = {{grey(kSliceOccupied), "occupied"}, {grey(kSliceFree), "free"}, {grey(kSliceUnknown), "unknown"}};
   }
-  Picture pic(cells, lo.x(), lo.y(), map.resolution(), o);
+  // The cells painted into the picture as they come: an image of them beside the canvas would
+  // be a second copy of the slice when an app saves its map, holding the most.
+  Picture pic(static_cast<int>(bounds.extent(1)), static_cast<int>(bounds.extent(0)),
+              probability ? unknown : grey(kSliceUnknown), lo.x(), lo.y(), map.resolution(), o);
+  const LogOddsModel& model = map.logOddsModel();
+  forEachSliceCell(map, bounds, zk, [&](std::int64_t r, std::int64_t c, float v) {
+    pic.paintCell(static_cast<int>(c), static_cast<int>(r), grey(probability ? probabilityGrey(v) : stateGrey(model, v)));
+  });
   return pic.finish();  // shares the canvas, which outlives the picture
 }
 

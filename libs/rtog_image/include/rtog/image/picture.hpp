@@ -36,6 +36,18 @@ class Picture {
   /// cell's lower-left corner lies at (x0, y0) [m]; cells `resolution` [m] wide. Throws
   /// std::invalid_argument for an empty image or a resolution that is not a positive number.
   Picture(const cv::Mat& cells, double x0, double y0, double resolution, PictureOptions options = {});
+  /// A picture of rows x cols cells, all `background` (BGR) until paintCell(): for cells that
+  /// come one by one (a map's slice), without an image of them beside the canvas.
+  Picture(int rows, int cols, const cv::Vec3b& background, double x0, double y0, double resolution,
+          PictureOptions options = {});
+
+  /// Paints cell (column, row) `colour` (BGR), as the constructor paints a cell of `cells`.
+  void paintCell(int column, int row, const cv::Vec3b& colour) {
+    for (int dy = 0; dy < scale_; ++dy) {
+      auto* out = canvas_.ptr<cv::Vec3b>(plot_.y + row * scale_ + dy) + plot_.x + column * scale_;
+      for (int dx = 0; dx < scale_; ++dx) out[dx] = colour;
+    }
+  }
 
   /// The pixel of map point p [m] (overlays: paths, segments).
   cv::Point toPixel(const Eigen::Vector2d& p) const;
