@@ -5,8 +5,10 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
 
 #include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
 
 #include "rtog/image/picture.hpp"
 #include "rtog/image/slice.hpp"
@@ -71,6 +73,25 @@ TEST(Picture, SlicePictureIsReadableAndShowsEveryCell) {
       EXPECT_TRUE(pic.cellRect(c, r).contains(pic.toPixel(centre))) << c << " " << r;
     }
   }
+}
+
+// The picture written band by band (an app's end save) is the picture drawn whole, pixel for pixel.
+TEST(Picture, ASlicePictureWrittenByBandsIsThePictureDrawnWhole) {
+  const rtog::OccupancyMap& m = senaMap();
+  const double z = 0.5 * m.resolution();
+  const std::string path = (std::filesystem::temp_directory_path() / "rtog_banded_slice.png").string();
+  for (const bool probability : {false, true}) {
+    const cv::Mat whole = rtog::image::slicePicture(m, z, probability);
+    rtog::image::writeSlicePicture(m, z, probability, path);
+    const cv::Mat banded = cv::imread(path, cv::IMREAD_COLOR);
+    ASSERT_EQ(banded.size(), whole.size()) << "probability " << probability;
+    ASSERT_GT(whole.rows, 64 * 3) << "the picture must span several bands";
+    cv::Mat diff;
+    cv::absdiff(whole, banded, diff);
+    EXPECT_EQ(cv::countNonZero(diff.reshape(1)), 0) << "probability " << probability;
+  }
+  std::filesystem::remove(path);
+  EXPECT_THROW(rtog::image::writeSlicePicture(m, z, false, "/nonexistent-dir/x.png"), std::runtime_error);
 }
 
 TEST(Picture, BigGridsKeepOnePixelACellAndBadInputIsRefused) {

@@ -10,6 +10,7 @@
 #include <stdexcept>
 #include <vector>
 
+#include "png_rows.hpp"
 #include "rtog/image/picture.hpp"
 
 namespace rtog::image {
@@ -36,32 +37,39 @@ struct PngWriter {
   static void onWarning(png_structp, png_const_charp) {}
 };
 
+/// libpng's output function for a sink with append(data, n).
+template <class Sink>
+void writeToSink(png_structp p, png_bytep data, png_size_t n) {
+  bool stored = true;
+  try {
+    static_cast<Sink*>(png_get_io_ptr(p))->append(reinterpret_cast<const char*>(data), n);
+  } catch (...) {  // no exception may cross libpng's C frames
+    stored = false;
+  }
+  if (!stored) png_error(p, "cannot store the encoded bytes");
+}
+
+void header(png_structp png, png_infop info, int width, int height, bool grey, int level) {
+  png_set_compression_level(png, level);
+  png_set_IHDR(png, info, static_cast<png_uint_32>(width), static_cast<png_uint_32>(height), 8,
+               grey ? PNG_COLOR_TYPE_GRAY : PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT,
+               PNG_FILTER_TYPE_DEFAULT);
+  png_write_info(png, info);
+  if (!grey) png_set_bgr(png);
+}
+
 /// The bytes of `image` (8-bit, 1 channel grey or 3 channels BGR) to `sink`.
 template <class Sink>
 void encode(const cv::Mat& image, int level, Sink& sink) {
   if (image.depth() != CV_8U || (image.channels() != 1 && image.channels() != 3) || image.empty())
     throw std::invalid_argument("cannot encode a PNG: the image is not 8-bit grey or BGR, or is empty");
   PngWriter w;
-  const auto write = [](png_structp p, png_bytep data, png_size_t n) {
-    bool stored = true;
-    try {
-      static_cast<Sink*>(png_get_io_ptr(p))->append(reinterpret_cast<const char*>(data), n);
-    } catch (...) {  // no exception may cross libpng's C frames
-      stored = false;
-    }
-    if (!stored) png_error(p, "cannot store the encoded bytes");
-  };
   // No C++ object with a destructor may be created between setjmp and the last libpng call.
   std::vector<png_bytep> rows(static_cast<std::size_t>(image.rows));
   for (int r = 0; r < image.rows; ++r) rows[static_cast<std::size_t>(r)] = const_cast<png_bytep>(image.ptr<png_byte>(r));
   if (setjmp(png_jmpbuf(w.png))) throw std::runtime_error("cannot encode a PNG: " + w.error);
-  png_set_write_fn(w.png, &sink, write, nullptr);
-  png_set_compression_level(w.png, level);
-  png_set_IHDR(w.png, w.info, static_cast<png_uint_32>(image.cols), static_cast<png_uint_32>(image.rows), 8,
-               image.channels() == 1 ? PNG_COLOR_TYPE_GRAY : PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE,
-               PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
-  png_write_info(w.png, w.info);
-  if (image.channels() == 3) png_set_bgr(w.png);
+  png_set_write_fn(w.png, &sink, writeToSink<Sink>, nullptr);
+  header(w.png, w.info, image.cols, image.rows, image.channels() == 1, level);
   png_write_image(w.png, rows.data());
   png_write_end(w.png, nullptr);
 }
@@ -72,6 +80,40 @@ struct FileSink {
 };
 
 }  // namespace
+
+struct PngRows::State {
+  std::ofstream os;
+  FileSink sink{os};
+  PngWriter w;
+  std::string path;
+};
+
+PngRows::PngRows(const std::string& path, int width, int height) : s_(std::make_unique<State>()) {
+  s_->path = path;
+  s_->os.open(path, std::ios::binary);
+  if (!s_->os) throw std::runtime_error("cannot open '" + path + "' for writing");
+  if (width <= 0 || height <= 0) throw std::invalid_argument("cannot encode a PNG: the image is empty");
+  png_structp png = s_->w.png;
+  if (setjmp(png_jmpbuf(png))) throw std::runtime_error("cannot encode a PNG: " + s_->w.error);
+  png_set_write_fn(png, &s_->sink, writeToSink<FileSink>, nullptr);
+  header(png, s_->w.info, width, height, false, 6);
+}
+
+PngRows::~PngRows() = default;
+
+void PngRows::write(const std::uint8_t* bgr) {
+  png_structp png = s_->w.png;
+  if (setjmp(png_jmpbuf(png))) throw std::runtime_error("cannot encode a PNG: " + s_->w.error);
+  png_write_row(png, const_cast<png_bytep>(bgr));
+}
+
+void PngRows::close() {
+  png_structp png = s_->w.png;
+  if (setjmp(png_jmpbuf(png))) throw std::runtime_error("cannot encode a PNG: " + s_->w.error);
+  png_write_end(png, nullptr);
+  s_->os.flush();
+  if (!s_->os) throw std::runtime_error("cannot write '" + s_->path + "'");
+}
 
 std::string encodePng(const cv::Mat& image) {
   std::string bytes;

@@ -68,31 +68,48 @@ cv::Mat rasterizeSliceProbabilityZ(const OccupancyMap& map, double z) {
   return img;
 }
 
-cv::Mat slicePicture(const OccupancyMap& map, double z, bool probability) {
-  Key zk;
-  const Box bounds = sliceGeometry(map, z, zk);
-  const Eigen::Vector3d lo = map.lattice().boxMin(bounds);
+namespace {
+
+/// The picture's title and legend for a slice at `z`.
+PictureOptions sliceOptions(double z, bool probability) {
   PictureOptions o;
   char title[64];
   std::snprintf(title, sizeof title, "slice at z = %g m", z);
   o.title = title;
   const auto grey = [](std::uint8_t g) { return cv::Vec3b(g, g, g); };
-  const cv::Vec3b unknown(kSliceUnknownColour[0], kSliceUnknownColour[1], kSliceUnknownColour[2]);
   if (probability) {
-    o.legend = {{unknown, "unknown"}};
+    o.legend = {{cv::Vec3b(kSliceUnknownColour[0], kSliceUnknownColour[1], kSliceUnknownColour[2]), "unknown"}};
     o.probability_ramp = true;
   } else {
     o.legend = {{grey(kSliceOccupied), "occupied"}, {grey(kSliceFree), "free"}, {grey(kSliceUnknown), "unknown"}};
   }
+  return o;
+}
+
+}  // namespace
+
+cv::Mat slicePicture(const OccupancyMap& map, double z, bool probability) {
+  Key zk;
+  const Box bounds = sliceGeometry(map, z, zk);
+  const Eigen::Vector3d lo = map.lattice().boxMin(bounds);
+  const cv::Vec3b unknown = probability ? cv::Vec3b(kSliceUnknownColour[0], kSliceUnknownColour[1], kSliceUnknownColour[2])
+                                        : cv::Vec3b(kSliceUnknown, kSliceUnknown, kSliceUnknown);
   // The cells painted into the picture as they come: an image of them beside the canvas would
-  // be a second copy of the slice when an app saves its map, holding the most.
-  Picture pic(static_cast<int>(bounds.extent(1)), static_cast<int>(bounds.extent(0)),
-              probability ? unknown : grey(kSliceUnknown), lo.x(), lo.y(), map.resolution(), o);
+  // be a second copy of the slice.
+  Picture pic(static_cast<int>(bounds.extent(1)), static_cast<int>(bounds.extent(0)), unknown, lo.x(), lo.y(),
+              map.resolution(), sliceOptions(z, probability));
   const LogOddsModel& model = map.logOddsModel();
   forEachSliceCell(map, bounds, zk, [&](std::int64_t r, std::int64_t c, float v) {
-    pic.paintCell(static_cast<int>(c), static_cast<int>(r), grey(probability ? probabilityGrey(v) : stateGrey(model, v)));
+    const std::uint8_t g = probability ? probabilityGrey(v) : stateGrey(model, v);
+    pic.paintCell(static_cast<int>(c), static_cast<int>(r), cv::Vec3b(g, g, g));
   });
   return pic.finish();  // shares the canvas, which outlives the picture
+}
+
+void writeSlicePicture(const OccupancyMap& map, double z, bool probability, const std::string& path) {
+  const cv::Mat cells = probability ? rasterizeSliceProbabilityZ(map, z) : rasterizeSliceZ(map, z);
+  const Eigen::Vector3d lo = map.lattice().boxMin(map.keyBounds());
+  Picture::writePng(path, cells, lo.x(), lo.y(), map.resolution(), sliceOptions(z, probability));
 }
 
 }  // namespace rtog::image

@@ -11,7 +11,6 @@
 #include <mrpt/io/CFileGZOutputStream.h>
 #include <mrpt/serialization/CArchive.h>
 
-#include "rtog/image/picture.hpp"
 #include "rtog/image/slice.hpp"
 #include "rtog/mrpt/CRTreeOccupancyGridMap.h"
 #include "archive_read.hpp"
@@ -203,7 +202,7 @@ void CRTreeOccupancyGridMap::saveMetricMapRepresentationToFile(const std::string
     const Box b = map_.keyBounds();
     const double z = (0.5 * (double(b.min.z) + double(b.max.z)) + 0.5) * map_.resolution();
     try {
-      image::writePng(prefix + "_slice.png", image::slicePicture(map_, z, false));
+      image::writeSlicePicture(map_, z, false, prefix + "_slice.png");
     } catch (const std::exception&) {
       // A slice too large for an image is not an error of the map file itself.
     }

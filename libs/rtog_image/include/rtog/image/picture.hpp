@@ -63,8 +63,27 @@ class Picture {
   /// Draws the frame, ticks, axes, scale bar and legend over the canvas and returns it.
   const cv::Mat& finish();
 
+  /// Writes the finished picture of `cells` (as the constructor from cells takes them) to `path`
+  /// as PNG, a band of rows at a time: neither its canvas nor a second image of the cells is ever
+  /// held whole. The pixels are finish()'s for the same cells and options. Throws as the
+  /// constructor, and std::runtime_error if the file cannot be written.
+  static void writePng(const std::string& path, const cv::Mat& cells, double x0, double y0, double resolution,
+                       PictureOptions options = {});
+
+  struct Pen;
+
  private:
+  struct Layout {};
+  /// The geometry alone (no canvas).
+  Picture(Layout, int rows, int cols, double x0, double y0, double resolution, PictureOptions options);
+  static void checkCells(const cv::Mat& cells);
+  /// Canvas row y (in the plot) of the cells, into `row` (the canvas's row y).
+  void paintPlotRow(const cv::Mat& cells, int y, cv::Vec3b* row) const;
+  /// finish()'s drawing onto `canvas`, whose first row is the canvas's row `top`.
+  void decorate(cv::Mat& canvas, int top) const;
+
   cv::Mat canvas_;
+  cv::Size size_;
   cv::Rect plot_;
   int scale_ = 1, rows_ = 0, cols_ = 0;
   double x0_ = 0.0, y0_ = 0.0, res_ = 0.0;

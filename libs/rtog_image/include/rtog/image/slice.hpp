@@ -2,6 +2,7 @@
 #pragma once
 
 #include <cstdint>
+#include <string>
 
 #include <opencv2/core/mat.hpp>
 
@@ -32,5 +33,9 @@ constexpr std::uint8_t kSliceUnknownColour[3] = {235, 206, 135};
 /// One of the slices above (by probability or by class) as a picture to look at (picture.hpp):
 /// cells scaled up, axes in metres, a scale bar, a legend. Same errors as rasterizeSliceZ().
 cv::Mat slicePicture(const OccupancyMap& map, double z, bool probability);
+/// slicePicture() written to `path` as PNG band by band (Picture::writePng): for a process that
+/// should not hold the whole picture, such as an MRPT app saving its map at the end of its run.
+/// Same errors, and std::runtime_error if the file cannot be written.
+void writeSlicePicture(const OccupancyMap& map, double z, bool probability, const std::string& path);
 
 }  // namespace rtog::image
