@@ -24,7 +24,10 @@ struct PngWriter {
   PngWriter() {
     png = png_create_write_struct(PNG_LIBPNG_VER_STRING, this, &PngWriter::onError, &PngWriter::onWarning);
     if (png) info = png_create_info_struct(png);
-    if (!png || !info) throw std::runtime_error("cannot encode a PNG: out of memory");
+    if (!png || !info) {
+      png_destroy_write_struct(&png, &info);
+      throw std::runtime_error("cannot encode a PNG: out of memory");
+    }
   }
   ~PngWriter() { png_destroy_write_struct(&png, &info); }
   PngWriter(const PngWriter&) = delete;
