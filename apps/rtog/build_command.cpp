@@ -114,7 +114,6 @@ BuildLog readBuildLog(const BuildOptions& o, std::ostream& out) {
 
 FeedFigures feedMap(const BuildOptions& o, const BuildLog& log, CRTreeOccupancyGridMap& map, std::ostream* progress_out) {
   FeedFigures f;
-  std::ostream* pout = progress_out;
   const auto timed = [&](auto&& insert) {
     const auto t0 = std::chrono::steady_clock::now();
     insert();
@@ -123,7 +122,7 @@ FeedFigures feedMap(const BuildOptions& o, const BuildLog& log, CRTreeOccupancyG
   const auto inRange = [&](std::size_t i) { return i >= o.scans_from && i < o.scans_to; };
   const auto leaves = [&map] { return map.map().leafCount(); };
   if (!o.tum_dir.empty()) {
-    Progress progress(pout, log.seq.frames.size(), o.progress_bar);
+    Progress progress(progress_out, log.seq.frames.size(), o.progress_bar);
     const InsertParams ip = map.insertionOptions.toInsertParams();
     for (std::size_t i = 0; i < log.seq.frames.size(); ++i) {
       if (!inRange(i)) continue;
@@ -138,7 +137,7 @@ FeedFigures feedMap(const BuildOptions& o, const BuildLog& log, CRTreeOccupancyG
       progress.update(i + 1, leaves);
     }
   } else if (!o.simplemap_path.empty()) {
-    Progress progress(pout, log.simplemap.size(), o.progress_bar);
+    Progress progress(progress_out, log.simplemap.size(), o.progress_bar);
     for (std::size_t i = 0; i < log.simplemap.size(); ++i) {
       if (!inRange(i)) continue;
       const auto [pose, sf] = log.simplemap.get(i);
@@ -156,7 +155,7 @@ FeedFigures feedMap(const BuildOptions& o, const BuildLog& log, CRTreeOccupancyG
       progress.update(i + 1, leaves);
     }
   } else {
-    Progress progress(pout, log.rawlog_entries, o.progress_bar, "rawlog entries");
+    Progress progress(progress_out, log.rawlog_entries, o.progress_bar, "rawlog entries");
     std::size_t index = 0;  // of the observation, for --scans
     forEachRawlogObservation(o.rawlog_path, log.rawlog_entries, [&](const mrpt::obs::CObservation::Ptr& obs,
                                                                      const mrpt::poses::CPose3D& robot, std::size_t entry) {

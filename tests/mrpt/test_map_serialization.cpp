@@ -234,9 +234,9 @@ TEST(MapSerialization, TheSceneFileHoldsTheDrawnCuboidsSetBySet) {
       set->getTriangle(i, a);
       all->getTriangle(t, b);
       for (int v = 0; v < 3; ++v) {
-        EXPECT_EQ(a.vertices[v].xyzrgba.pt, b.vertices[v].xyzrgba.pt);
-        EXPECT_EQ(a.vertices[v].xyzrgba.r, b.vertices[v].xyzrgba.r);
-        EXPECT_EQ(a.vertices[v].xyzrgba.a, b.vertices[v].xyzrgba.a);
+        const auto &pa = a.vertices[v].xyzrgba, &pb = b.vertices[v].xyzrgba;
+        EXPECT_EQ(pa.pt, pb.pt);
+        EXPECT_TRUE(pa.r == pb.r && pa.g == pb.g && pa.b == pb.b && pa.a == pb.a) << "triangle " << t;
       }
     }
   }

@@ -41,11 +41,9 @@ cv::Size textSize(const std::string& s) {
   return cv::getTextSize(s, kFont, kText, 1, &base);
 }
 
-}  // namespace
-
 /// Draws on the canvas, or on a band of it whose first row is canvas row `top`: the points and
 /// rectangles given are the canvas's.
-struct Picture::Pen {
+struct Pen {
   cv::Mat& img;
   int top;
   cv::Point at(cv::Point p) const { return {p.x, p.y - top}; }
@@ -63,10 +61,8 @@ struct Picture::Pen {
   }
 };
 
-namespace {
-
 /// MRPT's axes: x red to the right, y green up, from `o`, `len` pixels long.
-void axes(Picture::Pen& img, cv::Point o, int len) {
+void axes(Pen& img, cv::Point o, int len) {
   img.arrow(o, o + cv::Point(len, 0), kRed);
   img.arrow(o, o + cv::Point(0, -len), kGreen);
   img.text("x", o + cv::Point(len + 4, 5), kRed);

@@ -62,10 +62,9 @@ std::size_t cuboidsDrawn(const CRTreeOccupancyGridMap& m) {
   return std::min<std::size_t>(boxes, m.renderingOptions.maxBoxes);
 }
 
-void drawCuboids(const CRTreeOccupancyGridMap& m, mrpt::opengl::CSetOfTriangles& tris, std::size_t chunk,
-                 const std::function<void()>& emit) {
+void drawCuboids(const CRTreeOccupancyGridMap& m, std::size_t total, mrpt::opengl::CSetOfTriangles& tris,
+                 std::size_t chunk, const std::function<void()>& emit) {
   chunk = std::max<std::size_t>(chunk, 1);
-  const std::size_t total = cuboidsDrawn(m);
   // Reserved exactly: a set grown by doubling would hold up to twice its triangles.
   tris.reserve(12 * std::min(total, chunk));
   const Lattice& lat = m.map().lattice();
@@ -100,7 +99,7 @@ void drawCuboids(const CRTreeOccupancyGridMap& m, mrpt::opengl::CSetOfTriangles&
 void CRTreeOccupancyGridMap::getVisualizationInto(mrpt::opengl::CSetOfObjects& outObj) const {
   if (!genericMapParams.enableSaveAs3DObject) return;
   auto all = cuboidSet(*this);
-  drawCuboids(*this, *all, std::numeric_limits<std::size_t>::max(), [] {});
+  drawCuboids(*this, cuboidsDrawn(*this), *all, std::numeric_limits<std::size_t>::max(), [] {});
   outObj.insert(all);
 }
 
@@ -116,7 +115,8 @@ void saveCuboidScene(const CRTreeOccupancyGridMap& m, const std::string& path, s
   // The scene with as many empty sets as the cuboids fill, then each empty set's bytes replaced
   // by a full one's as it is drawn: an object's bytes in an MRPT archive do not depend on where
   // it is written (class name, version, data, end flag; no references between objects).
-  const std::size_t sets = std::max<std::size_t>(1, (cuboidsDrawn(m) + chunk - 1) / chunk);
+  const std::size_t total = cuboidsDrawn(m);
+  const std::size_t sets = std::max<std::size_t>(1, (total + chunk - 1) / chunk);
   const auto empty = cuboidSet(m);
   for (std::size_t i = 0; i < sets; ++i) obj->insert(empty);
   const std::vector<std::uint8_t> whole = bytesOf(scene), one = bytesOf(*empty);
@@ -132,7 +132,7 @@ void saveCuboidScene(const CRTreeOccupancyGridMap& m, const std::string& path, s
   auto archive = mrpt::serialization::archiveFrom(f);
   std::size_t written = 0;
   const auto tris = cuboidSet(m);
-  drawCuboids(m, *tris, chunk, [&] {
+  drawCuboids(m, total, *tris, chunk, [&] {
     archive << *tris;
     ++written;
   });

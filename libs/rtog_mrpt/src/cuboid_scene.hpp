@@ -20,11 +20,11 @@ std::size_t cuboidsDrawn(const CRTreeOccupancyGridMap& m);
 /// An empty set of triangles as the map's cuboids are drawn into (named "rtog_cuboids").
 mrpt::opengl::CSetOfTriangles::Ptr cuboidSet(const CRTreeOccupancyGridMap& m);
 
-/// Draws the map's cuboids into `tris` (from cuboidSet), `chunk` at most at a time: emit() is
-/// called when it is full, then it is emptied, and once after the last cuboid. That makes
-/// ceil(cuboidsDrawn / chunk) sets, at least one (empty, for a map that draws none).
-void drawCuboids(const CRTreeOccupancyGridMap& m, mrpt::opengl::CSetOfTriangles& tris, std::size_t chunk,
-                 const std::function<void()>& emit);
+/// Draws the map's first `total` (cuboidsDrawn) cuboids into `tris` (from cuboidSet), `chunk` at
+/// most at a time: emit() is called when it is full, then it is emptied, and once after the last
+/// cuboid. That makes ceil(total / chunk) sets, at least one (empty, for a map that draws none).
+void drawCuboids(const CRTreeOccupancyGridMap& m, std::size_t total, mrpt::opengl::CSetOfTriangles& tris,
+                 std::size_t chunk, const std::function<void()>& emit);
 
 /// Writes the scene getVisualizationInto draws to `path` (gzip, as COpenGLScene::saveToFile),
 /// its cuboids in sets of `chunk`, holding one set at a time: the file MRPT writes for a scene

@@ -71,7 +71,7 @@ void GridTiles::loadDense(const std::int8_t* dense) {
 }
 
 void GridTiles::useOptions(const FieldConstants& f, bool logs) {
-  if (field_ && (f.capUnits != field_->capUnits || f.window != field_->window || f.threshold != field_->threshold))
+  if (field_ && (f.capUnits != field_->capUnits || f.window != field_->window))
     for (Tile& t : tiles_.write()) t.terms.drop();  // the kept distances are other distances
   field_ = f;
   logs_ = logs;

@@ -21,10 +21,11 @@ double onDenseGrid(const Grid& g, const mrpt::obs::CObservation2DRangeScan& scan
   const FieldConstants f(g.likelihoodOptions, g.getResolution());
   const int sx = static_cast<int>(g.getSizeX()), sy = static_cast<int>(g.getSizeY());
   const auto& raw = g.getRawMap();
+  const float below = occupiedBelow();
   const auto row = [&](int y, int x0, int x1, auto&& visit) {
     const auto* r = raw.data() + static_cast<std::size_t>(y) * static_cast<std::size_t>(sx);
     for (int x = x0; x <= x1; ++x)
-      if (r[x] < f.threshold) visit(x);
+      if (r[x] < below) visit(x);
   };
   const FieldGrid fg{&g.insertionOptions, &g.likelihoodOptions, g.getResolution(), g.getXMin(), g.getYMin(),
                      g.getSizeX(), g.getSizeY()};
@@ -45,7 +46,6 @@ FieldConstants::FieldConstants(const Grid::TLikelihoodOptions& o, double res) {
   capUnits = static_cast<unsigned>(mrpt::round(maxCorrDistSq * unitsPerSqMetre));
   window = static_cast<int>(std::ceil(o.LF_maxCorrsDistance / res));
   squareDist = o.LF_useSquareDist;
-  threshold = occupiedBelow();
 }
 
 float occupiedBelow() { return Grid::p2l(0.5f); }

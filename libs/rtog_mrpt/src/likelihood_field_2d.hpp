@@ -31,11 +31,10 @@ struct FieldConstants {
   unsigned capUnits;            // the search's cap in those units
   int window;                   // cells searched either side
   bool squareDist;
-  float threshold;              // occupiedBelow(): a cell below it counts as occupied
   bool operator==(const FieldConstants& o) const {
     return zRandomTerm == o.zRandomTerm && zHit == o.zHit && q == o.q && maxCorrDistSq == o.maxCorrDistSq &&
            unitsPerSqMetre == o.unitsPerSqMetre && capUnits == o.capUnits && window == o.window &&
-           squareDist == o.squareDist && threshold == o.threshold;
+           squareDist == o.squareDist;
   }
   /// The mixture at squared distance `best` (in units) to the nearest occupied cell.
   double termOfBest(unsigned best) const {

@@ -70,8 +70,6 @@ class Picture {
   static void writePng(const std::string& path, const cv::Mat& cells, double x0, double y0, double resolution,
                        PictureOptions options = {});
 
-  struct Pen;
-
  private:
   struct Layout {};
   /// The geometry alone (no canvas).
