@@ -1,7 +1,8 @@
 // `rtog build --tiles`: a map split by space (doc/scale-out.md). Every rank reads the whole log;
-// a cheap first pass measures the work per brick column; the tiles are slabs of about equal
-// work; each rank builds its tiles (maps restricted to them, fed every scan: exactly the single
-// build's cells there) and writes them; rank 0 writes the index last, only if every rank succeeded.
+// a cheap first pass measures the work and the memory per brick column; the tiles are slabs of
+// about equal shares of both; each rank builds its tiles (maps restricted to them, fed every
+// scan: exactly the single build's cells there) and writes them; rank 0 writes the index last,
+// only if every rank succeeded.
 #include <sys/resource.h>
 #include <sys/stat.h>
 
@@ -16,6 +17,8 @@
 #include <ostream>
 #include <sstream>
 #include <stdexcept>
+#include <unordered_map>
+#include <unordered_set>
 
 #include "build_log.hpp"
 #include "ranks.hpp"
@@ -25,15 +28,34 @@
 namespace rtog::cli {
 namespace {
 
-/// Work per brick column across x and y: beams sampled every half brick from their origin to
-/// their end, every 8th beam of about 1,000 scans spread over the log (the share is what counts,
-/// not the total).
-void firstPass(const BuildOptions& o, const BuildLog& log, const CRTreeOccupancyGridMap& map,
-               std::vector<std::pair<std::int32_t, double>>& wx, std::vector<std::pair<std::int32_t, double>>& wy) {
-  std::map<std::int32_t, double> x, y;
-  const double cell = map.resolution(), step = 8.0 * cell;
+/// What each brick column across x and y holds, from a sample of the log: every 8th beam of
+/// about 1,000 scans spread over the log, sampled every half brick from its origin to its end.
+/// `work` counts the samples (the cells the beams step); `bricks` the distinct bricks they meet
+/// (the map's memory: its leaves cover what sensors saw, however often it was crossed; a set of
+/// finer blocks would cost the pass more memory than some maps). Only the shares count, not the
+/// totals.
+struct ColumnLoad {
+  std::unordered_map<std::int32_t, double> work, bricks;
+
+  /// Per column, its share of the work plus its share of the bricks: slabs of equal weight
+  /// balance both, within what a cut between whole columns allows.
+  std::vector<std::pair<std::int32_t, double>> weights() const {
+    double w = 0.0, b = 0.0;
+    for (const auto& [c, v] : work) w += v;
+    for (const auto& [c, v] : bricks) b += v;
+    std::map<std::int32_t, double> sum;
+    for (const auto& [c, v] : work) sum[c] += w > 0.0 ? v / w : 0.0;
+    for (const auto& [c, v] : bricks) sum[c] += b > 0.0 ? v / b : 0.0;
+    return {sum.begin(), sum.end()};
+  }
+};
+
+void firstPass(const BuildOptions& o, const BuildLog& log, const CRTreeOccupancyGridMap& map, ColumnLoad& x,
+               ColumnLoad& y) {
+  const double cell = map.resolution(), step = double((1 << kBrickBits) / 2) * cell;
   const double max_range = map.insertionOptions.maxDistanceInsertion;
   const std::size_t every = std::max<std::size_t>(1, logSize(log) / 1000);
+  std::unordered_set<std::uint64_t> seen;  // packKey of the bricks met
   forEachBeams(o, log, map, every, [&](const Eigen::Vector3d& origin, const std::vector<Eigen::Vector3f>& pts) {
     for (std::size_t i = 0; i < pts.size(); i += 8) {
       Eigen::Vector3d d = pts[i].cast<double>() - origin;
@@ -41,15 +63,20 @@ void firstPass(const BuildOptions& o, const BuildLog& log, const CRTreeOccupancy
       if (!std::isfinite(len) || len <= 0.0) continue;
       if (max_range > 0.0) len = std::min(len, double(max_range));
       d /= d.norm();
+      Key last{kKeyMax, kKeyMax, kKeyMax};  // no brick: brick coordinates are far smaller
       for (double t = 0.0; t <= len; t += step) {
         const Eigen::Vector3d p = origin + t * d;
-        x[static_cast<std::int32_t>(std::floor(p.x() / cell)) >> kBrickBits] += 1.0;
-        y[static_cast<std::int32_t>(std::floor(p.y() / cell)) >> kBrickBits] += 1.0;
+        const Key b{static_cast<std::int32_t>(std::floor(p.x() / cell)) >> kBrickBits,
+                    static_cast<std::int32_t>(std::floor(p.y() / cell)) >> kBrickBits,
+                    static_cast<std::int32_t>(std::floor(p.z() / cell)) >> kBrickBits};
+        x.work[b.x] += 1.0;
+        y.work[b.y] += 1.0;
+        if (b == last) continue;
+        last = b;
+        if (keyInRange(b) && seen.insert(packKey(b)).second) x.bricks[b.x] += 1.0, y.bricks[b.y] += 1.0;
       }
     }
   });
-  wx.assign(x.begin(), x.end());
-  wy.assign(y.begin(), y.end());
 }
 
 double peakRssMb() {
@@ -73,11 +100,11 @@ std::string buildOwnTiles(const BuildOptions& o, const Ranks& ranks, int n,
   std::ostringstream mine;
   const BuildLog log = readBuildLog(o, say);
   const auto probe = makeBuildMap(o);
-  std::vector<std::pair<std::int32_t, double>> wx, wy;
-  firstPass(o, log, *probe, wx, wy);
-  const std::vector<Box> slabs = balancedSlabs(wx, wy, n);
+  ColumnLoad x, y;
+  firstPass(o, log, *probe, x, y);
+  const std::vector<Box> slabs = balancedSlabs(x.weights(), y.weights(), n);
   const double first_pass = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  say << "tiles: " << slabs.size() << " slabs of about equal work (first pass " << std::fixed << std::setprecision(3)
+  say << "tiles: " << slabs.size() << " slabs of about equal work and memory (first pass " << std::fixed << std::setprecision(3)
       << first_pass << " s), " << ranks.size() << " rank" << (ranks.size() == 1 ? "" : "s") << "\n";
   say.unsetf(std::ios::floatfield);
   for (std::size_t i = std::size_t(ranks.rank()); i < slabs.size(); i += std::size_t(ranks.size())) {

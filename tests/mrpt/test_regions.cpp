@@ -225,3 +225,34 @@ TEST(Regions, TiledMapOnDiskAndItsNeighbourhood) {
 }
 
 }  // namespace
+
+namespace {
+
+TEST(Regions, BalancedSlabsCutTheLongerAxisIntoEqualShares) {
+  using rtog::kBrickBits;
+  using rtog::kKeyMax;
+  using rtog::kKeyMin;
+  // Ten brick columns across x of equal weight, two across y: two slabs across x, cut after
+  // the fifth column; the outer slabs reach the ends of the key range.
+  std::vector<std::pair<std::int32_t, double>> x, y{{0, 5.0}, {1, 5.0}};
+  for (std::int32_t c = 0; c < 10; ++c) x.emplace_back(c, 1.0);
+  auto slabs = rtog::balancedSlabs(x, y, 2);
+  ASSERT_EQ(slabs.size(), 2u);
+  EXPECT_EQ(slabs[0].min.x, kKeyMin);
+  EXPECT_EQ(slabs[0].max.x, (5 << kBrickBits) - 1);
+  EXPECT_EQ(slabs[1].min.x, 5 << kBrickBits);
+  EXPECT_EQ(slabs[1].max.x, kKeyMax);
+  EXPECT_EQ(slabs[0].min.y, kKeyMin);
+  EXPECT_EQ(slabs[0].max.y, kKeyMax);
+  // The weight, not the extent, places the cut: one heavy column at the low end is a slab alone.
+  x[0].second = 9.0;
+  slabs = rtog::balancedSlabs(x, y, 2);
+  ASSERT_EQ(slabs.size(), 2u);
+  EXPECT_EQ(slabs[0].max.x, (1 << kBrickBits) - 1);
+  // More slabs than columns: no empty slab, each column a slab at most.
+  slabs = rtog::balancedSlabs(y, {{0, 1.0}}, 4);
+  EXPECT_LE(slabs.size(), 2u);
+  EXPECT_THROW(rtog::balancedSlabs(x, y, 0), std::invalid_argument);
+}
+
+}  // namespace
