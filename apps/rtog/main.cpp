@@ -79,7 +79,7 @@ int main(int argc, char** argv) {
   std::string scan_range;
   b->add_option("--scans", scan_range, "Only scans A <= i < B of the log (A:B, counted from 0; either may be left out)");
   b->add_option("--tiles", build.tiles,
-                "Build the map as N tiles of space (or 'auto': one a rank under mpirun) into the directory --out");
+                "Build the map as N tiles of space (or 'auto': four a rank under mpirun) into the directory --out");
   auto* bstride = b->add_option("--stride", build.stride, "Use every n-th pixel")->capture_default_str()->check(rtog::app::checks::integer(1, 1 << 16));
 
   std::string map_path;

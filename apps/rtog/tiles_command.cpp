@@ -122,12 +122,17 @@ std::string buildOwnTiles(const BuildOptions& o, const Ranks& ranks, int n,
   return mine.str();
 }
 
+constexpr int kAutoTilesPerRank = 4;
+
 }  // namespace
 
 int buildTiles(const BuildOptions& o, std::ostream& out) {
   if (o.out_path.empty()) throw std::invalid_argument("--tiles needs --out DIR (the directory of the tiles)");
   Ranks ranks;
-  int n = ranks.size();
+  // A rank builds its tiles one after another: its memory is its largest tile's, and a smaller
+  // tile's layers stay in the processor's caches (doc/scale-out.md), for one more reading of the
+  // log a tile.
+  int n = kAutoTilesPerRank * ranks.size();
   if (o.tiles != "auto") {
     std::size_t used = 0;
     try {
