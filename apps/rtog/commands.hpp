@@ -46,8 +46,8 @@ struct BuildOptions {
   /// counts what was dropped, instead of refused. (Default: false)
   bool allow_truncated = false;
   /// Build the map as tiles of space, each a region of whole bricks holding exactly the single
-  /// build's cells there, into the directory --out: a count, or "auto" (one a rank under mpirun,
-  /// else one). Empty: one map file. (Default: empty)
+  /// build's cells there, into the directory --out: a count, or "auto" (four a rank under mpirun,
+  /// else four). Empty: one map file. (Default: empty)
   std::string tiles;
 };
 

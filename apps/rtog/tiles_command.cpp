@@ -65,15 +65,16 @@ void firstPass(const BuildOptions& o, const BuildLog& log, const CRTreeOccupancy
       d /= d.norm();
       Key last{kKeyMax, kKeyMax, kKeyMax};  // no brick: brick coordinates are far smaller
       for (double t = 0.0; t <= len; t += step) {
-        const Eigen::Vector3d p = origin + t * d;
-        const Key b{static_cast<std::int32_t>(std::floor(p.x() / cell)) >> kBrickBits,
-                    static_cast<std::int32_t>(std::floor(p.y() / cell)) >> kBrickBits,
-                    static_cast<std::int32_t>(std::floor(p.z() / cell)) >> kBrickBits};
+        const Eigen::Array3d c = ((origin + t * d) / cell).array().floor();
+        // A cell beyond the key range is one the map skips (and the cast's range ends there).
+        if (!(c.abs().maxCoeff() <= double(kKeyMax))) continue;
+        const Key b{static_cast<std::int32_t>(c.x()) >> kBrickBits, static_cast<std::int32_t>(c.y()) >> kBrickBits,
+                    static_cast<std::int32_t>(c.z()) >> kBrickBits};
         x.work[b.x] += 1.0;
         y.work[b.y] += 1.0;
         if (b == last) continue;
         last = b;
-        if (keyInRange(b) && seen.insert(packKey(b)).second) x.bricks[b.x] += 1.0, y.bricks[b.y] += 1.0;
+        if (seen.insert(packKey(b)).second) x.bricks[b.x] += 1.0, y.bricks[b.y] += 1.0;
       }
     }
   });
