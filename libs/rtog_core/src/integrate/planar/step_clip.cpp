@@ -81,9 +81,12 @@ void clipStepRuns(const MapStore& store, std::int32_t z, const StepRun* runs, st
       } else {
         // The part inside: an interval of steps (monotone on each axis, a box on both), kept as a
         // run of the same raster from a later step.
+        // A brick's first cell by multiplying: a left shift of a negative brick is undefined.
+        const auto first = [](std::int32_t brick) { return std::int64_t{brick} * (std::int64_t{1} << kBrickBits); };
+        const std::int64_t last = (std::int64_t{1} << kBrickBits) - 1;
         std::int64_t a0, a1, b0, b1;
-        axisInterval(r, 0, std::int64_t{store.region.min.x} << kBrickBits, (std::int64_t{store.region.max.x} << kBrickBits) + 15, a0, a1);
-        axisInterval(r, 1, std::int64_t{store.region.min.y} << kBrickBits, (std::int64_t{store.region.max.y} << kBrickBits) + 15, b0, b1);
+        axisInterval(r, 0, first(store.region.min.x), first(store.region.max.x) + last, a0, a1);
+        axisInterval(r, 1, first(store.region.min.y), first(store.region.max.y) + last, b0, b1);
         const std::int64_t k0 = std::max(a0, b0), k1 = std::min(a1, b1);
         const bool layer_in = bz >= store.region.min.z && bz <= store.region.max.z;
         if (!layer_in || k0 > k1) {
