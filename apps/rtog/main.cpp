@@ -49,6 +49,9 @@ int main(int argc, char** argv) {
                                   "rangeNoise: cells beyond the reading + this many sigma stay untouched (0.5 to 10)")
                         ->capture_default_str()
                         ->check(within(0.5, 10.0));
+  auto* noise_share = b->add_option("--range-noise-shared-band", build.insert.range_noise_shared_band,
+                                    "rangeNoise: beams ending in one cell, if at least this many, share one band (0: a band each)")
+                          ->capture_default_str();
   auto* bmerge = b->add_option("--merge", merge, "Leaf merging: off | clamped | equal")->capture_default_str();
   // Beyond the lidars the tool reads (VLP-16 100 m, SICK LMS 80 m): a bound on one scan's reach.
   build.insert.max_range = 120.0;
@@ -235,7 +238,8 @@ int main(int argc, char** argv) {
       for (const auto& [opt, key] : std::vector<std::pair<CLI::Option*, const char*>>{
                {bres, "resolution in its _creationOpts"}, {bmodel, "sensorModel in its _insertOpts"},
                {noise, "rangeNoiseStd in its _insertOpts"}, {noise_m, "rangeNoiseStdPerMeter in its _insertOpts"},
-               {noise_cut, "rangeNoiseCutoff in its _insertOpts"}, {bmerge, "mergePolicy in its _insertOpts"},
+               {noise_cut, "rangeNoiseCutoff in its _insertOpts"},
+               {noise_share, "rangeNoiseSharedBand in its _insertOpts"}, {bmerge, "mergePolicy in its _insertOpts"},
                {bmax_range, "maxDistanceInsertion in its _insertOpts"},
                {miss_rate, "missRate and falseAlarmRate in its _insertOpts"},
                {false_alarm, "missRate and falseAlarmRate in its _insertOpts"},
@@ -257,7 +261,7 @@ int main(int argc, char** argv) {
     if (b->parsed()) {
       build.insert.model = rtog::sensorModelFromString(model);
       build.map.merge = rtog::mergePolicyFromString(merge);
-      const bool noise_flags = noise->count() + noise_m->count() + noise_cut->count() > 0;
+      const bool noise_flags = noise->count() + noise_m->count() + noise_cut->count() + noise_share->count() > 0;
       if (noise_flags && build.insert.model != rtog::SensorModel::RangeNoise)
         throw std::invalid_argument("--range-noise-*: only with --model rangeNoise");
       if (miss_rate->count() > 0) build.map.log_odds = rtog::withChannel(build.map.log_odds, channel);

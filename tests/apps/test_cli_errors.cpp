@@ -88,6 +88,8 @@ TEST(CliErrors, OptionsWithoutEffectAreRefused) {
   expectOneLine("build" + kTum + "--ini " + ini + " --discretize", 2, {"--discretize has no effect with --ini"});
   expectOneLine("build" + kTum + "--ini " + ini + " --model endpoint", 2, {"--model", "sensorModel"});
   expectOneLine("build" + kTum + "--ini " + ini + " --miss-rate 0.1 --false-alarm-rate 0.1", 2, {"missRate"});
+  expectOneLine("build" + kTum + "--ini " + ini + " --range-noise-shared-band 8", 2,
+                {"--range-noise-shared-band has no effect with --ini", "rangeNoiseSharedBand"});
   const std::string log = std::string(RTOG_MRPT_DATASETS) + "/2006-01ENE-21-SENA_Telecom Faculty_one_loop_only.rawlog";
   expectOneLine("build --rawlog '" + log + "' --stride 4", 2, {"--stride has no effect without --tum"});
   expectOneLine("image " + smallMap() + " --out /dev/null --hough-min-length 2", 2, {"--hough-min-length requires --hough"});

@@ -47,18 +47,21 @@ TEST(RangeNoiseOptions, ZeroSigmaGivesTheBeamModelsMapOnSena) {
 
 TEST(RangeNoiseOptions, OptionsReadWriteAndSerializeBack) {
   const auto m = mapFromIni("sensorModelPreset=octomap\nsensorModel=rangeNoise\nrangeNoiseStd=0.02\n"
-                            "rangeNoiseStdPerMeter=0.005\nrangeNoiseCutoff=2.5\n");
+                            "rangeNoiseStdPerMeter=0.005\nrangeNoiseCutoff=2.5\nrangeNoiseSharedBand=7\n");
   const auto& io = m->insertionOptions;
   EXPECT_EQ(io.sensorModel, "rangeNoise");
   EXPECT_FLOAT_EQ(io.rangeNoiseStd, 0.02f);
   EXPECT_FLOAT_EQ(io.rangeNoiseStdPerMeter, 0.005f);
   EXPECT_FLOAT_EQ(io.rangeNoiseCutoff, 2.5f);
+  EXPECT_EQ(io.rangeNoiseSharedBand, 7);
+  EXPECT_EQ(io.toInsertParams().range_noise_shared_band, 7u);
   mrpt::config::CConfigFileMemory out;
   io.saveToConfigFile(out, "s");
   CRTreeOccupancyGridMap::TInsertionOptions again;
   again.loadFromConfigFile(out, "s");
   EXPECT_EQ(again.rangeNoiseStd, io.rangeNoiseStd);
   EXPECT_EQ(again.rangeNoiseCutoff, io.rangeNoiseCutoff);
+  EXPECT_EQ(again.rangeNoiseSharedBand, 7);
   mrpt::io::CMemoryStream buf;
   auto arch = mrpt::serialization::archiveFrom(buf);
   arch << *m;
@@ -68,6 +71,7 @@ TEST(RangeNoiseOptions, OptionsReadWriteAndSerializeBack) {
   EXPECT_EQ(back.insertionOptions.sensorModel, "rangeNoise");
   EXPECT_EQ(back.insertionOptions.rangeNoiseStdPerMeter, io.rangeNoiseStdPerMeter);
   EXPECT_EQ(back.insertionOptions.rangeNoiseCutoff, io.rangeNoiseCutoff);
+  EXPECT_EQ(back.insertionOptions.rangeNoiseSharedBand, 7);
 }
 
 // Range noise in both presets (in mrpt_grid on the grid's raster and int8 lattice,
@@ -92,6 +96,7 @@ TEST(RangeNoiseOptions, BadValuesAreRefusedByKeyInBothPresets) {
     refused(o + "rangeNoiseStdPerMeter=inf\n", "rangeNoiseStdPerMeter");
     refused(o + "rangeNoiseCutoff=20\n", "rangeNoiseCutoff");
     refused(o + "rangeNoiseCutoff=0\n", "rangeNoiseCutoff");
+    refused(o + "rangeNoiseSharedBand=-1\n", "rangeNoiseSharedBand");
   }
 }
 

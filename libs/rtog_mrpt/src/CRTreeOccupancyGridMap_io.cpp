@@ -34,8 +34,9 @@ namespace rtog {
 // matchingOptions after the likelihood options. Version 3 adds the range-noise options
 // (rangeNoiseStd, rangeNoiseStdPerMeter, rangeNoiseCutoff) after matchingOptions. Version 4 adds
 // insertionOptions.poseUncertainty after them. Version 5 adds the 3D grid's geometry
-// (TGridFrame3D: defined, then its extent and sizes if so) after that.
-uint8_t CRTreeOccupancyGridMap::serializeGetVersion() const { return 5; }
+// (TGridFrame3D: defined, then its extent and sizes if so) after that. Version 6 adds
+// insertionOptions.rangeNoiseSharedBand after it (older maps load with sharing off, as built).
+uint8_t CRTreeOccupancyGridMap::serializeGetVersion() const { return 6; }
 
 void CRTreeOccupancyGridMap::serializeTo(mrpt::serialization::CArchive& out) const {
   out << genericMapParams;
@@ -62,6 +63,7 @@ void CRTreeOccupancyGridMap::serializeTo(mrpt::serialization::CArchive& out) con
   if (frame3d_.defined)
     out << frame3d_.x_min << frame3d_.y_min << frame3d_.z_min << frame3d_.resolution << frame3d_.size_x
         << frame3d_.size_y << frame3d_.size_z;
+  out << static_cast<int32_t>(io.rangeNoiseSharedBand);
   // The map's bytes, preceded by their count, go straight into the archive (a copy in memory
   // would hold up to three times the map while an app saves it, when it holds the most).
   const std::uint64_t bytes = map_.writtenSize();
@@ -82,7 +84,7 @@ void CRTreeOccupancyGridMap::serializeTo(mrpt::serialization::CArchive& out) con
 // anything is allocated (archive_read.hpp).
 void CRTreeOccupancyGridMap::serializeFrom(mrpt::serialization::CArchive& in, uint8_t version) {
   constexpr const char* kWho = "rtog::CRTreeOccupancyGridMap";
-  if (version > 5) MRPT_THROW_UNKNOWN_SERIALIZATION_VERSION(version);
+  if (version > 6) MRPT_THROW_UNKNOWN_SERIALIZATION_VERSION(version);
   mrpt::maps::TMapGenericParams generic;
   archive::readGenericParams(in, generic);
   TInsertionOptions io;
@@ -138,6 +140,7 @@ void CRTreeOccupancyGridMap::serializeFrom(mrpt::serialization::CArchive& in, ui
       in >> frame3d.x_min >> frame3d.y_min >> frame3d.z_min >> frame3d.resolution >> frame3d.size_x >>
           frame3d.size_y >> frame3d.size_z;
   }
+  io.rangeNoiseSharedBand = version >= 6 ? in.ReadAs<int32_t>() : 0;
   try {
     io.validate();
     lo.validate();

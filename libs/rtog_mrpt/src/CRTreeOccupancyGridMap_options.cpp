@@ -30,8 +30,11 @@ void reportInertInsertKeys(const RTreeInsertionOptions& o, const mrpt::config::C
       if (s.keyExists(sec, k)) reportInertKey(sec, k, why);
   };
   if (sensorModelFromString(o.sensorModel) != SensorModel::RangeNoise)
-    told({"rangeNoiseStd", "rangeNoiseStdPerMeter", "rangeNoiseCutoff"},
+    told({"rangeNoiseStd", "rangeNoiseStdPerMeter", "rangeNoiseCutoff", "rangeNoiseSharedBand"},
          "only sensorModel = rangeNoise uses it (sensorModel is " + o.sensorModel + ")");
+  else if (o.mrptGrid())
+    told({"rangeNoiseSharedBand"}, "the mrpt_grid preset grades every beam on the grid's raster; only "
+                                   "sensorModelPreset = octomap shares bands");
   if (o.mrptGrid())
     told({"clampingMin", "clampingMax"},
          "the mrpt_grid preset saturates at the grid's int8 range; only sensorModelPreset = octomap clamps there");
@@ -49,6 +52,7 @@ void CRTreeOccupancyGridMap::TInsertionOptions::loadFromConfigFile(const mrpt::c
   rangeNoiseStd = readFloat(s, sec, "rangeNoiseStd", rangeNoiseStd);
   rangeNoiseStdPerMeter = readFloat(s, sec, "rangeNoiseStdPerMeter", rangeNoiseStdPerMeter);
   rangeNoiseCutoff = readFloat(s, sec, "rangeNoiseCutoff", rangeNoiseCutoff);
+  rangeNoiseSharedBand = readInt(s, sec, "rangeNoiseSharedBand", rangeNoiseSharedBand);
   maxOccupancyUpdateCertainty = readFloat(s, sec, "maxOccupancyUpdateCertainty", maxOccupancyUpdateCertainty);
   maxFreenessUpdateCertainty = readFloat(s, sec, "maxFreenessUpdateCertainty", maxFreenessUpdateCertainty);
   // Read as 0 where absent: a section without them states the sensor by the certainties.
@@ -91,7 +95,7 @@ void CRTreeOccupancyGridMap::TInsertionOptions::loadFromConfigFile(const mrpt::c
   sonarConeWeighting = s.read_string(sec, "sonarConeWeighting", sonarConeWeighting);
   // COccupancyGridMap2D's keys that concern what rtog does not build (its CFD features).
   reportUnknownKeys(s, sec,
-                    {"sensorModelPreset", "sensorModel", "rangeNoiseStd", "rangeNoiseStdPerMeter", "rangeNoiseCutoff",
+                    {"sensorModelPreset", "sensorModel", "rangeNoiseStd", "rangeNoiseStdPerMeter", "rangeNoiseCutoff", "rangeNoiseSharedBand",
                      "maxOccupancyUpdateCertainty", "maxFreenessUpdateCertainty", "missRate", "falseAlarmRate",
                      "maxFreenessInvalidRanges", "considerInvalidRangesAsFreeSpace", "horizontalTolerance",
                      "useMapAltitude", "mapAltitude", "wideningBeamsWithDistance", "clampingMin", "clampingMax",
@@ -110,6 +114,7 @@ void CRTreeOccupancyGridMap::TInsertionOptions::saveToConfigFile(mrpt::config::C
   c.write(sec, "rangeNoiseStd", rangeNoiseStd);
   c.write(sec, "rangeNoiseStdPerMeter", rangeNoiseStdPerMeter);
   c.write(sec, "rangeNoiseCutoff", rangeNoiseCutoff);
+  c.write(sec, "rangeNoiseSharedBand", rangeNoiseSharedBand);
   c.write(sec, "maxFreenessInvalidRanges", maxFreenessInvalidRanges);
   c.write(sec, "considerInvalidRangesAsFreeSpace", considerInvalidRangesAsFreeSpace);
   c.write(sec, "horizontalTolerance", mrpt::RAD2DEG(horizontalTolerance));
@@ -167,6 +172,7 @@ InsertParams CRTreeOccupancyGridMap::TInsertionOptions::toInsertParams() const {
   ip.range_noise_std = rangeNoiseStd;
   ip.range_noise_std_per_meter = rangeNoiseStdPerMeter;
   ip.range_noise_cutoff = rangeNoiseCutoff;
+  ip.range_noise_shared_band = static_cast<std::uint32_t>(rangeNoiseSharedBand);
   if (mrptGrid()) ip.graded_unit = 1.0 / 16.0;  // the int8 grids' unit (mrpt_grid::gradedStep)
   return ip;
 }
@@ -182,6 +188,8 @@ void CRTreeOccupancyGridMap::TInsertionOptions::validate() const {
     badOption(sec, "rangeNoiseStdPerMeter", "must be finite and >= 0 [m per m], got " + std::to_string(rangeNoiseStdPerMeter));
   if (!(rangeNoiseCutoff >= 0.5f && rangeNoiseCutoff <= 10.0f))
     badOption(sec, "rangeNoiseCutoff", "must lie in [0.5, 10] sigma, got " + std::to_string(rangeNoiseCutoff));
+  if (rangeNoiseSharedBand < 0)
+    badOption(sec, "rangeNoiseSharedBand", "must be a count of beams >= 0, got " + std::to_string(rangeNoiseSharedBand));
   if (!(maxFreenessInvalidRanges == 0.0f ||
         (isProbability(maxFreenessInvalidRanges) && maxFreenessInvalidRanges > 0.5f)))
     badOption(sec, "maxFreenessInvalidRanges", "must be 0 or lie in (0.5, 1), got " +

@@ -55,6 +55,7 @@ RTreeInsertionOptions RTreeInsertionOptions::fromCore(const MapParams& map, cons
   io.rangeNoiseStd = float(ip.range_noise_std);
   io.rangeNoiseStdPerMeter = float(ip.range_noise_std_per_meter);
   io.rangeNoiseCutoff = float(ip.range_noise_cutoff);
+  io.rangeNoiseSharedBand = static_cast<int>(ip.range_noise_shared_band);
   io.mergePolicy = toString(map.merge);
   io.discretize = ip.discretize;
   io.threads = ip.threads;

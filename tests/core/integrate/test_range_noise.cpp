@@ -159,6 +159,53 @@ TEST(RangeNoise, TheBandWidensWithRange) {
   EXPECT_GT(far, 2 * near);  // sigma 0.03 m against 0.13 m
 }
 
+// n beams from one origin that all end in the cell of `target`, spread over it.
+std::vector<Eigen::Vector3f> beamsIntoOneCell(const Eigen::Vector3d& target, int n) {
+  std::vector<Eigen::Vector3f> pts;
+  for (int i = 0; i < n; ++i)
+    pts.emplace_back(float(target.x() + 0.035 * std::sin(1.3 * i)), float(target.y() + 0.035 * std::cos(0.7 * i)),
+                     float(target.z() + 0.035 * std::sin(2.1 * i + 0.5)));
+  return pts;
+}
+
+// The cells of a map whose value is not the miss change's (the graded ones).
+CellValues gradedCells(const OccupancyMap& m) {
+  const float miss = m.logOddsModel().first(m.logOddsModel().missDelta());
+  CellValues out;
+  for (const auto& c : cellsOf(m))
+    if (c.second != miss) out.push_back(c);
+  return out;
+}
+
+TEST(RangeNoise, BeamsEndingInOneCellShareTheBandOfTheRayToItsCentre) {
+  MapParams mp;
+  mp.resolution = 0.125;
+  mp.merge = MergePolicy::Off;
+  // The centre of its cell, exact in float and double alike.
+  const Eigen::Vector3d origin(0.03, 0.02, 0.01), target(3.1875, 1.3125, 0.4375);
+  const InsertParams shared = rangeNoise(0.05, 0.01);
+  InsertParams own = shared;
+  own.range_noise_shared_band = 0;
+  const auto build = [&](const std::vector<Eigen::Vector3f>& pts, const InsertParams& ip) {
+    auto m = std::make_unique<OccupancyMap>(mp);
+    m->insertPointCloud(origin, pts, ip);
+    EXPECT_EQ(m->checkInvariants(), "");
+    return m;
+  };
+  // Fewer beams than range_noise_shared_band: a band each, as with sharing off.
+  const auto three = beamsIntoOneCell(target, 3);
+  EXPECT_EQ(differingCells(cellsOf(*build(three, shared)), cellsOf(*build(three, own))), 0u);
+  // Eight: their graded cells are those of the one ray to the cell's centre, value for value;
+  // each beam still frees the cells before its own band.
+  const auto eight = beamsIntoOneCell(target, 8);
+  const auto centre = build({target.cast<float>()}, own);
+  const auto grouped = build(eight, shared), apart = build(eight, own);
+  ASSERT_GE(gradedCells(*centre).size(), 5u);
+  EXPECT_EQ(differingCells(gradedCells(*grouped), gradedCells(*centre)), 0u);
+  EXPECT_GT(differingCells(gradedCells(*apart), gradedCells(*centre)), 0u) << "the beams' own bands differ";
+  EXPECT_GT(cellsOf(*grouped).size(), cellsOf(*centre).size()) << "the beams' own free cells";
+}
+
 TEST(RangeNoise, TheMapDoesNotDependOnTheThreadCount) {
   InsertParams one = rangeNoise(0.03, 0.01), two = one;
   one.threads = 1;

@@ -34,10 +34,11 @@ void GradedScan::clear() {
   bricks_.clear();
   codes_.clear();
   cells_.clear();
+  banded_.clear();
 }
 
 std::size_t GradedScan::memoryBytes() const {
-  return miss_.memoryBytes() + index_.memoryBytes() + keys_.capacity() * sizeof(Key) +
+  return miss_.memoryBytes() + index_.memoryBytes() + banded_.capacity() + own_ends_.memoryBytes() + keys_.capacity() * sizeof(Key) +
          deltas_.capacity() * sizeof(float) + order_.capacity() * sizeof(order_[0]) +
          bricks_.capacity() * sizeof(BrickEntry) + codes_.capacity() * sizeof(std::uint64_t) +
          cells_.capacity() * sizeof(GradedCell);
@@ -79,29 +80,75 @@ void GradedScan::finalize() {
   }
 }
 
+void SharedEnds::count(const Lattice& lattice, const Eigen::Vector3d& origin, const Eigen::Vector3f* points,
+                       std::size_t n, const InsertParams& ip, const std::uint8_t* is_hit) {
+  index_.clear();
+  ends_.clear();
+  beams_.clear();
+  group_of_.clear();
+  min_beams_ = ip.range_noise_shared_band;
+  if (min_beams_ == 0) return;
+  group_of_.resize(n, kNone);
+  const BeamRules rules(lattice, ip);
+  Eigen::Vector3d end;
+  Key end_key;
+  std::uint32_t last = kNone;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (rules.classify(origin, points[i].cast<double>(), is_hit == nullptr || is_hit[i] != 0, end, end_key) !=
+        BeamEnd::Hit)
+      continue;
+    // Neighbouring beams (a depth image's row) mostly end in the same cell: no lookup then.
+    std::uint32_t g = last;
+    if (g == kNone || ends_[g] != end_key) {
+      const auto next = static_cast<std::uint32_t>(ends_.size());
+      g = index_.findOrInsert(packKey(end_key), next);
+      if (g == next) {
+        ends_.push_back(end_key);
+        beams_.push_back(0);
+      }
+      last = g;
+    }
+    ++beams_[g];
+    group_of_[i] = g;
+  }
+}
+
 void GradedScan::traceRangeNoise(const Lattice& lattice, const LogOddsModel& model, const Eigen::Vector3d& origin,
                                  const Eigen::Vector3f* points, std::size_t count, const InsertParams& ip,
-                                 const std::uint8_t* is_hit, InsertStats& stats) {
+                                 const std::uint8_t* is_hit, const SharedEnds* shared_ends, std::size_t first,
+                                 InsertStats& stats) {
   const Key origin_key = lattice.key(origin);  // throws for a bad origin
   const Eigen::Vector3d origin_l = lattice.toLattice(origin);
   const BeamRules rules(lattice, ip);
   const RangeNoiseRule noise(model, ip);
   const double res = lattice.resolution();
-  Eigen::Vector3d end;
-  Key end_key;
-  for (std::size_t i = 0; i < count; ++i) {
-    const BeamEnd kind = rules.classify(origin, points[i].cast<double>(), is_hit == nullptr || is_hit[i] != 0, end, end_key);
-    if (!BeamRules::count(kind, stats)) continue;
-    const Eigen::Vector3d end_l = rules.walkEnd(end, end_key);
+  if (shared_ends == nullptr) {
+    own_ends_.count(lattice, origin, points, count, ip, is_hit);
+    shared_ends = &own_ends_;
+    first = 0;
+  }
+  // A returned beam to `end` (lattice `end_l`, cell `end_key`): the cells before its band take the
+  // miss change by the fast walk (if `free`), the band's cells their own (if `band`).
+  const auto traceHit = [&](const Eigen::Vector3d& end, const Eigen::Vector3d& end_l, const Key& end_key, bool free,
+                            bool band) {
     const double r = (end - origin).norm();
     const double sigma = noise.sigma(r);
-    if (kind != BeamEnd::Hit || sigma == 0.0) {  // the beam model's marks (its sigma -> 0 limit)
-      if (kind == BeamEnd::Hit) mark(end_key, model.hitDelta());
-      miss_.queueRayFree(origin_l, end_l, origin_key, end_key);
-      continue;
-    }
-    // The walk goes on to the far edge of the band, unless that has no key or is too long.
     const Eigen::Vector3d dir = (end - origin) / r;
+    // Cells before the band's start take exactly the miss change: the fast walk up to the start's
+    // cell (up to the end cell if the band starts within it), the graded walk from there.
+    Eigen::Vector3d from_l = origin_l;
+    Key from_key = origin_key;
+    const double band_start = r - noise.reach(sigma);
+    Key start_key;
+    if (band_start > res && lattice.tryKey(origin + dir * band_start, start_key)) {
+      from_l = lattice.toLattice(origin + dir * band_start);
+      from_key = start_key;
+      if (free) miss_.queueRayFree(origin_l, start_key == end_key ? end_l : from_l, origin_key, start_key);
+    } else if (free && !band) {  // a band back to the origin: the shared band grades the end cell
+      miss_.queueRayFree(origin_l, end_l, origin_key, end_key);
+    }
+    if (!band) return;
+    // The walk goes on to the far edge of the band, unless that has no key or is too long.
     const Eigen::Vector3d far = origin + dir * (r + noise.reach(sigma));
     Key far_key;
     Eigen::Vector3d far_l = end_l;
@@ -115,20 +162,6 @@ void GradedScan::traceRangeNoise(const Lattice& lattice, const LogOddsModel& mod
     const Eigen::Vector3d dir_l = (far_l - origin_l).normalized();
     const Eigen::Vector3d inv_l(dir_l.x() != 0.0 ? 1.0 / dir_l.x() : 0.0, dir_l.y() != 0.0 ? 1.0 / dir_l.y() : 0.0,
                                 dir_l.z() != 0.0 ? 1.0 / dir_l.z() : 0.0);
-    // Cells before the band's start take exactly the miss change: the fast walk up to the start's
-    // cell, the graded walk from there.
-    Eigen::Vector3d from_l = origin_l;
-    Key from_key = origin_key;
-    const double band_start = r - noise.reach(sigma);
-    if (band_start > res) {
-      const Eigen::Vector3d start = origin + dir * band_start;
-      Key start_key;
-      if (lattice.tryKey(start, start_key) && start_key != end_key) {
-        from_l = lattice.toLattice(start);
-        miss_.queueRayFree(origin_l, from_l, origin_key, start_key);
-        from_key = start_key;
-      }
-    }
     // Cells before the end cell end before the reading, the end cell holds it, later cells
     // start after it, whatever the rounding of their intervals.
     bool past_end = false;
@@ -155,6 +188,38 @@ void GradedScan::traceRangeNoise(const Lattice& lattice, const LogOddsModel& mod
     visit(far_key);
     // A walk that stepped around the end cell (rounding on a cell corner) still marks it.
     if (!past_end) visit(end_key);
+  };
+  if (banded_.size() != shared_ends->groups()) banded_.assign(shared_ends->groups(), 0);
+  Eigen::Vector3d end;
+  Key end_key;
+  for (std::size_t i = 0; i < count; ++i) {
+    // A returned beam's end cell and group were found when the scan was counted.
+    const std::uint32_t g = shared_ends->group(first + i);
+    BeamEnd kind = BeamEnd::Hit;
+    if (g != SharedEnds::kNone) {
+      end = points[i].cast<double>();
+      end_key = shared_ends->end(g);
+      ++stats.rays_hit;
+    } else {
+      kind = rules.classify(origin, points[i].cast<double>(), is_hit == nullptr || is_hit[i] != 0, end, end_key);
+      if (!BeamRules::count(kind, stats)) continue;
+    }
+    const Eigen::Vector3d end_l = rules.walkEnd(end, end_key);
+    if (kind != BeamEnd::Hit || noise.sigma((end - origin).norm()) == 0.0) {  // the beam model's marks (sigma -> 0)
+      if (kind == BeamEnd::Hit) mark(end_key, model.hitDelta());
+      miss_.queueRayFree(origin_l, end_l, origin_key, end_key);
+      continue;
+    }
+    if (g == SharedEnds::kNone || !shared_ends->shared(g)) {
+      traceHit(end, end_l, end_key, true, true);
+      continue;
+    }
+    traceHit(end, end_l, end_key, true, false);
+    // The shared band, once per thread: the same cells and values whichever thread traces it.
+    if (banded_[g] != 0) continue;
+    banded_[g] = 1;
+    const Eigen::Vector3d centre = lattice.cellCenter(end_key);
+    traceHit(centre, lattice.toLattice(centre), end_key, false, true);
   }
 }
 

@@ -19,6 +19,35 @@
 
 namespace rtog {
 
+/// The end cells of a scan's returned beams, and which of them share one band (InsertParams::
+/// range_noise_shared_band): counted over the whole scan before it is traced, so that which
+/// beams share does not depend on how the beams are split among threads. Each returned beam's
+/// end cell is kept, so that the trace classifies only the others.
+class SharedEnds {
+ public:
+  static constexpr std::uint32_t kNone = detail::FlatHashMap64::kAbsent;
+  /// Counts the scan's beams by end cell; with range_noise_shared_band 0 counts nothing (every
+  /// beam kNone, a band each).
+  void count(const Lattice& lattice, const Eigen::Vector3d& origin, const Eigen::Vector3f* points, std::size_t n,
+             const InsertParams& ip, const std::uint8_t* is_hit);
+  /// The end cell's group of returned beam i of the scan, or kNone (not returned, or not counted).
+  std::uint32_t group(std::size_t i) const { return i < group_of_.size() ? group_of_[i] : kNone; }
+  std::size_t groups() const { return ends_.size(); }
+  const Key& end(std::uint32_t g) const { return ends_[g]; }
+  /// True if the group's cell is the end of at least range_noise_shared_band beams.
+  bool shared(std::uint32_t g) const { return beams_[g] >= min_beams_; }
+  std::size_t memoryBytes() const {
+    return index_.memoryBytes() + ends_.capacity() * sizeof(Key) +
+           (beams_.capacity() + group_of_.capacity()) * sizeof(std::uint32_t);
+  }
+
+ private:
+  detail::FlatHashMap64 index_;  // packed end key -> group
+  std::vector<Key> ends_;        // by group
+  std::vector<std::uint32_t> beams_, group_of_;  // by group: beams; by beam: group
+  std::uint32_t min_beams_ = 0;
+};
+
 class GradedScan {
  public:
   void clear();
@@ -68,10 +97,15 @@ class GradedScan {
 
   /// Traces a scan's beams with the range-noise rule into this set (no change to the map): the
   /// same beams as the beam model are skipped or cut; a no-return beam frees the cells before its
-  /// end, as in the beam model. Throws std::out_of_range if the origin has no key.
+  /// end, as in the beam model. A beam ending in a cell of `shared_ends` frees the cells before
+  /// its own band, and the cell's one band is graded once, along the ray to its centre.
+  /// `shared_ends`: the whole scan's when these points are a part of it, its beams `first`
+  /// on; null when they are the whole scan (counted here). Throws std::out_of_range if the
+  /// origin has no key.
   void traceRangeNoise(const Lattice& lattice, const LogOddsModel& model, const Eigen::Vector3d& origin,
                        const Eigen::Vector3f* points, std::size_t count, const InsertParams& ip,
-                       const std::uint8_t* is_hit, InsertStats& stats);
+                       const std::uint8_t* is_hit, const SharedEnds* shared_ends, std::size_t first,
+                       InsertStats& stats);
 
  private:
   struct BrickEntry {
@@ -82,6 +116,8 @@ class GradedScan {
   };
   UpdateBatch miss_;             // cells of exactly the miss change
   detail::FlatHashMap64 index_;  // packed key -> position in keys_ / deltas_
+  std::vector<std::uint8_t> banded_;  // traceRangeNoise(): by SharedEnds group, its band traced
+  SharedEnds own_ends_;           // traceRangeNoise() of a whole scan
   std::vector<Key> keys_;
   std::vector<float> deltas_;
   std::vector<std::pair<std::uint64_t, std::uint64_t>> order_;  // finalize(): brick's Morton code, local << 32 | position

@@ -22,7 +22,7 @@ struct ScratchPool {
 
 std::size_t InsertScratch::memoryBytes() const {
   std::size_t bytes = sizeof(*this) + planar_beams.capacity() * sizeof(PlanarBeam) +
-                      assigned.capacity() * sizeof(AssignedPiece);
+                      assigned.capacity() * sizeof(AssignedPiece) + shared_ends.memoryBytes();
   for (const auto& m : moved_points) bytes += m.capacity() * sizeof(Eigen::Vector3f);
   for (const GradedScan& g : graded) bytes += sizeof(g) + g.memoryBytes();
   for (const UpdateBatch& b : batches) bytes += sizeof(b) + b.memoryBytes();
@@ -37,6 +37,7 @@ void InsertScratch::shrink() {
   for (PlanarBatch& b : planar_batches) b = PlanarBatch();
   std::vector<PlanarBeam>().swap(planar_beams);
   for (GradedScan& g : graded) g = GradedScan();
+  shared_ends = SharedEnds();
   std::vector<AssignedPiece>().swap(assigned);
   std::vector<std::vector<Eigen::Vector3f>>().swap(moved_points);
 }

@@ -29,6 +29,7 @@ struct InsertScratch {
   std::vector<PlanarBatch> planar_batches;  // per thread
   std::vector<PlanarBeam> planar_beams;
   std::vector<GradedScan> graded;  // RangeNoise scans per thread; pose blur, cones, fusion
+  SharedEnds shared_ends;  // RangeNoise: the end cells whose beams share a band
   std::vector<AssignedPiece> assigned;  // grouped by brick
   std::vector<std::vector<Eigen::Vector3f>> moved_points;  // pose blur: the scan moved to each pose
 

@@ -184,7 +184,7 @@ UpdateSet PoseBlurIntegrator::trace(const WeightedScan* scans, std::size_t n, co
         if (graded) {
           GradedScan& g = scratch.graded[i];
           g.clear();
-          g.traceRangeNoise(store.lattice, store.model, s.origin, s.points, s.count, ip, s.is_hit, part[i]);
+          g.traceRangeNoise(store.lattice, store.model, s.origin, s.points, s.count, ip, s.is_hit, nullptr, 0, part[i]);
           g.finalize();
           return true;
         }

@@ -273,7 +273,7 @@ UpdateSet PoseBlurIntegrator::resample(const Eigen::Vector3d& origin, const Eige
   if (graded) {
     GradedScan& g = scratch.graded[threads];
     g.clear();
-    g.traceRangeNoise(store.lattice, store.model, origin, points, count, ip, is_hit, stats);
+    g.traceRangeNoise(store.lattice, store.model, origin, points, count, ip, is_hit, nullptr, 0, stats);
     g.finalize();
     view->fromGraded(g, rule, store.model.missDelta());
   } else {

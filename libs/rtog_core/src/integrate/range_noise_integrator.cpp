@@ -17,6 +17,7 @@ UpdateSet RangeNoiseIntegrator::trace(const Eigen::Vector3d& origin, const Eigen
   const std::size_t threads = traceThreads(count, ip);
   if (scratch.graded.size() < threads) scratch.graded.resize(threads);
   std::vector<InsertStats> part(threads);
+  scratch.shared_ends.count(store.lattice, origin, points, count, ip, is_hit);
   // The union of the threads' scans does not depend on the split (per cell the largest change,
   // miss masks or-ed).
   parallel::traceChunks(
@@ -24,7 +25,7 @@ UpdateSet RangeNoiseIntegrator::trace(const Eigen::Vector3d& origin, const Eigen
       [&](std::size_t t) { scratch.graded[t].clear(); },
       [&](std::size_t t, std::size_t first, std::size_t n, InsertStats& own) {
         scratch.graded[t].traceRangeNoise(store.lattice, store.model, origin, points + first, n, ip,
-                                          is_hit ? is_hit + first : nullptr, own);
+                                          is_hit ? is_hit + first : nullptr, &scratch.shared_ends, first, own);
         return true;
       },
       [&](std::size_t t) { scratch.graded[t].finalize(); });

@@ -41,6 +41,9 @@ struct RTreeInsertionOptions : public mrpt::config::CLoadableOptions {
   /// rangeNoise: cells beyond r + rangeNoiseCutoff * sigma are left untouched [sigmas, 0.5 to
   /// 10]. (Default: 3)
   float rangeNoiseCutoff{3.0f};
+  /// rangeNoise: beams of one scan ending in the same cell, if at least this many, share one
+  /// band along the ray to the cell's centre (doc/range-noise.md); 0: a band each. (Default: 4)
+  int rangeNoiseSharedBand{4};
   /// P(occupied) of a cell where a beam ends, as in COccupancyGridMap2D. (Default: 0.65)
   float maxOccupancyUpdateCertainty{0.65f};
   /// 1 - P(occupied) of a cell a beam crosses; 0 means "same as maxOccupancyUpdateCertainty",
