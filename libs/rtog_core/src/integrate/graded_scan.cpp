@@ -38,8 +38,8 @@ void GradedScan::clear() {
 }
 
 std::size_t GradedScan::memoryBytes() const {
-  return miss_.memoryBytes() + index_.memoryBytes() + banded_.capacity() + own_ends_.memoryBytes() + keys_.capacity() * sizeof(Key) +
-         deltas_.capacity() * sizeof(float) + order_.capacity() * sizeof(order_[0]) +
+  return miss_.memoryBytes() + index_.memoryBytes() + banded_.capacity() + own_ends_.memoryBytes() +
+         keys_.capacity() * sizeof(Key) + deltas_.capacity() * sizeof(float) + order_.capacity() * sizeof(order_[0]) +
          bricks_.capacity() * sizeof(BrickEntry) + codes_.capacity() * sizeof(std::uint64_t) +
          cells_.capacity() * sizeof(GradedCell);
 }
