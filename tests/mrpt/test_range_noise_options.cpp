@@ -1,6 +1,6 @@
 // sensorModel = rangeNoise in _insertOpts: sigma 0 gives the beam model's map on SENA cell for
-// cell, a real sigma changes it; the options read, write and serialize back; bad values and the
-// mrpt_grid preset are refused naming the key.
+// cell, a real sigma changes it; the options read, write and serialize back; bad values are
+// refused naming the key; rangeNoiseSharedBand acts where the core walks the beams.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -72,6 +72,29 @@ TEST(RangeNoiseOptions, OptionsReadWriteAndSerializeBack) {
   EXPECT_EQ(back.insertionOptions.rangeNoiseStdPerMeter, io.rangeNoiseStdPerMeter);
   EXPECT_EQ(back.insertionOptions.rangeNoiseCutoff, io.rangeNoiseCutoff);
   EXPECT_EQ(back.insertionOptions.rangeNoiseSharedBand, 7);
+}
+
+// rangeNoiseSharedBand acts wherever the core walks the beams: a depth image in either preset
+// (a 2D mrpt_grid section takes 3D observations by the core's walk); on the 2D grid's own raster
+// (SENA's scans in mrpt_grid) every beam keeps its band, so the key changes nothing there.
+TEST(RangeNoiseOptions, TheSharedBandActsWhereTheCoreWalksTheBeams) {
+  const auto rgbd = rtog_test::firstObservation(rtog_test::dataset("tests_rgbd.rawlog"));
+  const std::string noise = "sensorModel=rangeNoise\nrangeNoiseStd=0.02\nrangeNoiseStdPerMeter=0.01\n";
+  for (const std::string preset : {"", "sensorModelPreset=octomap\n"}) {
+    const auto shared = mapFromIni(preset + noise), apart = mapFromIni(preset + noise + "rangeNoiseSharedBand=0\n");
+    for (const auto& m : {shared, apart}) {
+      ASSERT_TRUE(m->insertObservation(*rgbd, mrpt::poses::CPose3D()));
+      EXPECT_EQ(m->map().checkInvariants(), "");
+    }
+    const auto a = cellsOf(shared->map()), b = cellsOf(apart->map());
+    ASSERT_GT(a.size(), 1000u) << preset;
+    EXPECT_NE(a, b) << "the depth image's beams share bands (" << preset << ")";
+  }
+  const auto frames = rtog_test::loadOdometryFrames(rtog_test::dataset(rtog_test::kSena), 40);
+  const auto shared = mapFromIni(noise), apart = mapFromIni(noise + "rangeNoiseSharedBand=0\n");
+  for (const auto& f : frames)
+    for (const auto& m : {shared, apart}) m->insertObservation(*f.sf->getObservationByIndex(0), f.pose);
+  EXPECT_EQ(cellsOf(shared->map()), cellsOf(apart->map())) << "mrpt_grid grades a 2D scan's beams on its raster";
 }
 
 // Range noise in both presets (in mrpt_grid on the grid's raster and int8 lattice,

@@ -32,9 +32,6 @@ void reportInertInsertKeys(const RTreeInsertionOptions& o, const mrpt::config::C
   if (sensorModelFromString(o.sensorModel) != SensorModel::RangeNoise)
     told({"rangeNoiseStd", "rangeNoiseStdPerMeter", "rangeNoiseCutoff", "rangeNoiseSharedBand"},
          "only sensorModel = rangeNoise uses it (sensorModel is " + o.sensorModel + ")");
-  else if (o.mrptGrid())
-    told({"rangeNoiseSharedBand"}, "the mrpt_grid preset grades every beam on the grid's raster; only "
-                                   "sensorModelPreset = octomap shares bands");
   if (o.mrptGrid())
     told({"clampingMin", "clampingMax"},
          "the mrpt_grid preset saturates at the grid's int8 range; only sensorModelPreset = octomap clamps there");

@@ -127,11 +127,10 @@ void GradedScan::traceRangeNoise(const Lattice& lattice, const LogOddsModel& mod
     shared_ends = &own_ends_;
     first = 0;
   }
-  // A returned beam to `end` (lattice `end_l`, cell `end_key`): the cells before its band take the
+  // A returned beam to `end` (lattice `end_l`, cell `end_key`, range r): the cells before its band take the
   // miss change by the fast walk (if `free`), the band's cells their own (if `band`).
-  const auto traceHit = [&](const Eigen::Vector3d& end, const Eigen::Vector3d& end_l, const Key& end_key, bool free,
-                            bool band) {
-    const double r = (end - origin).norm();
+  const auto traceHit = [&](const Eigen::Vector3d& end, const Eigen::Vector3d& end_l, const Key& end_key, double r,
+                            bool free, bool band) {
     const double sigma = noise.sigma(r);
     const Eigen::Vector3d dir = (end - origin) / r;
     // Cells before the band's start take exactly the miss change: the fast walk up to the start's
@@ -205,21 +204,22 @@ void GradedScan::traceRangeNoise(const Lattice& lattice, const LogOddsModel& mod
       if (!BeamRules::count(kind, stats)) continue;
     }
     const Eigen::Vector3d end_l = rules.walkEnd(end, end_key);
-    if (kind != BeamEnd::Hit || noise.sigma((end - origin).norm()) == 0.0) {  // the beam model's marks (sigma -> 0)
+    const double r = (end - origin).norm();
+    if (kind != BeamEnd::Hit || noise.sigma(r) == 0.0) {  // the beam model's marks (sigma -> 0)
       if (kind == BeamEnd::Hit) mark(end_key, model.hitDelta());
       miss_.queueRayFree(origin_l, end_l, origin_key, end_key);
       continue;
     }
     if (g == SharedEnds::kNone || !shared_ends->shared(g)) {
-      traceHit(end, end_l, end_key, true, true);
+      traceHit(end, end_l, end_key, r, true, true);
       continue;
     }
-    traceHit(end, end_l, end_key, true, false);
+    traceHit(end, end_l, end_key, r, true, false);
     // The shared band, once per thread: the same cells and values whichever thread traces it.
     if (banded_[g] != 0) continue;
     banded_[g] = 1;
     const Eigen::Vector3d centre = lattice.cellCenter(end_key);
-    traceHit(centre, lattice.toLattice(centre), end_key, false, true);
+    traceHit(centre, lattice.toLattice(centre), end_key, (centre - origin).norm(), false, true);
   }
 }
 
