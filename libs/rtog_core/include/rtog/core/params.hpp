@@ -88,8 +88,8 @@ struct InsertParams {
   double range_noise_cutoff = 3.0;
   /// RangeNoise: the beams of one scan that end in the same cell, if at least this many do,
   /// share one band, graded along the ray to that cell's centre at the centre's range; each
-  /// still frees the cells before its own band. A depth image puts ~100 beams into a cell at
-  /// 5 cm, whose bands are nearly the same cells: one band, not 100. Fewer beams, and sparse
+  /// still frees the cells before its own band. A Kinect frame puts some 20 beams into a cell
+  /// at 5 cm, whose bands are nearly the same cells: one band, not 20. Fewer beams, and sparse
   /// scans, keep a band each. 0: every beam its own band. (Default: 4)
   std::uint32_t range_noise_shared_band = 4;
   /// The graded changes (range noise, pose blur) rounded to whole multiples of this log-odds
