@@ -20,10 +20,11 @@ bool rasterCell(const OccupancyMap::StepRun& r, std::uint32_t i, const TGridFram
   return static_cast<std::uint32_t>(k.x - keyOffsetX(f)) < f.size_x && static_cast<std::uint32_t>(k.y - keyOffsetY(f)) < f.size_y;
 }
 
-/// One pose's beams as steps, beam by beam in the grid's order: each run's cells, then its end
-/// cell; a hit beam with range noise by gradeBeam().
+/// One pose's beams as steps to out.push_back(CellStep), beam by beam in the grid's order: each
+/// run's cells, then its end cell; a hit beam with range noise by gradeBeam().
+template <class Out>
 void poseSteps(const std::vector<OccupancyMap::StepRun>& runs, const std::vector<float>& ranges,
-               const RangeNoiseRule* noise, const Steps& whole, const TGridFrame2D& f, std::vector<CellStep>& out) {
+               const RangeNoiseRule* noise, const Steps& whole, const TGridFrame2D& f, Out& out) {
   const std::int32_t z = f.layer;
   for (std::size_t j = 0; j < runs.size(); ++j) {
     const OccupancyMap::StepRun& r = runs[j];
@@ -142,7 +143,11 @@ InsertStats stepThroughCache(OccupancyMap& map, const std::vector<OccupancyMap::
 }  // namespace
 
 PoseMixture::PoseMixture(float prior)
-    : mix_(prior), unit_term_(2 * kUnits + 1, std::numeric_limits<double>::quiet_NaN()) {}
+    : mix_(prior), unit_term_(2 * kUnits + 1, std::numeric_limits<double>::quiet_NaN()) {
+  // No cell lies within a block of this one's (keys are within kKeyMin..kKeyMax).
+  none_.first = Key{std::numeric_limits<std::int32_t>::min() / 2, std::numeric_limits<std::int32_t>::min() / 2,
+                    std::numeric_limits<std::int32_t>::min() / 2};
+}
 
 double PoseMixture::unitTerm(int units) {
   const auto i = static_cast<std::size_t>(std::clamp(units, -kUnits, kUnits) + kUnits);
@@ -151,37 +156,28 @@ double PoseMixture::unitTerm(int units) {
   return t;
 }
 
-PoseMixture::Block& PoseMixture::block(const Key& k, int& cell) {
+void PoseMixture::enter(const Key& k) {
   const auto bx = static_cast<std::uint32_t>(k.x - kKeyMin) >> 4, by = static_cast<std::uint32_t>(k.y - kKeyMin) >> 4,
              bz = static_cast<std::uint32_t>(k.z - kKeyMin) >> 1;
   const std::uint64_t key = std::uint64_t{bx} | std::uint64_t{by} << 21 | std::uint64_t{bz} << 42;
-  if (key != last_key_) {
-    const auto next = static_cast<std::uint32_t>(blocks_.size());
-    last_ = index_.findOrInsert(key, next);
-    if (last_ == next) {
-      blocks_.emplace_back();
-      blocks_.back().first = Key{static_cast<std::int32_t>(bx << 4) + kKeyMin, static_cast<std::int32_t>(by << 4) + kKeyMin,
-                                 static_cast<std::int32_t>(bz << 1) + kKeyMin};
-    }
-    last_key_ = key;
+  const auto next = static_cast<std::uint32_t>(blocks_.size());
+  const std::uint32_t at = index_.findOrInsert(key, next);
+  if (at == next) {
+    blocks_.emplace_back();
+    blocks_.back().first = Key{static_cast<std::int32_t>(bx << 4) + kKeyMin, static_cast<std::int32_t>(by << 4) + kKeyMin,
+                               static_cast<std::int32_t>(bz << 1) + kKeyMin};
   }
-  Block& b = blocks_[last_];
-  cell = ((k.z - b.first.z) << 8) | ((k.y - b.first.y) << 4) | (k.x - b.first.x);
-  return b;
+  at_ = &blocks_[at];
+  if (at_->stamp != stamp_) at_->stamp = stamp_, pose_blocks_.push_back(at);
 }
 
-void PoseMixture::add(double weight, const std::vector<CellStep>& steps) {
+void PoseMixture::beginPose() {
   ++stamp_;
   pose_blocks_.clear();
-  int i;
-  for (const CellStep& c : steps) {
-    Block& b = block(c.key, i);
-    if (b.stamp != stamp_) b.stamp = stamp_, pose_blocks_.push_back(last_);
-    const std::uint64_t bit = std::uint64_t{1} << (i & 63);
-    std::uint64_t& mine = b.mine[static_cast<std::size_t>(i) >> 6];
-    if (!(mine & bit)) mine |= bit, b.now[static_cast<std::size_t>(i)] = 0;
-    b.now[static_cast<std::size_t>(i)] += c.kind == StepKind::Occupied ? -int{c.size} : int{c.size};  // cell units
-  }
+  at_ = &none_;
+}
+
+void PoseMixture::endPose(double weight) {
   for (const std::uint32_t at : pose_blocks_) {
     Block& b = blocks_[at];
     for (std::size_t w = 0; w < b.mine.size(); ++w) {
@@ -193,6 +189,7 @@ void PoseMixture::add(double weight, const std::vector<CellStep>& steps) {
       b.mine[w] = 0;
     }
   }
+  at_ = &none_;
 }
 
 void PoseMixture::steps(std::vector<CellStep>& out) const {
@@ -265,9 +262,7 @@ bool insertGradedScan(OccupancyMap& map, TGridFrame2D& frame, const mrpt::obs::C
       InsertStats pose_stats;
       traceScan(scan, *plans[i], io, grown, runs, pose_stats, &ranges, map.region());
       if (!counted) stats = pose_stats, counted = true;
-      steps.clear();
-      poseSteps(runs, ranges, rule, whole, grown, steps);
-      mixture.add(poses[i].weight, steps);
+      mixture.add(poses[i].weight, [&](auto& sink) { poseSteps(runs, ranges, rule, whole, grown, sink); });
     }
     steps.clear();
     mixture.steps(steps);

@@ -10,6 +10,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <deque>
 #include <vector>
 
 #include <mrpt/obs/CObservation2DRangeScan.h>
@@ -41,10 +42,11 @@ struct CellStep {
 /// edge. Each cell takes RangeNoiseRule's change rounded by gradedStep(); cells wholly before the
 /// band take the whole free step. cellAt returns false where the raster leaves the grid (the beam
 /// stops there). A band within half a stretch of the reading leaves the grid's own steps. The
-/// cells from `first` on (those before are the caller's, e.g. bandStart()'s whole free steps).
-template <class CellAt>
+/// cells from `first` on (those before are the caller's, e.g. bandStart()'s whole free steps), each
+/// to out.push_back(CellStep) (a list, or PoseMixture's sink).
+template <class CellAt, class Out>
 void gradeBeam(const RangeNoiseRule& noise, double R, double sigma, std::uint32_t n, const Key* end,
-               const Steps& whole, CellAt&& cellAt, std::vector<CellStep>& out, std::uint32_t first = 0) {
+               const Steps& whole, CellAt&& cellAt, Out& out, std::uint32_t first = 0) {
   const double s = R / n, reach = noise.reach(sigma);
   const auto graded = [&](const Key& k, float delta) {
     const auto [kind, size] = gradedStep(delta);
@@ -85,13 +87,27 @@ inline std::uint32_t bandStart(const RangeNoiseRule& noise, double R, double sig
 class PoseMixture {
  public:
   explicit PoseMixture(float prior);
-  void add(double weight, const std::vector<CellStep>& steps);
+  /// One pose's steps: `each(sink)` calls sink.push_back(CellStep) for each of them, in any order
+  /// (the steps go straight into the cells' sums, not through a list).
+  template <class Each>
+  void add(double weight, Each&& each) {
+    beginPose();
+    Sink sink{*this};
+    each(sink);
+    endPose(weight);
+  }
+  void add(double weight, const std::vector<CellStep>& steps) {
+    add(weight, [&](Sink& sink) {
+      for (const CellStep& c : steps) sink.push_back(c);
+    });
+  }
   /// Each touched cell's mixed step (none where it rounds to 0), block by block.
   void steps(std::vector<CellStep>& out) const;
 
  private:
   // Cells in blocks of 16 x 16 x 2 (a 2D layer's cells stay together), found by hash once a block
-  // and then by index: a pose's steps cost an add each.
+  // and then by index: a pose's steps cost an add each. Beams walk on through one block for many
+  // steps, so the block of the last step is kept and checked first, inline.
   static constexpr int kCells = 512;
   struct Block {
     Key first;                                       // lattice key of its cell 0
@@ -100,17 +116,39 @@ class PoseMixture {
     std::array<double, kCells> sum{};                // the mixture's sum
     std::array<std::uint64_t, kCells / 64> mine{}, touched{};
   };
-  Block& block(const Key& k, int& cell);
+  struct Sink {
+    PoseMixture& m;
+    void push_back(const CellStep& c) { m.step(c.key, c.kind == StepKind::Occupied ? -int{c.size} : int{c.size}); }
+  };
+  void step(const Key& k, int units) {
+    auto x = static_cast<std::uint32_t>(k.x) - static_cast<std::uint32_t>(at_->first.x);
+    auto y = static_cast<std::uint32_t>(k.y) - static_cast<std::uint32_t>(at_->first.y);
+    auto z = static_cast<std::uint32_t>(k.z) - static_cast<std::uint32_t>(at_->first.z);
+    if (x >= 16 || y >= 16 || z >= 2) {
+      enter(k);
+      x = static_cast<std::uint32_t>(k.x - at_->first.x), y = static_cast<std::uint32_t>(k.y - at_->first.y),
+      z = static_cast<std::uint32_t>(k.z - at_->first.z);
+    }
+    const std::uint32_t i = z << 8 | y << 4 | x;
+    const std::uint64_t bit = std::uint64_t{1} << (i & 63);
+    std::uint64_t& mine = at_->mine[i >> 6];
+    if (!(mine & bit)) mine |= bit, at_->now[i] = 0;
+    at_->now[i] += units;
+  }
+  /// Makes the block holding `k` the current one (created on first use, listed once a pose).
+  void enter(const Key& k);
+  void beginPose();
+  void endPose(double weight);
   double unitTerm(int units);  // mix_.term(1, units / 16), from a table filled on demand
 
   ProbabilityMixture mix_;
   std::vector<double> unit_term_;
   detail::FlatHashMap64 index_;  // block key -> position in blocks_
-  std::vector<Block> blocks_;
+  std::deque<Block> blocks_;     // a deque: blocks stay where they are as more are made
   std::vector<std::uint32_t> pose_blocks_;  // the blocks the current pose touched
   std::uint32_t stamp_ = 0;
-  std::uint64_t last_key_ = ~std::uint64_t{0};
-  std::uint32_t last_ = 0;
+  Block none_;        // the current block before a pose's first step: its key is no cell's
+  Block* at_ = &none_;
 };
 
 /// `steps` into `cells` one after another (stepCell).

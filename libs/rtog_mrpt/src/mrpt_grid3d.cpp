@@ -194,9 +194,11 @@ bool countRay(const mrpt::math::TPoint3D& e, Ray ray, InsertStats& stats) {
   return false;
 }
 
-/// One ray set's steps, ray by ray: the grid's, or graded by gradeBeam() with range noise.
+/// One ray set's steps to out.push_back(CellStep), ray by ray: the grid's, or graded by
+/// gradeBeam() with range noise.
+template <class Out>
 void setSteps(const TGridFrame3D& f, const RaySet& set, const mrpt_grid::Steps& whole, const RangeNoiseRule* noise,
-              std::vector<mrpt_grid::CellStep>& out, InsertStats& stats) {
+              Out& out, InsertStats& stats) {
   const Key o = keyOffset(f);
   const auto key = [&](int x, int y, int z) { return Key{o.x + x, o.y + y, o.z + z}; };
   for (std::size_t i = 0; i < set.n; ++i) {
@@ -260,15 +262,14 @@ InsertStats insertRays(OccupancyMap& map, const TGridFrame3D& f, const std::vect
   // One set with range noise: its steps in order; several: their mixture, a step a cell.
   mrpt_grid::PoseMixture mixture(map.logOddsModel().prior());
   std::vector<mrpt_grid::CellStep> cellSteps;
-  for (std::size_t s = 0; s < sets.size(); ++s) {
-    InsertStats own;
-    cellSteps.clear();
-    setSteps(f, sets[s], whole, noise, cellSteps, own);
-    if (s == 0) stats = own;
-    if (sets.size() > 1) mixture.add(sets[s].weight, cellSteps);
-  }
-  if (sets.size() > 1) {
-    cellSteps.clear();
+  if (sets.size() == 1) {
+    setSteps(f, sets.front(), whole, noise, cellSteps, stats);
+  } else {
+    for (std::size_t s = 0; s < sets.size(); ++s) {
+      InsertStats own;
+      mixture.add(sets[s].weight, [&](auto& sink) { setSteps(f, sets[s], whole, noise, sink, own); });
+      if (s == 0) stats = own;
+    }
     mixture.steps(cellSteps);
   }
   const Key origin{kKeyMin, kKeyMin, kKeyMin};

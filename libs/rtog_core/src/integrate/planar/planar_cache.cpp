@@ -65,7 +65,18 @@ void PlanarCache::decode(PlanarLayer& layer) {
 
 void PlanarCache::useRule(const StepRule& rule, float prior) {
   if (have_rule_ && std::memcmp(&rule, &rule_, sizeof rule) == 0 && prior == rule_prior_) return;
-  StepCodec fresh = StepCodec::make(rule, prior);
+  const auto made = std::find_if(made_.begin(), made_.end(), [&](const MadeCodec& m) {
+    return std::memcmp(&rule, &m.rule, sizeof rule) == 0 && prior == m.prior;
+  });
+  StepCodec fresh;
+  if (made != made_.end()) {
+    fresh = made->codec;
+  } else {
+    fresh = StepCodec::make(rule, prior);
+    const MadeCodec entry{rule, prior, fresh};
+    if (made_.size() < kMadeCodecs) made_.push_back(entry);
+    else made_[made_next_] = entry, made_next_ = (made_next_ + 1) % kMadeCodecs;
+  }
   if (codec_.usable() && !(fresh.usable() && fresh.sameCodes(codec_)))
     for (std::size_t i = 0; i < layers_.size(); ++i)
       if (layers_[i].form == LayerForm::Codes) decode(layers_[i]);
