@@ -10,8 +10,6 @@
 namespace rtog::mrpt_grid {
 namespace {
 
-constexpr int kUnits = 4096;  // PoseMixture's changes beyond +-256 nats: the probability is 0 or 1 in double
-
 /// Cell i of the 2D grid's raster `r` (past its end cell for i > count), false outside the grid.
 bool rasterCell(const OccupancyMap::StepRun& r, std::uint32_t i, const TGridFrame2D& f, Key& k) {
   constexpr int F = OccupancyMap::kRunFracBits;
@@ -142,32 +140,76 @@ InsertStats stepThroughCache(OccupancyMap& map, const std::vector<OccupancyMap::
 
 }  // namespace
 
-PoseMixture::PoseMixture(float prior)
+PoseMixture::PoseMixture(float prior, const Box* box)
     : mix_(prior), unit_term_(2 * kUnits + 1, std::numeric_limits<double>::quiet_NaN()) {
   // No cell lies within a block of this one's (keys are within kKeyMin..kKeyMax).
   none_.first = Key{std::numeric_limits<std::int32_t>::min() / 2, std::numeric_limits<std::int32_t>::min() / 2,
                     std::numeric_limits<std::int32_t>::min() / 2};
+  if (box && !box->isEmpty()) {
+    const auto block = [](const Key& k) {
+      return Key{static_cast<std::int32_t>(static_cast<std::uint32_t>(k.x - kKeyMin) >> 4),
+                 static_cast<std::int32_t>(static_cast<std::uint32_t>(k.y - kKeyMin) >> 4), k.z - kKeyMin};
+    };
+    const Key lo = block(box->min), hi = block(box->max);
+    const auto w = static_cast<std::uint64_t>(hi.x - lo.x + 1), h = static_cast<std::uint64_t>(hi.y - lo.y + 1),
+               d = static_cast<std::uint64_t>(hi.z - lo.z + 1);
+    if (w * h * d <= kTableBlocks) {
+      table_.assign(static_cast<std::size_t>(w * h * d), 0);
+      table_lo_ = lo;
+      table_w_ = static_cast<std::uint32_t>(w), table_h_ = static_cast<std::uint32_t>(h),
+      table_d_ = static_cast<std::uint32_t>(d);
+    }
+  }
 }
 
-double PoseMixture::unitTerm(int units) {
-  const auto i = static_cast<std::size_t>(std::clamp(units, -kUnits, kUnits) + kUnits);
-  double& t = unit_term_[i];
-  if (std::isnan(t)) t = mix_.term(1.0, valueOfCell(static_cast<int>(i) - kUnits));
-  return t;
+PoseMixture::~PoseMixture() {
+  // Back to the pool as a new block: sums 0, no bits, no stamp (`now` is reset by `mine` on use).
+  std::vector<std::unique_ptr<Block>>& spare = pool();
+  for (std::unique_ptr<Block>& b : blocks_) {
+    if (spare.size() >= kPoolBlocks) break;
+    for (std::size_t w = 0; w < b->touched.size(); ++w)
+      for (std::uint64_t bits = b->touched[w]; bits != 0; bits &= bits - 1)
+        b->sum[w * 64 + static_cast<std::size_t>(__builtin_ctzll(bits))] = 0.0;
+    b->touched = {}, b->mine = {}, b->stamp = 0;
+    spare.push_back(std::move(b));
+  }
+}
+
+std::vector<std::unique_ptr<PoseMixture::Block>>& PoseMixture::pool() {
+  thread_local std::vector<std::unique_ptr<Block>> spare;
+  return spare;
+}
+
+double PoseMixture::fillTerm(std::size_t i) {
+  return unit_term_[i] = mix_.term(1.0, valueOfCell(static_cast<int>(i) - kUnits));
 }
 
 void PoseMixture::enter(const Key& k) {
   const auto bx = static_cast<std::uint32_t>(k.x - kKeyMin) >> 4, by = static_cast<std::uint32_t>(k.y - kKeyMin) >> 4,
-             bz = static_cast<std::uint32_t>(k.z - kKeyMin) >> 1;
-  const std::uint64_t key = std::uint64_t{bx} | std::uint64_t{by} << 21 | std::uint64_t{bz} << 42;
+             bz = static_cast<std::uint32_t>(k.z - kKeyMin);
   const auto next = static_cast<std::uint32_t>(blocks_.size());
-  const std::uint32_t at = index_.findOrInsert(key, next);
-  if (at == next) {
-    blocks_.emplace_back();
-    blocks_.back().first = Key{static_cast<std::int32_t>(bx << 4) + kKeyMin, static_cast<std::int32_t>(by << 4) + kKeyMin,
-                               static_cast<std::int32_t>(bz << 1) + kKeyMin};
+  std::uint32_t at;
+  const auto tx = bx - static_cast<std::uint32_t>(table_lo_.x), ty = by - static_cast<std::uint32_t>(table_lo_.y),
+             tz = bz - static_cast<std::uint32_t>(table_lo_.z);
+  if (tx < table_w_ && ty < table_h_ && tz < table_d_) {
+    std::uint32_t& slot = table_[(std::size_t{tz} * table_h_ + ty) * table_w_ + tx];
+    if (slot == 0) slot = next + 1;
+    at = slot - 1;
+  } else {
+    at = index_.findOrInsert(std::uint64_t{bx} | std::uint64_t{by} << 21 | std::uint64_t{bz} << 42, next);
   }
-  at_ = &blocks_[at];
+  if (at == next) {
+    std::vector<std::unique_ptr<Block>>& spare = pool();
+    if (spare.empty()) {
+      blocks_.push_back(std::make_unique<Block>());
+    } else {
+      blocks_.push_back(std::move(spare.back()));
+      spare.pop_back();
+    }
+    blocks_.back()->first = Key{static_cast<std::int32_t>(bx << 4) + kKeyMin, static_cast<std::int32_t>(by << 4) + kKeyMin,
+                                static_cast<std::int32_t>(bz) + kKeyMin};
+  }
+  at_ = blocks_[at].get();
   if (at_->stamp != stamp_) at_->stamp = stamp_, pose_blocks_.push_back(at);
 }
 
@@ -179,7 +221,7 @@ void PoseMixture::beginPose() {
 
 void PoseMixture::endPose(double weight) {
   for (const std::uint32_t at : pose_blocks_) {
-    Block& b = blocks_[at];
+    Block& b = *blocks_[at];
     for (std::size_t w = 0; w < b.mine.size(); ++w) {
       for (std::uint64_t bits = b.mine[w]; bits != 0; bits &= bits - 1) {
         const std::size_t c = w * 64 + static_cast<std::size_t>(__builtin_ctzll(bits));
@@ -193,15 +235,17 @@ void PoseMixture::endPose(double weight) {
 }
 
 void PoseMixture::steps(std::vector<CellStep>& out) const {
-  for (const Block& b : blocks_)
+  for (const std::unique_ptr<Block>& block : blocks_) {
+    const Block& b = *block;
     for (std::size_t w = 0; w < b.touched.size(); ++w)
       for (std::uint64_t bits = b.touched[w]; bits != 0; bits &= bits - 1) {
         const auto c = static_cast<int>(w * 64) + __builtin_ctzll(bits);
         const auto [kind, size] = gradedStep(mix_.change(b.sum[static_cast<std::size_t>(c)]));
         if (size > 0)
-          out.push_back(CellStep{Key{b.first.x + (c & 15), b.first.y + ((c >> 4) & 15), b.first.z + (c >> 8)}, kind,
+          out.push_back(CellStep{Key{b.first.x + (c & 15), b.first.y + (c >> 4), b.first.z}, kind,
                                  static_cast<std::uint8_t>(std::min(size, 254))});
       }
+  }
 }
 
 void applyInOrder(ScanCells& cells, const Key& offset, const std::vector<CellStep>& steps, const Steps& whole) {
@@ -256,7 +300,10 @@ bool insertGradedScan(OccupancyMap& map, TGridFrame2D& frame, const mrpt::obs::C
     std::vector<OccupancyMap::StepRun> runs;
     std::vector<float> ranges;
     std::vector<CellStep> steps;
-    PoseMixture mixture(map.logOddsModel().prior());
+    const Box grid{Key{keyOffsetX(grown), keyOffsetY(grown), grown.layer},
+                   Key{keyOffsetX(grown) + static_cast<std::int32_t>(grown.size_x) - 1,
+                       keyOffsetY(grown) + static_cast<std::int32_t>(grown.size_y) - 1, grown.layer}};
+    PoseMixture mixture(map.logOddsModel().prior(), &grid);
     for (std::size_t i = 0; i < poses.size(); ++i) {
       if (!plans[i]) continue;
       InsertStats pose_stats;

@@ -9,8 +9,9 @@
 #include <algorithm>
 #include <array>
 #include <cstddef>
+#include <cmath>
 #include <cstdint>
-#include <deque>
+#include <memory>
 #include <vector>
 
 #include <mrpt/obs/CObservation2DRangeScan.h>
@@ -86,7 +87,13 @@ inline std::uint32_t bandStart(const RangeNoiseRule& noise, double R, double sig
 /// rounded by gradedStep(): one step, which saturates as stepCell() does.
 class PoseMixture {
  public:
-  explicit PoseMixture(float prior);
+  /// `box`, if given, holds every cell the poses will step (a 2D section's grid): the blocks are
+  /// then found by a table over it (where that is no larger than kTableBlocks), else by hash.
+  explicit PoseMixture(float prior, const Box* box = nullptr);
+  ~PoseMixture();
+  PoseMixture(const PoseMixture&) = delete;
+  PoseMixture& operator=(const PoseMixture&) = delete;
+
   /// One pose's steps: `each(sink)` calls sink.push_back(CellStep) for each of them, in any order
   /// (the steps go straight into the cells' sums, not through a list).
   template <class Each>
@@ -104,16 +111,21 @@ class PoseMixture {
   /// Each touched cell's mixed step (none where it rounds to 0), block by block.
   void steps(std::vector<CellStep>& out) const;
 
+  static constexpr std::size_t kTableBlocks = std::size_t{1} << 18;  // a 1 MiB table: 8192^2 cells of one layer
+  static constexpr std::size_t kPoolBlocks = 1024;  // kept by a thread between scans: 3 MiB
+
  private:
-  // Cells in blocks of 16 x 16 x 2 (a 2D layer's cells stay together), found by hash once a block
-  // and then by index: a pose's steps cost an add each. Beams walk on through one block for many
-  // steps, so the block of the last step is kept and checked first, inline.
-  static constexpr int kCells = 512;
+  // Cells in blocks of 16 x 16 x 1 (a 2D layer's cells stay together), found once a block and
+  // then by index: a pose's steps cost an add each. Beams walk on through one block for many
+  // steps, so the block of the last step is kept and checked first, inline. The blocks come from
+  // a pool the thread keeps (a scan's blur touches hundreds; fresh ones each scan cost a page
+  // fault each).
+  static constexpr int kCells = 256;
   struct Block {
     Key first;                                       // lattice key of its cell 0
     std::uint32_t stamp = 0;                         // the last pose that touched it
     std::array<std::int32_t, kCells> now{};          // that pose's change, in int8 units
-    std::array<double, kCells> sum{};                // the mixture's sum
+    std::array<double, kCells> sum{};                // the mixture's sum (0 where not touched)
     std::array<std::uint64_t, kCells / 64> mine{}, touched{};
   };
   struct Sink {
@@ -123,29 +135,40 @@ class PoseMixture {
   void step(const Key& k, int units) {
     auto x = static_cast<std::uint32_t>(k.x) - static_cast<std::uint32_t>(at_->first.x);
     auto y = static_cast<std::uint32_t>(k.y) - static_cast<std::uint32_t>(at_->first.y);
-    auto z = static_cast<std::uint32_t>(k.z) - static_cast<std::uint32_t>(at_->first.z);
-    if (x >= 16 || y >= 16 || z >= 2) {
+    if (x >= 16 || y >= 16 || k.z != at_->first.z) {
       enter(k);
-      x = static_cast<std::uint32_t>(k.x - at_->first.x), y = static_cast<std::uint32_t>(k.y - at_->first.y),
-      z = static_cast<std::uint32_t>(k.z - at_->first.z);
+      x = static_cast<std::uint32_t>(k.x - at_->first.x), y = static_cast<std::uint32_t>(k.y - at_->first.y);
     }
-    const std::uint32_t i = z << 8 | y << 4 | x;
+    const std::uint32_t i = y << 4 | x;
     const std::uint64_t bit = std::uint64_t{1} << (i & 63);
     std::uint64_t& mine = at_->mine[i >> 6];
     if (!(mine & bit)) mine |= bit, at_->now[i] = 0;
     at_->now[i] += units;
   }
-  /// Makes the block holding `k` the current one (created on first use, listed once a pose).
+  /// Makes the block holding `k` the current one (made on first use, listed once a pose).
   void enter(const Key& k);
   void beginPose();
   void endPose(double weight);
-  double unitTerm(int units);  // mix_.term(1, units / 16), from a table filled on demand
+  /// mix_.term(1, units / 16), from a table filled on demand.
+  double unitTerm(int units) {
+    const auto i = static_cast<std::size_t>(std::clamp(units, -kUnits, kUnits) + kUnits);
+    const double t = unit_term_[i];
+    return std::isnan(t) ? fillTerm(i) : t;
+  }
+  double fillTerm(std::size_t i);
+  static std::vector<std::unique_ptr<Block>>& pool();  // the thread's spare blocks
 
+  static constexpr int kUnits = 4096;  // changes beyond +-256 nats: the probability is 0 or 1 in double
   ProbabilityMixture mix_;
   std::vector<double> unit_term_;
-  detail::FlatHashMap64 index_;  // block key -> position in blocks_
-  std::deque<Block> blocks_;     // a deque: blocks stay where they are as more are made
-  std::vector<std::uint32_t> pose_blocks_;  // the blocks the current pose touched
+  // Blocks by their block coordinates: a table over the box's (table_lo_, extents table_w_ x
+  // table_h_ x table_d_; entry = position + 1, 0 none), else a hash.
+  std::vector<std::uint32_t> table_;
+  Key table_lo_{};
+  std::uint32_t table_w_ = 0, table_h_ = 0, table_d_ = 0;
+  detail::FlatHashMap64 index_;
+  std::vector<std::unique_ptr<Block>> blocks_;  // in the order made
+  std::vector<std::uint32_t> pose_blocks_;      // the blocks the current pose touched
   std::uint32_t stamp_ = 0;
   Block none_;        // the current block before a pose's first step: its key is no cell's
   Block* at_ = &none_;
