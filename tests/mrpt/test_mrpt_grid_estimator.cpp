@@ -8,6 +8,7 @@
 #include <cmath>
 #include <iostream>
 #include <map>
+#include <thread>
 
 #include <mrpt/config/CConfigFileMemory.h>
 #include <mrpt/maps/CMultiMetricMap.h>
@@ -229,6 +230,44 @@ TEST(MrptGridEstimator, PoseBlurMixesTheSigmaPosesOnTheGridsLattice) {
   EXPECT_GT(mixed.size(), 1000u);
   EXPECT_EQ(outside, 0u);
   EXPECT_GT(differ_from_mean, 100u);
+}
+
+// The mixture's cells live in blocks that the inserting thread keeps between scans, found by a
+// table over the grid, or by hash where the grid is too large for the table (8192^2 cells). Neither
+// may change a cell: the same blurred scans give the same cells in a thread of its own (nothing
+// kept yet), after other blurred maps were built in this thread, and in a grid that a scan 600 m
+// away grew past the table's size first.
+TEST(MrptGridEstimator, PoseBlurDoesNotDependOnKeptBlocksOrTheGridsSize) {
+  mrpt::math::CMatrixDouble66 cov;
+  cov.setZero();
+  cov(0, 0) = cov(1, 1) = 0.05 * 0.05;
+  cov(3, 3) = mrpt::square(mrpt::DEG2RAD(2.0));
+  const auto build = [&](bool far_first) {
+    auto p = pasted("poseUncertainty = on");
+    if (far_first) {
+      const mrpt::poses::CPose3D far = sena()[0].pose + mrpt::poses::CPose3D(600, 600, 0, 0, 0, 0);
+      EXPECT_TRUE(p->r->insertObservation(*scanOf(sena()[0]), mrpt::poses::CPose3DPDFGaussian(far, cov)));
+      EXPECT_GT(std::uint64_t{p->r->gridFrame().size_x} * p->r->gridFrame().size_y, std::uint64_t{1} << 26);
+    }
+    for (std::size_t i = 0; i < 40 && i < sena().size(); ++i)
+      if (const auto s = scanOf(sena()[i])) {
+        EXPECT_TRUE(p->r->insertObservation(*s, mrpt::poses::CPose3DPDFGaussian(sena()[i].pose, cov)));
+      }
+    auto cells = cellsOf(*p->r);
+    for (auto it = cells.begin(); it != cells.end();)  // the far scan's cells: 600 m is 12000 cells
+      it = it->first.first > 6000 ? cells.erase(it) : std::next(it);
+    return cells;
+  };
+  std::map<std::pair<int, int>, int> alone;
+  std::thread([&] { alone = build(false); }).join();
+  ASSERT_GT(alone.size(), 10000u);
+  const auto far = build(true);
+  const auto again = build(false);
+  std::cout << "SENA, 40 blurred scans in mrpt_grid: " << alone.size() << " cells in a fresh thread; "
+            << (far == alone ? "the same" : "others") << " after a far scan, "
+            << (again == alone ? "the same" : "others") << " with kept blocks\n";
+  EXPECT_TRUE(far == alone);
+  EXPECT_TRUE(again == alone);
 }
 
 // A particle filter scores between insertions: the 2D view's tiles are then kept and follow each
