@@ -103,11 +103,6 @@ class PoseMixture {
     each(sink);
     endPose(weight);
   }
-  void add(double weight, const std::vector<CellStep>& steps) {
-    add(weight, [&](Sink& sink) {
-      for (const CellStep& c : steps) sink.push_back(c);
-    });
-  }
   /// Each touched cell's mixed step (none where it rounds to 0), block by block.
   void steps(std::vector<CellStep>& out) const;
 

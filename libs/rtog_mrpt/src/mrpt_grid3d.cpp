@@ -260,14 +260,14 @@ InsertStats insertRays(OccupancyMap& map, const TGridFrame3D& f, const std::vect
     return stats;
   }
   // One set with range noise: its steps in order; several: their mixture, a step a cell.
-  const Key o = keyOffset(f);
-  const Box grid{o, Key{o.x + static_cast<std::int32_t>(f.size_x) - 1, o.y + static_cast<std::int32_t>(f.size_y) - 1,
-                        o.z + static_cast<std::int32_t>(f.size_z) - 1}};
-  mrpt_grid::PoseMixture mixture(map.logOddsModel().prior(), &grid);
   std::vector<mrpt_grid::CellStep> cellSteps;
   if (sets.size() == 1) {
     setSteps(f, sets.front(), whole, noise, cellSteps, stats);
   } else {
+    const Key o = keyOffset(f);
+    const Box grid{o, Key{o.x + static_cast<std::int32_t>(f.size_x) - 1, o.y + static_cast<std::int32_t>(f.size_y) - 1,
+                          o.z + static_cast<std::int32_t>(f.size_z) - 1}};
+    mrpt_grid::PoseMixture mixture(map.logOddsModel().prior(), &grid);
     for (std::size_t s = 0; s < sets.size(); ++s) {
       InsertStats own;
       mixture.add(sets[s].weight, [&](auto& sink) { setSteps(f, sets[s], whole, noise, sink, own); });
