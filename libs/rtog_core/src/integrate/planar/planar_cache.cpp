@@ -63,20 +63,34 @@ void PlanarCache::decode(PlanarLayer& layer) {
   layer.form = LayerForm::Floats;
 }
 
+namespace {
+
+/// StepCodec::make(rule, prior), kept for the thread's last 256 rules: graded scans (range noise
+/// and pose blur in the mrpt_grid preset) apply a rule for each step size they use, mostly the
+/// same sizes scan after scan, and a codec is 768 steps to make. Per thread, not per map: a
+/// particle filter's maps would each hold the same codecs (about 1 MiB at most).
+StepCodec madeCodec(const StepRule& rule, float prior) {
+  struct Made {
+    StepRule rule;
+    float prior;
+    StepCodec codec;
+  };
+  constexpr std::size_t kKept = 256;
+  thread_local std::vector<Made> made;
+  thread_local std::size_t next = 0;  // the entry to replace once `made` is full
+  for (const Made& m : made)
+    if (std::memcmp(&rule, &m.rule, sizeof rule) == 0 && prior == m.prior) return m.codec;
+  const StepCodec codec = StepCodec::make(rule, prior);
+  if (made.size() < kKept) made.push_back(Made{rule, prior, codec});
+  else made[next] = Made{rule, prior, codec}, next = (next + 1) % kKept;
+  return codec;
+}
+
+}  // namespace
+
 void PlanarCache::useRule(const StepRule& rule, float prior) {
   if (have_rule_ && std::memcmp(&rule, &rule_, sizeof rule) == 0 && prior == rule_prior_) return;
-  const auto made = std::find_if(made_.begin(), made_.end(), [&](const MadeCodec& m) {
-    return std::memcmp(&rule, &m.rule, sizeof rule) == 0 && prior == m.prior;
-  });
-  StepCodec fresh;
-  if (made != made_.end()) {
-    fresh = made->codec;
-  } else {
-    fresh = StepCodec::make(rule, prior);
-    const MadeCodec entry{rule, prior, fresh};
-    if (made_.size() < kMadeCodecs) made_.push_back(entry);
-    else made_[made_next_] = entry, made_next_ = (made_next_ + 1) % kMadeCodecs;
-  }
+  StepCodec fresh = madeCodec(rule, prior);
   if (codec_.usable() && !(fresh.usable() && fresh.sameCodes(codec_)))
     for (std::size_t i = 0; i < layers_.size(); ++i)
       if (layers_[i].form == LayerForm::Codes) decode(layers_[i]);

@@ -44,8 +44,7 @@ class PlanarCache {
   /// Forgets every cached layer (the map's leaves were cleared).
   void clear();
   std::size_t memoryBytes() const {
-    return layers_.capacity() * sizeof(PlanarLayer) + floats_.capacity() * sizeof(LayerValues) + index_.memoryBytes() +
-           made_.capacity() * sizeof(MadeCodec);
+    return layers_.capacity() * sizeof(PlanarLayer) + floats_.capacity() * sizeof(LayerValues) + index_.memoryBytes();
   }
 
   /// Applies the union of batches[0 .. count) of a scan in z-layer `z` (occupied winning).
@@ -93,16 +92,6 @@ class PlanarCache {
   StepRule rule_;                          // the last rule of applyStepRuns, with its prior
   float rule_prior_ = 0.0f;
   StepCodec codec_;                        // its codec: the codes of the coded layers
-  // Codecs of recent rules: graded scans (pose blur in the mrpt_grid preset) apply a rule for each
-  // step size they use, mostly the same sizes scan after scan, and each codec is 768 steps to make.
-  struct MadeCodec {
-    StepRule rule;
-    float prior;
-    StepCodec codec;
-  };
-  static constexpr std::size_t kMadeCodecs = 256;
-  std::vector<MadeCodec> made_;
-  std::size_t made_next_ = 0;              // the entry to replace next once made_ is full
 };
 
 }  // namespace rtog
