@@ -97,17 +97,13 @@ UpdateSet FusionIntegrator::trace(const OccupancyMap& other, const Eigen::Isomet
   GradedScan& graded = fusionScan(ctx_.scratch);
   if (const auto shift = wholeCellShift(lattice, other.lattice(), pose)) {
     // Chunks of one log, maps of one frame: the leaves are disjoint and the shift one-to-one, so
-    // each cell is reached once and goes in with no lookup.
-    std::size_t cells = 0;
-    other.forEachLeaf([&](const Box& box, float) { cells += static_cast<std::size_t>(box.volume()); });
-    graded.reserve(cells);
+    // each cell is reached once.
     other.forEachLeaf([&](const Box& box, float v) {
-      shiftedCells(*shift, box, stats, [&](const Key& k) { graded.markDistinct(k, v - l0); });
+      shiftedCells(*shift, box, stats, [&](const Key& k) { graded.mark(k, v - l0); });
     });
   } else {
     const ResampledEvidence r = resample(other, lattice, pose, l0, threads, stats);
-    graded.reserve(r.keys().size());
-    for (std::size_t i = 0; i < r.keys().size(); ++i) graded.markDistinct(r.keys()[i], static_cast<float>(r.sums()[i]));
+    for (std::size_t i = 0; i < r.keys().size(); ++i) graded.mark(r.keys()[i], static_cast<float>(r.sums()[i]));
   }
   return fusionSet(graded, stats, threads);
 }

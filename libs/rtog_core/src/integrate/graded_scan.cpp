@@ -28,43 +28,67 @@ void cellInterval(const Eigen::Vector3d& origin, const Eigen::Vector3d& inv, con
 
 void GradedScan::clear() {
   miss_.clear();
-  index_.clear();
-  keys_.clear();
-  deltas_.clear();
+  for (std::size_t i = 0; i < slot_bricks_.size(); ++i) marks_[i].clear();
+  slot_bricks_.clear();
+  slots_.clear();
+  last_slot_ = kNoSlot;
   bricks_.clear();
   codes_.clear();
   cells_.clear();
   banded_.clear();
 }
 
+void GradedScan::enterBrick(const Key& brick) {
+  const auto next = static_cast<std::uint32_t>(slot_bricks_.size());
+  last_slot_ = slots_.findOrInsert(packKey(brick), next);
+  last_brick_ = brick;
+  if (last_slot_ != next) return;
+  slot_bricks_.push_back(brick);
+  if (marks_.size() < slot_bricks_.size()) marks_.emplace_back();
+}
+
 std::size_t GradedScan::memoryBytes() const {
-  return miss_.memoryBytes() + index_.memoryBytes() + banded_.capacity() + own_ends_.memoryBytes() +
-         keys_.capacity() * sizeof(Key) + deltas_.capacity() * sizeof(float) + order_.capacity() * sizeof(order_[0]) +
-         bricks_.capacity() * sizeof(BrickEntry) + codes_.capacity() * sizeof(std::uint64_t) +
-         cells_.capacity() * sizeof(GradedCell);
+  std::size_t marks = marks_.capacity() * sizeof(marks_[0]);
+  for (const auto& m : marks_) marks += m.capacity() * sizeof(Mark);
+  return miss_.memoryBytes() + slots_.memoryBytes() + banded_.capacity() + own_ends_.memoryBytes() + marks +
+         slot_bricks_.capacity() * sizeof(Key) + value_.capacity() * sizeof(float) +
+         order_.capacity() * sizeof(order_[0]) + bricks_.capacity() * sizeof(BrickEntry) +
+         codes_.capacity() * sizeof(std::uint64_t) + cells_.capacity() * sizeof(GradedCell);
 }
 
 void GradedScan::finalize() {
   miss_.finalize();
+  last_slot_ = kNoSlot;
   order_.clear();
-  order_.reserve(keys_.size());
-  for (std::uint32_t i = 0; i < keys_.size(); ++i)
-    order_.emplace_back(mortonCode(brickOf(keys_[i])), static_cast<std::uint64_t>(localIndex(keys_[i])) << 32 | i);
+  for (std::uint32_t s = 0; s < slot_bricks_.size(); ++s) order_.emplace_back(mortonCode(slot_bricks_[s]), s);
   std::sort(order_.begin(), order_.end());
-  // The graded bricks (first), with their codes...
+  // The graded bricks (first), with their codes, each brick's cells by local index...
   std::vector<BrickEntry> graded;
   codes_.clear();
   cells_.clear();
-  cells_.reserve(order_.size());
-  for (std::size_t j = 0; j < order_.size(); ++j) {
-    const auto pos = static_cast<std::uint32_t>(order_[j].second);
-    const Key& k = keys_[pos];
-    if (j == 0 || order_[j].first != order_[j - 1].first) {
-      graded.push_back(BrickEntry{brickOf(k), order_[j].first, nullptr, static_cast<std::uint32_t>(cells_.size()), 0});
-      codes_.push_back(order_[j].first);
+  value_.resize(kBrickCells);
+  BrickMask seen{};
+  for (const auto& [code, slot] : order_) {
+    for (const Mark& m : marks_[slot]) {
+      std::uint64_t& word = seen[m.local >> 6];
+      const std::uint64_t bit = std::uint64_t{1} << (m.local & 63);
+      float& v = value_[m.local];
+      if (!(word & bit)) {
+        word |= bit;
+        v = m.delta;
+      } else if (m.delta > v) {
+        v = m.delta;
+      }
     }
-    cells_.push_back(GradedCell{static_cast<std::uint16_t>(localIndex(k)), deltas_[pos]});
-    ++graded.back().count;
+    const auto first = static_cast<std::uint32_t>(cells_.size());
+    for (std::size_t w = 0; w < seen.size(); ++w)
+      for (std::uint64_t bits = seen[w]; bits != 0; bits &= bits - 1) {
+        const auto i = static_cast<std::uint16_t>(w * 64 + static_cast<std::size_t>(__builtin_ctzll(bits)));
+        cells_.push_back(GradedCell{i, value_[i]});
+      }
+    seen = BrickMask{};
+    graded.push_back(BrickEntry{slot_bricks_[slot], code, nullptr, first, static_cast<std::uint32_t>(cells_.size()) - first});
+    codes_.push_back(code);
   }
   // ...merged with the miss batch's bricks, both in Morton order.
   bricks_.clear();

@@ -15,6 +15,7 @@
 #include "rtog/core/key.hpp"
 #include "rtog/core/params.hpp"
 #include "rtog/core/stats.hpp"
+#include "storage/brick.hpp"
 #include "util/flat_hash_map.hpp"
 
 namespace rtog {
@@ -51,26 +52,11 @@ class SharedEnds {
 class GradedScan {
  public:
   void clear();
+  /// A change of cell k; a cell marked several times takes the largest.
   void mark(const Key& k, float delta) {
-    const auto i = static_cast<std::uint32_t>(keys_.size());
-    const std::uint32_t at = index_.findOrInsert(packKey(k), i);
-    if (at == i) {
-      keys_.push_back(k);
-      deltas_.push_back(delta);
-    } else if (delta > deltas_[at]) {
-      deltas_[at] = delta;
-    }
-  }
-  /// Room for n marks.
-  void reserve(std::size_t n) {
-    keys_.reserve(n);
-    deltas_.reserve(n);
-  }
-  /// mark() of a cell the caller knows is not marked yet (e.g. the cells of disjoint boxes moved
-  /// one-to-one): no lookup.
-  void markDistinct(const Key& k, float delta) {
-    keys_.push_back(k);
-    deltas_.push_back(delta);
+    const Key b = brickOf(k);
+    if (last_slot_ == kNoSlot || !(b == last_brick_)) enterBrick(b);
+    marks_[last_slot_].push_back(Mark{static_cast<std::uint16_t>(localIndex(k)), delta});
   }
   /// Groups the marked cells by brick, bricks in Morton order, cells by local index. Ends marking.
   void finalize();
@@ -114,13 +100,26 @@ class GradedScan {
     const BrickMask* miss;
     std::uint32_t first, count;
   };
-  UpdateBatch miss_;             // cells of exactly the miss change
-  detail::FlatHashMap64 index_;  // packed key -> position in keys_ / deltas_
+  struct Mark {
+    std::uint16_t local;
+    float delta;
+  };
+  static constexpr std::uint32_t kNoSlot = detail::FlatHashMap64::kAbsent;
+  /// Makes `brick`'s slot the one mark() appends to.
+  void enterBrick(const Key& brick);
+
+  UpdateBatch miss_;  // cells of exactly the miss change
+  // The marks, by brick in the order made: a band's cells follow each other within a brick, so
+  // a mark is an append to the last brick's list; finalize() takes each cell's largest.
+  std::vector<std::vector<Mark>> marks_;  // by slot (the lists kept between scans)
+  std::vector<Key> slot_bricks_;          // by slot
+  detail::FlatHashMap64 slots_;           // packed brick key -> slot
+  Key last_brick_{};
+  std::uint32_t last_slot_ = kNoSlot;
   std::vector<std::uint8_t> banded_;  // traceRangeNoise(): by SharedEnds group, its band traced
   SharedEnds own_ends_;           // traceRangeNoise() of a whole scan
-  std::vector<Key> keys_;
-  std::vector<float> deltas_;
-  std::vector<std::pair<std::uint64_t, std::uint64_t>> order_;  // finalize(): brick's Morton code, local << 32 | position
+  std::vector<std::pair<std::uint64_t, std::uint32_t>> order_;  // finalize(): the bricks' Morton codes, slots
+  std::vector<float> value_;                                     // finalize(): one brick's cells' largest marks
   std::vector<BrickEntry> bricks_;
   std::vector<std::uint64_t> codes_;  // finalize(): the graded bricks' Morton codes
   std::vector<GradedCell> cells_;
