@@ -8,6 +8,7 @@
 namespace rtog {
 
 using detail::coverGreedily;
+using detail::coverValues;
 
 /// applyBrick()'s way for a brick without leaves under equal-value merging: each class of
 /// fresh cells has one value, so the greedy cover of each class's mask gives the leaves, the
@@ -285,12 +286,8 @@ void coverDense(MapStore& store, std::uint32_t slot, const std::vector<float>& v
   }
   std::vector<LeafEntry>& out = ctx.rebuilt;
   out.clear();
-  coverGreedily(
-      known,
-      [&](int start, int cell) {
-        const float v = value[static_cast<std::size_t>(start)];
-        return value[static_cast<std::size_t>(cell)] == v && store.mergeable(v);
-      },
+  coverValues(
+      known, value.data(), [&](float v) { return store.mergeable(v); },
       [&](const std::uint8_t lo[3], const std::uint8_t hi[3], int start) {
         out.push_back(makeLeaf(lo, hi, value[static_cast<std::size_t>(start)]));
       });

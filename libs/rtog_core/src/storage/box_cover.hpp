@@ -59,6 +59,49 @@ void coverGreedily(BrickMask m, Joins&& joins, Emit&& emit) {
     }
 }
 
+// coverGreedily's boxes (the same, in the same order) where joins(start, cell) is "the cell's
+// value equals the start's, which is mergeable": a brick covered anew from a dense table of
+// values (kBrickCells, by local index). Runs, rows and layers are grown by masks of the cells
+// equal to the start value, a row's worth compared at once, instead of cell by cell.
+template <class T, class Mergeable, class Emit>
+void coverValues(BrickMask m, const T* values, Mergeable&& mergeable, Emit&& emit) {
+  // Row r = y + 16 z holds the 16 x-bits of word r / 4 at bit 16 * (r % 4); its values start at 16 r.
+  const auto row = [&](int r) {
+    return static_cast<std::uint32_t>((m[static_cast<std::size_t>(r >> 2)] >> ((r & 3) * kBrickSize)) & 0xFFFFu);
+  };
+  const auto u8 = [](int c) { return static_cast<std::uint8_t>(c); };
+  for (int w = 0; w < kBrickWords; ++w)
+    while (m[static_cast<std::size_t>(w)] != 0) {
+      const int b = __builtin_ctzll(m[static_cast<std::size_t>(w)]);
+      const int start = w * 64 + b;
+      const int r = start >> kBrickBits, y = r & (kBrickSize - 1), z = r >> kBrickBits;
+      const int x0 = b & (kBrickSize - 1);
+      const T v = values[start];
+      int x1 = x0, y1 = y, z1 = z;
+      if (mergeable(v)) {
+        const auto same = [&](int yy, int zz) {
+          const int rr = yy + kBrickSize * zz;
+          return row(rr) & equalMask16(values + rr * kBrickSize, v);
+        };
+        x1 = x0 + __builtin_ctz(~((same(y, z) | (1u << x0)) >> x0)) - 1;
+        const std::uint32_t run = xRun(x0, x1);
+        while (y1 + 1 < kBrickSize && (same(y1 + 1, z) & run) == run) ++y1;
+        for (bool grow = true; grow && z1 + 1 < kBrickSize;) {
+          for (int yy = y; yy <= y1 && grow; ++yy) grow = (same(yy, z1 + 1) & run) == run;
+          if (grow) ++z1;
+        }
+      }
+      const std::uint64_t run = xRun(x0, x1);
+      for (int zz = z; zz <= z1; ++zz)
+        for (int yy = y; yy <= y1; ++yy) {
+          const int rr = yy + kBrickSize * zz;
+          m[static_cast<std::size_t>(rr >> 2)] &= ~(run << ((rr & 3) * kBrickSize));
+        }
+      const std::uint8_t lo[3] = {u8(x0), u8(y), u8(z)}, hi[3] = {u8(x1), u8(y1), u8(z1)};
+      emit(lo, hi, start);
+    }
+}
+
 // coverGreedily's boxes for a brick whose only cells to cover are one z-layer of values (a
 // planar cache layer, in floats or in the int8 codes of a step rule): runs and rows are grown
 // by masks of the cells equal to the start value, a row's worth compared at once, instead of
