@@ -126,7 +126,7 @@ void applyBrick(MapStore& store, const UpdateBatch::BrickUpdates& upd, std::uint
     const float v = model.first(delta);
     const bool boxes = merging && store.mergeable(v);
     const auto add = [&](const std::uint8_t lo[3], const std::uint8_t hi[3], int /*start*/ = 0) {
-      leaves.push_back(makeLeaf(lo, hi, v));
+      appendLeaf(leaves, lo, hi, v);
       const auto li = static_cast<std::int32_t>(leaves.size() - 1);
       paintLeaf(lo, hi, li, local, known);
       if (boxes) candidates.push_back(static_cast<std::uint32_t>(li));
@@ -220,7 +220,7 @@ static void coverFreshBrick(MapStore& store, const UpdateBatch::BrickUpdates& up
     coverGreedily(
         occupied ? upd.occupied : upd.free, [](int, int) { return true; },
         [&](const std::uint8_t lo[3], const std::uint8_t hi[3], int) {
-          out.push_back(makeLeaf(lo, hi, v));
+          appendLeaf(out, lo, hi, v);
         });
   }
   ctx.stats.leaves_created += out.size();
@@ -289,7 +289,7 @@ void coverDense(MapStore& store, std::uint32_t slot, const std::vector<float>& v
   coverValues(
       known, value.data(), [&](float v) { return store.mergeable(v); },
       [&](const std::uint8_t lo[3], const std::uint8_t hi[3], int start) {
-        out.push_back(makeLeaf(lo, hi, value[static_cast<std::size_t>(start)]));
+        appendLeaf(out, lo, hi, value[static_cast<std::size_t>(start)]);
       });
   stats.leaves_created += out.size();
   stats.leaves_merged += leaves.size();

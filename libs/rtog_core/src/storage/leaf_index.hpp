@@ -38,6 +38,13 @@ inline LeafEntry makeLeaf(const std::uint8_t lo[3], const std::uint8_t hi[3], fl
   e.value = value;
   return e;
 }
+/// makeLeaf() appended to `out`, written in place: a leaf made on the stack and copied is read
+/// back whole from its bytes just written, which stalls the covers that emit leaves by the million.
+inline void appendLeaf(std::vector<LeafEntry>& out, const std::uint8_t lo[3], const std::uint8_t hi[3], float value) {
+  LeafEntry& e = out.emplace_back();
+  for (int a = 0; a < 3; ++a) e.lo[a] = lo[a], e.hi[a] = hi[a];
+  e.value = value;
+}
 /// A leaf merged away, until the brick's array is compacted: lo[0] == kDead.
 constexpr std::uint8_t kDead = 0xFF;
 

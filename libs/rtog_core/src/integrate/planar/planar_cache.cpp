@@ -226,7 +226,7 @@ void coverCodes(const MapStore& store, const StepCodec& codec, const PlanarLayer
   coverLayer(
       known, layer.code.data(), layer.z, [&](std::int8_t c) { return store.mergeable(codec.value(c)); },
       [&](const std::uint8_t lo[3], const std::uint8_t hi[3], std::int8_t c) {
-        out.push_back(makeLeaf(lo, hi, codec.value(c)));
+        appendLeaf(out, lo, hi, codec.value(c));
       });
 }
 
@@ -304,7 +304,7 @@ InsertStats PlanarCache::cover(MapStore& store) {
       coverLayer(
           layer.known, values(layer), layer.z, [&](float v) { return store.mergeable(v); },
           [&](const std::uint8_t lo[3], const std::uint8_t hi[3], float v) {
-            out.push_back(makeLeaf(lo, hi, v));
+            appendLeaf(out, lo, hi, v);
           });
     } else {
       coverGreedily(
@@ -314,7 +314,7 @@ InsertStats PlanarCache::cover(MapStore& store) {
             return valueAt(cell) == v && store.mergeable(v);
           },
           [&](const std::uint8_t lo[3], const std::uint8_t hi[3], int start) {
-            out.push_back(makeLeaf(lo, hi, valueAt(start)));
+            appendLeaf(out, lo, hi, valueAt(start));
           });
     }
     stats.leaves_created += out.size() - kept;
