@@ -125,6 +125,14 @@ std::array<UpdateLayerFn, 2> layerUpdateKernels() {
   return {updateLayer, nullptr};
 }
 
+UpdateLayerFn bestLayerUpdate() {
+  static const UpdateLayerFn best = [] {
+    const auto kernels = layerUpdateKernels();
+    return kernels[1] ? kernels[1] : kernels[0];
+  }();
+  return best;
+}
+
 
 }  // namespace detail
 }  // namespace rtog

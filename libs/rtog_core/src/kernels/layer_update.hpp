@@ -21,6 +21,8 @@ using UpdateLayerFn = void (*)(float* values, std::uint64_t* known, const std::u
 
 /// {portable (SSE2 where compiled for it), AVX2 or null when the CPU lacks it}.
 std::array<UpdateLayerFn, 2> layerUpdateKernels();
+/// The fastest of layerUpdateKernels() this CPU runs (chosen once).
+UpdateLayerFn bestLayerUpdate();
 
 }  // namespace detail
 }  // namespace rtog

@@ -149,10 +149,7 @@ void PlanarCache::apply(MapStore& store, const std::vector<PlanarBatch>& planar_
   const LogOddsModel& model = store.model;
   const PlanarBatch& b0 = planar_batches[0];
   const float deltas[4] = {model.hitDelta(), model.missDelta(), model.clampMin(), model.clampMax()};
-  static const detail::UpdateLayerFn update_layer = [] {
-    const auto kernels = detail::layerUpdateKernels();
-    return kernels[1] ? kernels[1] : kernels[0];
-  }();
+  const detail::UpdateLayerFn update_layer = detail::bestLayerUpdate();
   detail::LayerCounts counts;
   for (std::size_t t = 0; t < b0.tiles().size(); ++t) {
     // The union over the threads' batches, occupied winning.
