@@ -132,7 +132,7 @@ void applyBrick(MapStore& store, const UpdateBatch::BrickUpdates& upd, std::uint
       if (boxes) candidates.push_back(static_cast<std::uint32_t>(li));
     };
     if (boxes) {
-      coverGreedily(mask, [](int, int) { return true; }, add);
+      coverGreedily(mask, add);
       return;
     }
     for (int w = 0; w < kBrickWords; ++w)
@@ -218,7 +218,7 @@ static void coverFreshBrick(MapStore& store, const UpdateBatch::BrickUpdates& up
   for (const bool occupied : {true, false}) {
     const float v = model.first(occupied ? model.hitDelta() : model.missDelta());
     coverGreedily(
-        occupied ? upd.occupied : upd.free, [](int, int) { return true; },
+        occupied ? upd.occupied : upd.free,
         [&](const std::uint8_t lo[3], const std::uint8_t hi[3], int) {
           appendLeaf(out, lo, hi, v);
         });

@@ -168,7 +168,7 @@ ClassCover OccupancyMap::classCover(const std::function<void(const Box&, CellSta
     const Key o = brickOrigin(b.brick);
     for (const bool occupied : {false, true})
       detail::coverGreedily(
-          by_class[occupied ? 1 : 0], [](int, int) { return true; },
+          by_class[occupied ? 1 : 0],
           [&](const std::uint8_t* lo, const std::uint8_t* hi, int) {
             ++(occupied ? counts.occupied : counts.free);
             if (emit)

@@ -1,5 +1,5 @@
 // Covering a brick's cells with boxes: the greedy cover of bit masks that insertion, the planar
-// cache and the class cover use; tests compare the cover of a single layer with the general one.
+// cache and the class cover use; tests compare each cover with a cell-by-cell greedy cover.
 #pragma once
 
 #include <array>
@@ -11,62 +11,16 @@
 namespace rtog {
 namespace detail {
 
-// Covers the set bits of `mask` with disjoint boxes, greedily: from the lowest uncovered cell
-// `start`, an x-run grown along y, then along z, over cells for which joins(start, cell) holds
-// (every cell, when the mask is one class of fresh cells; an equal value, when a brick is
-// rebuilt). emit(lo, hi, start) receives each box. A fresh 16^3 brick seen free becomes a
-// handful of boxes instead of 4096 cells merged one by one.
-template <class Joins, class Emit>
-void coverGreedily(BrickMask m, Joins&& joins, Emit&& emit) {
-  // Row (y, z) holds the 16 x-bits of word (y + 16 z) / 4 at bit 16 * (y % 4).
+// Covers the set bits of `m` with disjoint boxes, greedily: from the lowest uncovered cell
+// `start`, an x-run grown along y, then along z, over the cells that may join start's box:
+// joinable(row, start, y, z) returns those of row (y, z), given `row`, the row's uncovered
+// cells (bit x for cell x). emit(lo, hi, start) receives each box. Rows are taken 16 cells at
+// once, as masks.
+template <class Joinable, class Emit>
+void coverRows(BrickMask m, Joinable&& joinable, Emit&& emit) {
+  // Row r = y + 16 z holds the 16 x-bits of word r / 4 at bit 16 * (r % 4).
   const auto row = [&](int y, int z) {
     const int r = y + kBrickSize * z;
-    return static_cast<std::uint32_t>((m[static_cast<std::size_t>(r >> 2)] >> ((r & 3) * kBrickSize)) & 0xFFFFu);
-  };
-  const auto clear = [&](int y, int z, std::uint32_t run) {
-    const int r = y + kBrickSize * z;
-    m[static_cast<std::size_t>(r >> 2)] &= ~(std::uint64_t{run} << ((r & 3) * kBrickSize));
-  };
-  for (int w = 0; w < kBrickWords; ++w)
-    while (m[static_cast<std::size_t>(w)] != 0) {
-      const int b = __builtin_ctzll(m[static_cast<std::size_t>(w)]);
-      const int start = w * 64 + b;
-      const int r = start >> kBrickBits, y = r & (kBrickSize - 1), z = r >> kBrickBits;
-      const int x0 = b & (kBrickSize - 1);
-      const int len = __builtin_ctz(~(row(y, z) >> x0));  // bits above the row are zero: len <= 16 - x0
-      int x1 = x0;
-      while (x1 + 1 < x0 + len && joins(start, start + (x1 + 1 - x0))) ++x1;
-      const std::uint32_t run = xRun(x0, x1);
-      const auto rowJoins = [&](int yy, int zz) {
-        if ((row(yy, zz) & run) != run) return false;
-        const int base = localIndex(0, yy, zz);
-        for (int x = x0; x <= x1; ++x)
-          if (!joins(start, base + x)) return false;
-        return true;
-      };
-      int y1 = y;
-      while (y1 + 1 < kBrickSize && rowJoins(y1 + 1, z)) ++y1;
-      int z1 = z;
-      for (bool grow = true; grow && z1 + 1 < kBrickSize;) {
-        for (int yy = y; yy <= y1 && grow; ++yy) grow = rowJoins(yy, z1 + 1);
-        if (grow) ++z1;
-      }
-      for (int zz = z; zz <= z1; ++zz)
-        for (int yy = y; yy <= y1; ++yy) clear(yy, zz, run);
-      const auto u8 = [](int c) { return static_cast<std::uint8_t>(c); };
-      const std::uint8_t lo[3] = {u8(x0), u8(y), u8(z)}, hi[3] = {u8(x1), u8(y1), u8(z1)};
-      emit(lo, hi, start);
-    }
-}
-
-// coverGreedily's boxes (the same, in the same order) where joins(start, cell) is "the cell's
-// value equals the start's, which is mergeable": a brick covered anew from a dense table of
-// values (kBrickCells, by local index). Runs, rows and layers are grown by masks of the cells
-// equal to the start value, a row's worth compared at once, instead of cell by cell.
-template <class T, class Mergeable, class Emit>
-void coverValues(BrickMask m, const T* values, Mergeable&& mergeable, Emit&& emit) {
-  // Row r = y + 16 z holds the 16 x-bits of word r / 4 at bit 16 * (r % 4); its values start at 16 r.
-  const auto row = [&](int r) {
     return static_cast<std::uint32_t>((m[static_cast<std::size_t>(r >> 2)] >> ((r & 3) * kBrickSize)) & 0xFFFFu);
   };
   const auto u8 = [](int c) { return static_cast<std::uint8_t>(c); };
@@ -76,36 +30,51 @@ void coverValues(BrickMask m, const T* values, Mergeable&& mergeable, Emit&& emi
       const int start = w * 64 + b;
       const int r = start >> kBrickBits, y = r & (kBrickSize - 1), z = r >> kBrickBits;
       const int x0 = b & (kBrickSize - 1);
-      const T v = values[start];
-      int x1 = x0, y1 = y, z1 = z;
-      if (mergeable(v)) {
-        const auto same = [&](int yy, int zz) {
-          const int rr = yy + kBrickSize * zz;
-          return row(rr) & equalMask16(values + rr * kBrickSize, v);
-        };
-        x1 = x0 + __builtin_ctz(~((same(y, z) | (1u << x0)) >> x0)) - 1;
-        const std::uint32_t run = xRun(x0, x1);
-        while (y1 + 1 < kBrickSize && (same(y1 + 1, z) & run) == run) ++y1;
-        for (bool grow = true; grow && z1 + 1 < kBrickSize;) {
-          for (int yy = y; yy <= y1 && grow; ++yy) grow = (same(yy, z1 + 1) & run) == run;
-          if (grow) ++z1;
-        }
+      const auto joins = [&](int yy, int zz) { return joinable(row(yy, zz), start, yy, zz); };
+      // The start cell is in its box whatever joinable says of it; bits above the row are zero.
+      const int x1 = x0 + __builtin_ctz(~((joins(y, z) | (1u << x0)) >> x0)) - 1;
+      const std::uint32_t run = xRun(x0, x1);
+      int y1 = y;
+      while (y1 + 1 < kBrickSize && (joins(y1 + 1, z) & run) == run) ++y1;
+      int z1 = z;
+      for (bool grow = true; grow && z1 + 1 < kBrickSize;) {
+        for (int yy = y; yy <= y1 && grow; ++yy) grow = (joins(yy, z1 + 1) & run) == run;
+        if (grow) ++z1;
       }
-      const std::uint64_t run = xRun(x0, x1);
       for (int zz = z; zz <= z1; ++zz)
         for (int yy = y; yy <= y1; ++yy) {
           const int rr = yy + kBrickSize * zz;
-          m[static_cast<std::size_t>(rr >> 2)] &= ~(run << ((rr & 3) * kBrickSize));
+          m[static_cast<std::size_t>(rr >> 2)] &= ~(std::uint64_t{run} << ((rr & 3) * kBrickSize));
         }
       const std::uint8_t lo[3] = {u8(x0), u8(y), u8(z)}, hi[3] = {u8(x1), u8(y1), u8(z1)};
       emit(lo, hi, start);
     }
 }
 
-// coverGreedily's boxes for a brick whose only cells to cover are one z-layer of values (a
-// planar cache layer, in floats or in the int8 codes of a step rule): runs and rows are grown
-// by masks of the cells equal to the start value, a row's worth compared at once, instead of
-// cell by cell.
+// The cells of `mask` covered with boxes (coverRows, every cell joining): a fresh 16^3 brick
+// seen free becomes a handful of boxes instead of 4096 cells merged one by one.
+template <class Emit>
+void coverGreedily(const BrickMask& mask, Emit&& emit) {
+  coverRows(mask, [](std::uint32_t row, int, int, int) { return row; }, emit);
+}
+
+// A brick covered anew from a dense table of values (kBrickCells, by local index): coverRows
+// joining the cells equal to the start's value if that is mergeable, a row compared at once.
+template <class T, class Mergeable, class Emit>
+void coverValues(const BrickMask& mask, const T* values, Mergeable&& mergeable, Emit&& emit) {
+  coverRows(
+      mask,
+      [&](std::uint32_t row, int start, int y, int z) -> std::uint32_t {
+        const T v = values[start];
+        if (row == 0 || !mergeable(v)) return 0;
+        return row & equalMask16(values + (y + kBrickSize * z) * kBrickSize, v);
+      },
+      emit);
+}
+
+// coverValues' boxes for a brick whose only cells to cover are one z-layer of values (a
+// planar cache layer, in floats or in the int8 codes of a step rule), on the layer's 4 mask
+// words and 256 values alone; emit(lo, hi, value).
 template <class T, class Mergeable, class Emit>
 void coverLayer(const LayerMask& known, const T* values, int z, Mergeable&& mergeable, Emit&& emit) {
   std::uint32_t rows[kBrickSize];

@@ -10,7 +10,7 @@
 
 namespace rtog {
 
-using detail::coverGreedily;
+using detail::coverRows;
 using detail::coverLayer;
 
 void PlanarCache::clear() {
@@ -304,11 +304,13 @@ InsertStats PlanarCache::cover(MapStore& store) {
             appendLeaf(out, lo, hi, v);
           });
     } else {
-      coverGreedily(
+      // Several cached layers: a row's values are its layer's.
+      coverRows(
           known,
-          [&](int start, int cell) {
+          [&](std::uint32_t row, int start, int y, int z) -> std::uint32_t {
             const float v = valueAt(start);
-            return valueAt(cell) == v && store.mergeable(v);
+            if (row == 0 || !store.mergeable(v)) return 0;
+            return row & detail::equalMask16(values(*layer_at[z]) + y * kBrickSize, v);
           },
           [&](const std::uint8_t lo[3], const std::uint8_t hi[3], int start) {
             appendLeaf(out, lo, hi, valueAt(start));
